@@ -1,0 +1,389 @@
+"""Typed, immutable abstract syntax of SLEEC (both dialects and the paper notation).
+
+Every node is a frozen, slotted dataclass. Source spans and purely syntactic hints (was a
+measure written ``{m}``? was an expression parenthesised?) are excluded from equality, so
+that *meaning* is what compares equal: a TK file and its LEGOS rendering have equal ASTs,
+and parse -> print -> parse is the identity on ASTs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Literal, TypeAlias
+
+
+@dataclass(frozen=True, slots=True)
+class Span:
+    """Where a node came from: 1-based line and column, end exclusive.
+
+    The file is not stored per node (one parser serves every file); the Specification and
+    each Diagnostic carry the path.
+    """
+
+    line: int
+    col: int
+    end_line: int
+    end_col: int
+
+    def __str__(self) -> str:
+        return f"{self.line}:{self.col}"
+
+
+NO_SPAN = Span(0, 0, 0, 0)
+
+
+def _span() -> Span:
+    return field(default=NO_SPAN, compare=False, repr=False, kw_only=True)  # type: ignore[return-value]
+
+
+class Dialect(str, Enum):
+    """The concrete syntax a file was written in."""
+
+    TK = "tk"
+    LEGOS = "legos"
+    PAPER = "paper"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+# ---------------------------------------------------------------------------- expressions
+
+
+@dataclass(frozen=True, slots=True)
+class BoolLit:
+    value: bool
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class IntLit:
+    value: int
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class DecimalLit:
+    """A decimal literal: no SLEEC analyser accepts one, so the checker rejects it by name."""
+
+    text: str
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Name:
+    """An identifier in an expression: a measure, a constant or a scale literal.
+
+    Which one is decided by the checker (names are resolved by kind, strictly). ``braced``
+    (LEGOS ``{m}``) and ``arrow`` (LEGOS ``->C``) record how it was written; they do not
+    take part in equality.
+    """
+
+    name: str
+    braced: bool = field(default=False, compare=False, kw_only=True)
+    arrow: bool = field(default=False, compare=False, kw_only=True)
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Not:
+    operand: Expr
+    parenthesized: bool = field(default=False, compare=False, kw_only=True)
+    span: Span = _span()
+
+
+BoolOp: TypeAlias = Literal["and", "or"]
+ArithOp: TypeAlias = Literal["+", "-", "*"]
+RelOp: TypeAlias = Literal["<", "<=", ">", ">=", "=", "<>"]
+
+
+@dataclass(frozen=True, slots=True)
+class BinOp:
+    """``and``/``or`` (boolean) or ``+ - *`` (arithmetic)."""
+
+    op: str
+    left: Expr
+    right: Expr
+    parenthesized: bool = field(default=False, compare=False, kw_only=True)
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Compare:
+    op: str
+    left: Expr
+    right: Expr
+    parenthesized: bool = field(default=False, compare=False, kw_only=True)
+    span: Span = _span()
+
+
+Expr: TypeAlias = BoolLit | IntLit | DecimalLit | Name | Not | BinOp | Compare
+
+BOOL_OPS = frozenset({"and", "or"})
+ARITH_OPS = frozenset({"+", "-", "*"})
+REL_OPS = frozenset({"<", "<=", ">", ">=", "=", "<>"})
+
+# ---------------------------------------------------------------------------- responses
+
+TIME_UNITS: dict[str, int] = {"seconds": 1, "minutes": 60, "hours": 3600, "days": 86400}
+
+
+@dataclass(frozen=True, slots=True)
+class Duration:
+    """``value unit``; ``unit`` is the word as written (the checker rejects non-units)."""
+
+    value: Expr
+    unit: str
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class TimeLimit:
+    """``within hi`` (``lo`` is None) or the LEGOS interval ``within [lo, hi]``."""
+
+    hi: Duration
+    lo: Duration | None = None
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Occurrence:
+    """An event the robot must produce (or, when ``negated``, must not produce)."""
+
+    event: str
+    negated: bool = False
+    limit: TimeLimit | None = None
+    eventually: bool = False
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class ResponseItem:
+    """One obligation with its fallback (``otherwise``) and alternative (``else``)."""
+
+    occurrence: Occurrence
+    otherwise: Response | None = None
+    alternative: Response | None = None
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Defeater:
+    """A hedge clause: ``unless condition [then response]``.
+
+    A clause without ``then`` has ``response is None``: the empty response, nothing is
+    required for this trigger.
+    """
+
+    condition: Expr
+    response: Response | None = None
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Response:
+    """A conjunction of response items plus the hedge clauses that can defeat it.
+
+    Standard SLEEC has exactly one item; more than one is cosleec's conjunction extension
+    (``then A and B``), which the paper's ``(Refuse AND ExplainWhy)`` needs.
+    """
+
+    items: tuple[ResponseItem, ...]
+    defeaters: tuple[Defeater, ...] = ()
+    braced: bool = field(default=False, compare=False, kw_only=True)
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Trigger:
+    event: str
+    condition: Expr | None = None
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Rule:
+    name: str
+    trigger: Trigger
+    response: Response
+    span: Span = _span()
+
+
+# ---------------------------------------------------------------------------- definitions
+
+
+@dataclass(frozen=True, slots=True)
+class BooleanType:
+    def __str__(self) -> str:
+        return "boolean"
+
+
+@dataclass(frozen=True, slots=True)
+class NumericType:
+    def __str__(self) -> str:
+        return "numeric"
+
+
+@dataclass(frozen=True, slots=True)
+class ScaleType:
+    """An ordered scale; literals are listed lowest first and scoped to their measure."""
+
+    literals: tuple[str, ...]
+    literal_spans: tuple[Span, ...] = field(default=(), compare=False, repr=False, kw_only=True)
+
+    def __str__(self) -> str:
+        return f"scale({', '.join(self.literals)})"
+
+
+MeasureType: TypeAlias = BooleanType | NumericType | ScaleType
+
+
+@dataclass(frozen=True, slots=True)
+class EventDecl:
+    name: str
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class MeasureDecl:
+    name: str
+    type: MeasureType
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class ConstantDecl:
+    """``constant N = 5`` (value an int) or a reference ``constant B = A`` / ``= -> A``."""
+
+    name: str
+    value: int | str
+    arrow: bool = field(default=False, compare=False, kw_only=True)
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class FluentDecl:
+    """CPeluti's ``fluent F <{starts}, {ends}>``: an unsupported extension, kept for tools."""
+
+    name: str
+    initiating: tuple[str, ...]
+    terminating: tuple[str, ...]
+    span: Span = _span()
+
+
+Definition: TypeAlias = EventDecl | MeasureDecl | ConstantDecl | FluentDecl
+
+# ---------------------------------------------------------------------------- LEGOS blocks
+
+
+@dataclass(frozen=True, slots=True)
+class Situation:
+    """A concern or purpose: ``name when|exists trigger [then|while R {while R}] [meanwhile (...)]``."""
+
+    name: str
+    kind: Literal["when", "exists"]
+    trigger: Trigger
+    responses: tuple[Response, ...] = ()
+    meanwhile: Situation | None = None
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class EventRelation:
+    """``witness|mutualExclusive|equal|happenBefore|isContradictoryWith A B``."""
+
+    kind: str
+    first: str
+    second: str
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class MeasureRelation:
+    """``measure imply|mutualExclusive|iff|opposite p q`` or ``measure invariant p``."""
+
+    kind: str
+    first: Expr
+    second: Expr | None = None
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class EventMeasureRelation:
+    """``causation|includes|forbid E p``."""
+
+    kind: str
+    event: str
+    condition: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class UntilRelation:
+    """``when A [and c] then p until B [and c2]``."""
+
+    trigger: Trigger
+    condition: Expr
+    until_event: str
+    until_condition: Expr | None = None
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class ForRelation:
+    """``when A [and c] then p for T``."""
+
+    trigger: Trigger
+    condition: Expr
+    duration: Duration
+    span: Span = _span()
+
+
+Relation: TypeAlias = EventRelation | MeasureRelation | EventMeasureRelation | UntilRelation | ForRelation
+
+BlockKind: TypeAlias = Literal["def", "rule", "concern", "purpose", "relation"]
+
+
+@dataclass(frozen=True, slots=True)
+class BlockMark:
+    """Where a block opened; used to check block order and duplicates."""
+
+    kind: BlockKind
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Specification:
+    """A whole SLEEC file."""
+
+    definitions: tuple[Definition, ...]
+    rules: tuple[Rule, ...]
+    concerns: tuple[Situation, ...] = ()
+    purposes: tuple[Situation, ...] = ()
+    relations: tuple[Relation, ...] = ()
+    dialect: Dialect = field(default=Dialect.TK, compare=False)
+    path: str = field(default="<string>", compare=False)
+    blocks: tuple[BlockMark, ...] = field(default=(), compare=False, repr=False)
+
+    @property
+    def has_def_block(self) -> bool:
+        return any(b.kind == "def" for b in self.blocks) or bool(self.definitions)
+
+    @property
+    def events(self) -> tuple[EventDecl, ...]:
+        return tuple(d for d in self.definitions if isinstance(d, EventDecl))
+
+    @property
+    def measures(self) -> tuple[MeasureDecl, ...]:
+        return tuple(d for d in self.definitions if isinstance(d, MeasureDecl))
+
+    @property
+    def constants(self) -> tuple[ConstantDecl, ...]:
+        return tuple(d for d in self.definitions if isinstance(d, ConstantDecl))
+
+    def rule(self, name: str) -> Rule:
+        for r in self.rules:
+            if r.name == name:
+                return r
+        raise KeyError(name)

@@ -1,0 +1,118 @@
+"""Compiler-style diagnostics: ``path:line:col: error: message`` plus the line and a caret.
+
+Every problem cosleec finds in a rule file becomes a :class:`Diagnostic`; nothing the user
+wrote ever surfaces as a Python traceback. :class:`SleecError` is the one exception type
+the language front-end raises, and it carries the diagnostics.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from enum import Enum
+
+from cosleec.lang.ast import NO_SPAN, Span
+
+
+class Severity(str, Enum):
+    ERROR = "error"
+    WARNING = "warning"
+    NOTE = "note"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+@dataclass(frozen=True, slots=True)
+class Diagnostic:
+    """One finding, with a stable ``code`` that tests and tools can match on."""
+
+    severity: Severity
+    code: str
+    message: str
+    span: Span = NO_SPAN
+    path: str = "<string>"
+    hint: str | None = None
+    related: tuple[tuple[str, Span], ...] = field(default=())
+
+    @property
+    def is_error(self) -> bool:
+        return self.severity is Severity.ERROR
+
+    def header(self) -> str:
+        if self.span.line:
+            return f"{self.path}:{self.span.line}:{self.span.col}: {self.severity}: {self.message}"
+        return f"{self.path}: {self.severity}: {self.message}"
+
+    def render(self, source: str | None) -> str:
+        """The header, then the offending source line with a caret under the span."""
+        out = [self.header()]
+        if source is not None and self.span.line:
+            lines = source.splitlines()
+            if 0 < self.span.line <= len(lines):
+                text = lines[self.span.line - 1].expandtabs(1)
+                out.append(f"    {text}")
+                start = max(self.span.col - 1, 0)
+                if self.span.end_line == self.span.line and self.span.end_col > self.span.col:
+                    width = self.span.end_col - self.span.col
+                else:
+                    width = 1
+                width = max(1, min(width, max(len(text) - start, 1)))
+                out.append("    " + " " * start + "^" + "~" * (width - 1))
+        for note, span in self.related:
+            out.append(f"{self.path}:{span.line}:{span.col}: note: {note}")
+        if self.hint:
+            out.append(f"    hint: {self.hint}")
+        return "\n".join(out)
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "line": self.span.line,
+            "col": self.span.col,
+            "end_line": self.span.end_line,
+            "end_col": self.span.end_col,
+            "severity": str(self.severity),
+            "code": self.code,
+            "message": self.message,
+            "hint": self.hint,
+        }
+
+
+class SleecError(Exception):
+    """Raised when a rule file cannot be used; carries every diagnostic found."""
+
+    def __init__(self, diagnostics: Sequence[Diagnostic], source: str | None = None) -> None:
+        self.diagnostics = tuple(diagnostics)
+        self.source = source
+        errors = [d for d in self.diagnostics if d.is_error] or list(self.diagnostics)
+        super().__init__(errors[0].header() if errors else "invalid SLEEC specification")
+
+    def render(self) -> str:
+        return "\n".join(d.render(self.source) for d in self.diagnostics)
+
+
+class DiagnosticSink:
+    """Collects diagnostics for one file so that all of them are reported in one run."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+        self.items: list[Diagnostic] = []
+
+    def error(self, code: str, message: str, span: Span = NO_SPAN, **kw: object) -> None:
+        self.items.append(Diagnostic(Severity.ERROR, code, message, span, self.path, **kw))  # type: ignore[arg-type]
+
+    def warning(self, code: str, message: str, span: Span = NO_SPAN, **kw: object) -> None:
+        self.items.append(Diagnostic(Severity.WARNING, code, message, span, self.path, **kw))  # type: ignore[arg-type]
+
+    def note(self, code: str, message: str, span: Span = NO_SPAN) -> None:
+        self.items.append(Diagnostic(Severity.NOTE, code, message, span, self.path))
+
+    def extend(self, diags: Iterable[Diagnostic]) -> None:
+        self.items.extend(diags)
+
+    @property
+    def has_errors(self) -> bool:
+        return any(d.is_error for d in self.items)
+
+    def sorted(self) -> list[Diagnostic]:
+        return sorted(self.items, key=lambda d: (d.span.line, d.span.col))

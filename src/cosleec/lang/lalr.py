@@ -1,0 +1,146 @@
+"""A tight LALR(1) driver over the tables and callbacks Lark computes from ``sleec.lark``.
+
+Why: Lark's own driver looks every reduction up by ``Rule``/``Token`` objects that are
+equal but not identical, so each step pays for several Python-level ``__eq__`` calls.
+Re-keying Lark's table once, by plain strings and precomputed ``(size, origin,
+callback)`` triples, roughly doubles parsing speed; the grammar, the table construction
+and the tree-building callbacks (``ChildFilter`` + our inline transformer) all stay
+Lark's.
+
+The driver also does panic-mode error recovery, so that one run reports several syntax
+errors instead of stopping at the first.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+from lark import Lark
+from lark.parsers.lalr_analysis import Shift
+
+END = "$END"
+BAD_CHAR = "$BADCHAR"
+
+
+@dataclass(frozen=True, slots=True)
+class SyntaxProblem:
+    """One syntax error: the token met and the terminals the parser would have taken."""
+
+    token: tuple[str, str, int, int, int]  # see lexer.Token; type END at end of input
+    expected: frozenset[str]
+
+
+class CompiledLALR:
+    """Lark's LALR table for one start symbol, re-keyed for speed."""
+
+    def __init__(self, lark: Lark, start: str = "start") -> None:
+        inner = lark.parser.parser.parser  # ParsingFrontend -> LALR_Parser -> _Parser
+        table = inner.parse_table
+        callbacks = inner.callbacks
+        self.start_state: int = table.start_states[start]
+        self.end_state: int = table.end_states[start]
+        triples: dict[Any, tuple[int, str, Any]] = {}
+        self.states: dict[int, dict[str, tuple[bool, Any]]] = {}
+        for state, actions in table.states.items():
+            row: dict[str, tuple[bool, Any]] = {}
+            for term, (action, arg) in actions.items():
+                if action is Shift:
+                    row[str(term)] = (True, arg)
+                else:
+                    key = id(arg)
+                    if key not in triples:
+                        # A `?rule` reducing exactly one kept child returns that child
+                        # unchanged: no callback needed (None marks the pass-through).
+                        unit = (
+                            len(arg.expansion) == 1
+                            and arg.options.expand1
+                            and arg.alias is None
+                            and not arg.expansion[0].is_term
+                            and not arg.expansion[0].name.startswith("_")
+                        )
+                        cb = None if unit else callbacks[arg]
+                        triples[key] = (len(arg.expansion), str(arg.origin.name), cb)
+                    row[str(term)] = (False, triples[key])
+            self.states[state] = row
+
+    def expected(self, state: int) -> frozenset[str]:
+        return frozenset(t for t in self.states[state] if t.isupper() or t.startswith("$"))
+
+    def parse(self, tokens: Iterable[Any], problems: list[SyntaxProblem]) -> Any:
+        """Parse; on error, record a :class:`SyntaxProblem`, skip the token and go on.
+
+        Returns the value of the start symbol, or None when any error occurred (a tree
+        built around skipped tokens is not a faithful reading of the file). After an
+        error, further errors are recorded only once three tokens have been accepted, so
+        one mistake does not produce a cascade.
+        """
+        states = self.states
+        sstack: list[int] = [self.start_state]
+        vstack: list[Any] = []
+        quiet = 0
+        last: Any = None
+        for tok in tokens:
+            last = tok
+            t = tok[0]
+            recovered = False
+            while True:
+                act = states[sstack[-1]].get(t)
+                if act is None:
+                    if quiet == 0:
+                        problems.append(SyntaxProblem(tok, self.expected(sstack[-1])))
+                    quiet = 3
+                    if recovered:  # resynchronising did not help: drop the token
+                        break
+                    recovered = True
+                    # Pop to the nearest state that can take this token (its values go
+                    # with it, so the stacks stay a viable prefix); none: drop the token.
+                    depth = len(sstack) - 1
+                    while depth > 0 and t not in states[sstack[depth - 1]]:
+                        depth -= 1
+                    if depth == 0:
+                        break
+                    del sstack[depth:]
+                    del vstack[depth - 1 :]
+                    continue
+                if act[0]:
+                    sstack.append(act[1])
+                    vstack.append(tok)
+                    if quiet:
+                        quiet -= 1
+                    break
+                size, origin, cb = act[1]
+                if cb is None:  # unit pass-through: the value stays, the state changes
+                    sstack.pop()
+                    sstack.append(states[sstack[-1]][origin][1])
+                    continue
+                if size:
+                    s = vstack[-size:]
+                    del sstack[-size:]
+                    del vstack[-size:]
+                else:
+                    s = []
+                vstack.append(cb(s))
+                sstack.append(states[sstack[-1]][origin][1])
+        end = (END, "", 0, last[3], last[4] + len(last[1])) if last is not None else (END, "", 0, 1, 1)
+        while True:
+            act = states[sstack[-1]].get(END)
+            if act is None:
+                if quiet == 0 or not problems:
+                    problems.append(SyntaxProblem(end, self.expected(sstack[-1])))
+                return None
+            if act[0]:  # pragma: no cover - Lark never shifts $END
+                return None
+            size, origin, cb = act[1]
+            if size:
+                s = vstack[-size:]
+                del sstack[-size:]
+                del vstack[-size:]
+            else:
+                s = []
+            value = s[0] if cb is None else cb(s)
+            sstack.append(states[sstack[-1]][origin][1])
+            vstack.append(value)
+            if sstack[-1] == self.end_state:
+                return None if problems else value

@@ -1,0 +1,202 @@
+"""Text -> :class:`~cosleec.lang.ast.Specification`, with syntax diagnostics.
+
+Both grammars live in ``grammar/*.lark``; Lark builds their LALR tables once per process.
+The DSL (TK and LEGOS dialects) and the paper notation are told apart per file: a file
+with ``def_start`` or ``rule_start`` is DSL, any other file that contains ``when`` is the
+paper notation.
+"""
+
+from __future__ import annotations
+
+import difflib
+import re
+import threading
+from dataclasses import dataclass
+from importlib import resources
+from typing import Any
+
+from lark import Lark
+
+from cosleec.lang import ast as A
+from cosleec.lang.diagnostics import DiagnosticSink
+from cosleec.lang.lalr import END, CompiledLALR, SyntaxProblem
+from cosleec.lang.lexer import BAD_CHAR, SleecLexer
+from cosleec.lang.transformer import Block, ToAst
+
+
+@dataclass(frozen=True)
+class _Grammar:
+    lalr: CompiledLALR
+    lexer: SleecLexer
+    display: dict[str, str]
+
+
+_lock = threading.Lock()
+_grammars: dict[str, _Grammar] = {}
+
+
+def _grammar(name: str, transformer: Any) -> _Grammar:
+    g = _grammars.get(name)
+    if g is not None:
+        return g
+    with _lock:
+        g = _grammars.get(name)
+        if g is None:
+            text = resources.files("cosleec.lang").joinpath(f"grammar/{name}.lark").read_text("utf-8")
+            lark = Lark(text, parser="lalr", lexer=SleecLexer, maybe_placeholders=True, transformer=transformer)
+            display = {END: "end of file", "NAME": "a name", "INT": "a number", "DECIMAL": "a number"}
+            for term in lark.terminals:
+                if hasattr(term.pattern, "value") and type(term.pattern).__name__ == "PatternStr":
+                    display[term.name] = f"`{term.pattern.value}`"
+            g = _Grammar(CompiledLALR(lark), SleecLexer(lark.lexer_conf), display)
+            _grammars[name] = g
+    return g
+
+
+_DSL_MARK = re.compile(r"\b(?:def_start|rule_start)\b")
+_PAPER_MARK = re.compile(r"(?i)\bwhen\b")
+
+
+def looks_like_paper(text: str) -> bool:
+    return _DSL_MARK.search(text) is None and _PAPER_MARK.search(text) is not None
+
+
+def parse_blocks(text: str, sink: DiagnosticSink) -> list[Block] | None:
+    """Parse DSL text into its blocks; syntax errors go to ``sink``."""
+    g = _grammar("sleec", ToAst())
+    problems: list[SyntaxProblem] = []
+    blocks = g.lalr.parse(g.lexer.tokens(text), problems)
+    for p in problems:
+        _report(p, g, text, sink)
+    return None if problems else blocks
+
+
+def parse_paper_rules(text: str, sink: DiagnosticSink) -> list[A.Rule] | None:
+    """Parse the paper notation into rules; syntax errors go to ``sink``."""
+    from cosleec.lang.paper import PaperToAst
+
+    g = _grammar("paper", PaperToAst())
+    problems: list[SyntaxProblem] = []
+    rules = g.lalr.parse(g.lexer.tokens(text), problems)
+    for p in problems:
+        _report(p, g, text, sink)
+    return None if problems else rules
+
+
+_ORDER: tuple[A.BlockKind, ...] = ("def", "rule", "concern", "purpose", "relation")
+
+
+def assemble(blocks: list[Block], path: str, sink: DiagnosticSink) -> A.Specification:
+    """Blocks -> Specification, checking that each block appears once and in order."""
+    seen: dict[str, A.Span] = {}
+    parts: dict[str, list[Any]] = {k: [] for k in _ORDER}
+    last_rank = -1
+    marks = []
+    for b in blocks:
+        marks.append(A.BlockMark(b.kind, span=b.span))
+        if b.kind in seen:
+            sink.error(
+                "duplicate-block",
+                f"a second `{b.kind}_start` block; a file has at most one of each",
+                b.span,
+                related=(("the first one is here", seen[b.kind]),),
+            )
+        else:
+            seen[b.kind] = b.span
+        rank = _ORDER.index(b.kind)
+        if rank < last_rank:
+            sink.error(
+                "block-order",
+                f"the `{b.kind}_start` block is out of order; blocks come in the order "
+                "def, rule, concern, purpose, relation",
+                b.span,
+            )
+        last_rank = max(last_rank, rank)
+        parts[b.kind].extend(b.items)
+    if "rule" not in seen:
+        sink.error("no-rule-block", "no rule block: a SLEEC file needs `rule_start ... rule_end`")
+    return A.Specification(
+        definitions=tuple(parts["def"]),
+        rules=tuple(parts["rule"]),
+        concerns=tuple(parts["concern"]),
+        purposes=tuple(parts["purpose"]),
+        relations=tuple(parts["relation"]),
+        path=path,
+        blocks=tuple(marks),
+    )
+
+
+# ------------------------------------------------------------------ syntax messages
+
+_ALL_KEYWORDS = (
+    "def_start def_end rule_start rule_end concern_start concern_end purpose_start purpose_end "
+    "relation_start relation_end event measure constant boolean numeric scale when then and or "
+    "not within otherwise unless else eventually exists while meanwhile true false seconds "
+    "minutes hours days"
+).split()
+
+
+def _report(p: SyntaxProblem, g: _Grammar, text: str, sink: DiagnosticSink) -> None:
+    tok = p.token
+    ttype, value = tok[0], tok[1]
+    span = A.Span(tok[3], tok[4], tok[3], tok[4] + max(len(value), 1))
+    expected = sorted({g.display.get(t, t) for t in p.expected if t != BAD_CHAR})
+    expected_values = {g.display.get(t, t).strip("`") for t in p.expected}
+    special = _special_message(ttype, value, p.expected, expected_values, text, tok)
+    if special is not None:
+        code, message, hint = special
+        sink.error(code, message, span, hint=hint)
+        return
+    shown = "end of file" if ttype == END else f"`{value}`"
+    if len(expected) > 8:
+        expected = [e for e in expected if e.startswith("`")][:7] + ["..."]
+    exp = ", ".join(expected) if expected else "nothing more"
+    hint = None
+    if ttype == "NAME":
+        kws = [g.display[t].strip("`") for t in p.expected if g.display.get(t, "").startswith("`")]
+        close = difflib.get_close_matches(value, [k for k in kws if k.isidentifier()], n=1, cutoff=0.6)
+        if close:
+            hint = f"did you mean `{close[0]}`?"
+    elif ttype != END and value in _ALL_KEYWORDS and "NAME" in p.expected:
+        hint = f"`{value}` is a reserved keyword and cannot be used as a name"
+    sink.error("syntax", f"unexpected {shown}; expected {exp}", span, hint=hint)
+
+
+def _special_message(
+    ttype: str, value: str, expected: frozenset[str], values: set[str], text: str, tok: Any
+) -> tuple[str, str, str | None] | None:
+    """Messages for the mistakes real files make (sleec-language.md §11 item 17)."""
+    if tok[2] == 0 and text.lstrip().startswith("{\\rtf"):
+        return ("rtf", "this file is RTF, not plain text", "save it as plain text (UTF-8)")
+    if ttype == BAD_CHAR:
+        if value == "/*":
+            return ("unterminated-comment", "unterminated comment: `/*` has no matching `*/`", None)
+        if value == "/":
+            return ("division", "`/` is not a SLEEC operator: there is no division (only + - *)", None)
+        if value.isalpha():
+            return (
+                "non-ascii",
+                f"`{value}` is not allowed in a name: identifiers use ASCII letters, digits and `_`",
+                None,
+            )
+        return ("bad-char", f"unexpected character `{value}`", None)
+    if value == "or" and "then" in values and "and" in values and "or" not in values:
+        return (
+            "trigger-or",
+            "a rule is triggered by exactly one event; `or` between trigger events is not SLEEC",
+            "write one rule per trigger event, or move the alternative into the condition",
+        )
+    if value == "not" and values == {"a name"}:
+        return ("negated-trigger", "a trigger is a single event and cannot be negated", None)
+    if value in _REL_OPS and not (values & _REL_OPS):
+        return (
+            "comparison-chain",
+            f"a comparison cannot be chained (`a < b {value} c`)",
+            "combine two comparisons with `and`",
+        )
+    if value == "{" and values == {"("}:
+        return ("scale-braces", "scale literals are listed in parentheses: `scale(low, medium, high)`", None)
+    return None
+
+
+_REL_OPS = frozenset({"<", "<=", ">", ">=", "=", "<>"})

@@ -1,0 +1,257 @@
+"""Parse tree -> AST, run inline by the LALR parser (no intermediate tree is built).
+
+Callbacks take the children list directly (no ``v_args`` wrapper): it is the fastest
+calling convention Lark offers, and parsing speed is a project target. Optional grammar
+parts are ``[x]`` so the children have fixed positions (``None`` when absent).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+from lark import Token, Transformer
+
+from cosleec.lang import ast as A
+
+
+def tok_span(tok: Any) -> A.Span:
+    """A token is ``(type, value, start_pos, line, column)`` (see lexer.py); no token spans lines."""
+    return A.Span(tok[3], tok[4], tok[3], tok[4] + len(tok[1]))
+
+
+def join(a: A.Span, b: A.Span) -> A.Span:
+    return A.Span(a.line, a.col, b.end_line, b.end_col)
+
+
+def ident(tok: Any) -> str:
+    """An identifier's text; SLEEC-TK's ``^`` keyword escape is dropped."""
+    v: str = tok[1]
+    return v[1:] if v[0] == "^" else v
+
+
+_BOOLEAN = A.BooleanType()
+_NUMERIC = A.NumericType()
+
+
+class Block:
+    """A parsed block before the Specification is assembled."""
+
+    __slots__ = ("items", "kind", "span")
+
+    def __init__(self, kind: A.BlockKind, span: A.Span, items: list[Any]) -> None:
+        self.kind = kind
+        self.span = span
+        self.items = items
+
+
+class ToAst(Transformer[Token, Any]):
+    """Builds :mod:`cosleec.lang.ast` nodes; ``start`` returns the list of blocks."""
+
+    # -- blocks
+    def start(self, c: list[Any]) -> list[Block]:
+        return c
+
+    def def_block(self, c: list[Any]) -> Block:
+        return Block("def", tok_span(c[0]), c[1:])
+
+    def rule_block(self, c: list[Any]) -> Block:
+        return Block("rule", tok_span(c[0]), c[1:])
+
+    def concern_block(self, c: list[Any]) -> Block:
+        return Block("concern", tok_span(c[0]), c[1:])
+
+    def purpose_block(self, c: list[Any]) -> Block:
+        return Block("purpose", tok_span(c[0]), c[1:])
+
+    def relation_block(self, c: list[Any]) -> Block:
+        return Block("relation", tok_span(c[0]), c[1:])
+
+    # -- definitions
+    def event_decl(self, c: list[Any]) -> A.EventDecl:
+        return A.EventDecl(ident(c[0]), span=tok_span(c[0]))
+
+    def measure_decl(self, c: list[Any]) -> A.MeasureDecl:
+        return A.MeasureDecl(ident(c[0]), c[1], span=tok_span(c[0]))
+
+    def boolean_type(self, c: list[Any]) -> A.BooleanType:
+        return _BOOLEAN
+
+    def numeric_type(self, c: list[Any]) -> A.NumericType:
+        return _NUMERIC
+
+    def scale_type(self, c: list[Any]) -> A.ScaleType:
+        return A.ScaleType(tuple(ident(t) for t in c), literal_spans=tuple(tok_span(t) for t in c))
+
+    def constant_decl(self, c: list[Any]) -> A.ConstantDecl:
+        value, arrow = c[1]
+        return A.ConstantDecl(ident(c[0]), value, arrow=arrow, span=tok_span(c[0]))
+
+    def const_int(self, c: list[Any]) -> tuple[int, bool]:
+        return int(c[0][1]), False
+
+    def const_neg(self, c: list[Any]) -> tuple[int, bool]:
+        return -int(c[0][1]), False
+
+    def const_name(self, c: list[Any]) -> tuple[str, bool]:
+        return ident(c[0]), False
+
+    def const_arrow(self, c: list[Any]) -> tuple[str, bool]:
+        return ident(c[0]), True
+
+    def fluent_decl(self, c: list[Any]) -> A.FluentDecl:
+        return A.FluentDecl(ident(c[0]), c[1], c[2], span=tok_span(c[0]))
+
+    def name_list(self, c: list[Any]) -> tuple[str, ...]:
+        return tuple(ident(t) for t in c)
+
+    # -- rules
+    def rule(self, c: list[Any]) -> A.Rule:
+        return A.Rule(ident(c[0]), c[1], c[2], span=tok_span(c[0]))
+
+    def trigger(self, c: list[Any]) -> A.Trigger:
+        return A.Trigger(ident(c[0]), c[1], span=tok_span(c[0]))
+
+    def response_body(self, c: list[Any]) -> A.Response:
+        items = tuple(x for x in c if type(x) is A.ResponseItem)
+        defeaters = tuple(x for x in c if type(x) is A.Defeater)
+        return A.Response(items, defeaters, span=items[0].span)
+
+    def inner_body(self, c: list[Any]) -> A.Response:
+        return A.Response(tuple(c), (), span=c[0].span)
+
+    def item(self, c: list[Any]) -> A.ResponseItem:
+        occ: A.Occurrence = c[0]
+        return A.ResponseItem(occ, c[1], c[2], span=occ.span)
+
+    def occurrence(self, c: list[Any]) -> A.Occurrence:
+        not_tok, name, limit, ev = c
+        span = tok_span(name) if not_tok is None else join(tok_span(not_tok), tok_span(name))
+        return A.Occurrence(ident(name), not_tok is not None, limit, ev is not None, span=span)
+
+    def braced(self, c: list[Any]) -> A.Response:
+        return replace(c[0], braced=True)
+
+    def otherwise(self, c: list[Any]) -> A.Response:
+        r: A.Response = c[0]
+        return r
+
+    alternative = otherwise
+
+    def defeater(self, c: list[Any]) -> A.Defeater:
+        return A.Defeater(c[1], c[2], span=tok_span(c[0]))
+
+    def within(self, c: list[Any]) -> A.TimeLimit:
+        return A.TimeLimit(c[0], None, span=c[0].span)
+
+    def within_interval(self, c: list[Any]) -> A.TimeLimit:
+        return A.TimeLimit(c[1], c[0], span=join(c[0].span, c[1].span))
+
+    def duration(self, c: list[Any]) -> A.Duration:
+        unit = c[1]
+        return A.Duration(c[0], unit[1], span=join(_span_of(c[0]), tok_span(unit)))
+
+    def time_unit(self, c: list[Any]) -> Any:
+        return c[0]
+
+    # -- expressions
+    def and_(self, c: list[Any]) -> A.BinOp:
+        return A.BinOp("and", c[0], c[1], span=join(_span_of(c[0]), _span_of(c[1])))
+
+    def or_(self, c: list[Any]) -> A.BinOp:
+        return A.BinOp("or", c[0], c[1], span=join(_span_of(c[0]), _span_of(c[1])))
+
+    def not_(self, c: list[Any]) -> A.Not:
+        return A.Not(c[1], span=join(tok_span(c[0]), _span_of(c[1])))
+
+    def compare(self, c: list[Any]) -> A.Compare:
+        op = c[1]
+        return A.Compare(op[1], c[0], c[2], span=tok_span(op))
+
+    def rel_op(self, c: list[Any]) -> Any:
+        return c[0]
+
+    def add(self, c: list[Any]) -> A.BinOp:
+        return A.BinOp("+", c[0], c[1], span=join(_span_of(c[0]), _span_of(c[1])))
+
+    def sub(self, c: list[Any]) -> A.BinOp:
+        return A.BinOp("-", c[0], c[1], span=join(_span_of(c[0]), _span_of(c[1])))
+
+    def mul(self, c: list[Any]) -> A.BinOp:
+        return A.BinOp("*", c[0], c[1], span=join(_span_of(c[0]), _span_of(c[1])))
+
+    def bool_lit(self, c: list[Any]) -> A.BoolLit:
+        return A.BoolLit(c[0][0] == "TRUE", span=tok_span(c[0]))
+
+    def int_lit(self, c: list[Any]) -> A.IntLit:
+        return A.IntLit(int(c[0][1]), span=tok_span(c[0]))
+
+    def neg_int(self, c: list[Any]) -> A.IntLit:
+        t = c[0]
+        return A.IntLit(-int(t[1]), span=A.Span(t[3], max(t[4] - 1, 1), t[3], t[4] + len(t[1])))
+
+    def decimal_lit(self, c: list[Any]) -> A.DecimalLit:
+        return A.DecimalLit(c[0][1], span=tok_span(c[0]))
+
+    def name(self, c: list[Any]) -> A.Name:
+        return A.Name(ident(c[0]), span=tok_span(c[0]))
+
+    def arrow_name(self, c: list[Any]) -> A.Name:
+        return A.Name(ident(c[0]), arrow=True, span=tok_span(c[0]))
+
+    def braced_name(self, c: list[Any]) -> A.Name:
+        return A.Name(ident(c[0]), braced=True, span=tok_span(c[0]))
+
+    def paren(self, c: list[Any]) -> A.Expr:
+        e = c[0]
+        if type(e) in (A.BinOp, A.Compare, A.Not):
+            return replace(e, parenthesized=True)
+        return e  # type: ignore[no-any-return]
+
+    # -- LEGOS concerns and purposes
+    def situation(self, c: list[Any]) -> A.Situation:
+        body: A.Situation = c[1]
+        return replace(body, name=ident(c[0]), span=tok_span(c[0]))
+
+    def exists_body(self, c: list[Any]) -> A.Situation:
+        return A.Situation("", "exists", c[0], c[1] or (), c[2], span=c[0].span)
+
+    def when_body(self, c: list[Any]) -> A.Situation:
+        return A.Situation("", "when", c[0], c[1] or (), c[2], span=c[0].span)
+
+    def meanwhile(self, c: list[Any]) -> A.Situation:
+        s: A.Situation = c[0]
+        return s
+
+    def ext_response(self, c: list[Any]) -> tuple[A.Response, ...]:
+        return tuple(c)
+
+    # -- LEGOS relations
+    def event_relation(self, c: list[Any]) -> A.EventRelation:
+        return A.EventRelation(c[0][1], ident(c[1]), ident(c[2]), span=tok_span(c[0]))
+
+    def measure_relation(self, c: list[Any]) -> A.MeasureRelation:
+        return A.MeasureRelation(c[0][1], c[1], c[2], span=tok_span(c[0]))
+
+    def measure_invariant(self, c: list[Any]) -> A.MeasureRelation:
+        return A.MeasureRelation("invariant", c[0], None, span=_span_of(c[0]))
+
+    def event_measure_relation(self, c: list[Any]) -> A.EventMeasureRelation:
+        return A.EventMeasureRelation(c[0][1], ident(c[1]), c[2], span=tok_span(c[0]))
+
+    def until_relation(self, c: list[Any]) -> A.UntilRelation:
+        return A.UntilRelation(c[0], c[1], ident(c[2]), c[3], span=c[0].span)
+
+    def for_relation(self, c: list[Any]) -> A.ForRelation:
+        return A.ForRelation(c[0], c[1], c[2], span=c[0].span)
+
+    def event_rel(self, c: list[Any]) -> Any:
+        return c[0]
+
+    measure_rel = event_rel
+    event_measure_rel = event_rel
+
+
+def _span_of(node: Any) -> A.Span:
+    s: A.Span = node.span
+    return s

@@ -1,0 +1,127 @@
+"""Walks over the AST that several passes share (checker, inference, dialect detection)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+from cosleec.lang import ast as A
+
+
+def responses(resp: A.Response) -> Iterator[A.Response]:
+    """The response and every response nested in it (otherwise, else, hedge clauses)."""
+    yield resp
+    for item in resp.items:
+        if item.otherwise is not None:
+            yield from responses(item.otherwise)
+        if item.alternative is not None:
+            yield from responses(item.alternative)
+    for d in resp.defeaters:
+        if d.response is not None:
+            yield from responses(d.response)
+
+
+def occurrences(resp: A.Response) -> Iterator[A.Occurrence]:
+    for r in responses(resp):
+        for item in r.items:
+            yield item.occurrence
+
+
+def durations(resp: A.Response) -> Iterator[A.Duration]:
+    for occ in occurrences(resp):
+        if occ.limit is not None:
+            if occ.limit.lo is not None:
+                yield occ.limit.lo
+            yield occ.limit.hi
+
+
+def response_conditions(resp: A.Response) -> Iterator[A.Expr]:
+    for r in responses(resp):
+        for d in r.defeaters:
+            yield d.condition
+
+
+def situations(spec: A.Specification) -> Iterator[A.Situation]:
+    for s in (*spec.concerns, *spec.purposes):
+        cur: A.Situation | None = s
+        while cur is not None:
+            yield cur
+            cur = cur.meanwhile
+
+
+def triggers(spec: A.Specification) -> Iterator[A.Trigger]:
+    for r in spec.rules:
+        yield r.trigger
+    for s in situations(spec):
+        yield s.trigger
+    for rel in spec.relations:
+        if isinstance(rel, A.UntilRelation | A.ForRelation):
+            yield rel.trigger
+
+
+def all_responses(spec: A.Specification) -> Iterator[A.Response]:
+    for r in spec.rules:
+        yield r.response
+    for s in situations(spec):
+        yield from s.responses
+
+
+def conditions(spec: A.Specification) -> Iterator[A.Expr]:
+    """Every boolean condition: triggers, hedge clauses, situations and relations."""
+    for t in triggers(spec):
+        if t.condition is not None:
+            yield t.condition
+    for resp in all_responses(spec):
+        yield from response_conditions(resp)
+    for rel in spec.relations:
+        if isinstance(rel, A.MeasureRelation):
+            yield rel.first
+            if rel.second is not None:
+                yield rel.second
+        elif isinstance(rel, A.EventMeasureRelation):
+            yield rel.condition
+        elif isinstance(rel, A.UntilRelation):
+            yield rel.condition
+            if rel.until_condition is not None:
+                yield rel.until_condition
+        elif isinstance(rel, A.ForRelation):
+            yield rel.condition
+
+
+def all_durations(spec: A.Specification) -> Iterator[A.Duration]:
+    for resp in all_responses(spec):
+        yield from durations(resp)
+    for rel in spec.relations:
+        if isinstance(rel, A.ForRelation):
+            yield rel.duration
+
+
+def subexpressions(e: A.Expr) -> Iterator[A.Expr]:
+    yield e
+    if isinstance(e, A.Not):
+        yield from subexpressions(e.operand)
+    elif isinstance(e, A.BinOp | A.Compare):
+        yield from subexpressions(e.left)
+        yield from subexpressions(e.right)
+
+
+def names(e: A.Expr) -> Iterator[A.Name]:
+    for s in subexpressions(e):
+        if isinstance(s, A.Name):
+            yield s
+
+
+def event_references(spec: A.Specification) -> Iterator[tuple[str, A.Span]]:
+    """Every place an event is named, with its span."""
+    for t in triggers(spec):
+        yield t.event, t.span
+    for resp in all_responses(spec):
+        for occ in occurrences(resp):
+            yield occ.event, occ.span
+    for rel in spec.relations:
+        if isinstance(rel, A.EventRelation):
+            yield rel.first, rel.span
+            yield rel.second, rel.span
+        elif isinstance(rel, A.EventMeasureRelation):
+            yield rel.event, rel.span
+        elif isinstance(rel, A.UntilRelation):
+            yield rel.until_event, rel.span
