@@ -83,6 +83,7 @@ class Name:
     name: str
     braced: bool = field(default=False, compare=False, kw_only=True)
     arrow: bool = field(default=False, compare=False, kw_only=True)
+    parenthesized: bool = field(default=False, compare=False, kw_only=True)
     span: Span = _span()
 
 

@@ -63,6 +63,9 @@ def looks_like_paper(text: str) -> bool:
 
 def parse_blocks(text: str, sink: DiagnosticSink) -> list[Block] | None:
     """Parse DSL text into its blocks; syntax errors go to ``sink``."""
+    if text.lstrip().startswith("{\\rtf"):  # one clear error, not one per RTF control word
+        sink.error("rtf", "this file is RTF, not plain text", A.Span(1, 1, 1, 6), hint="save it as plain text (UTF-8)")
+        return None
     g = _grammar("sleec", ToAst())
     problems: list[SyntaxProblem] = []
     blocks = g.lalr.parse(g.lexer.tokens(text), problems)

@@ -204,7 +204,7 @@ class ToAst(Transformer[Token, Any]):
 
     def paren(self, c: list[Any]) -> A.Expr:
         e = c[0]
-        if type(e) in (A.BinOp, A.Compare, A.Not):
+        if type(e) in (A.BinOp, A.Compare, A.Not, A.Name):
             return replace(e, parenthesized=True)
         return e  # type: ignore[no-any-return]
 

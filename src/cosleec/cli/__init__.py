@@ -1,0 +1,1 @@
+"""The ``cosleec`` command line."""

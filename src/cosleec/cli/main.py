@@ -1,0 +1,64 @@
+"""``cosleec`` entry point: sub-commands, exit codes, and no tracebacks for users.
+
+Exit codes are a contract: 0 success, 1 the input has errors (or a decision could not be
+made), 2 usage errors. An unexpected internal failure prints one line and exits 70.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from cosleec.cli import check, fmt
+
+USAGE_ERROR = 2
+INTERNAL_ERROR = 70
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.print_usage(sys.stderr)
+        print(f"cosleec: error: {message}", file=sys.stderr)
+        raise SystemExit(USAGE_ERROR)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="cosleec", description="Operationalise SLEEC rules with context-oriented programming.")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    check.add_parser(sub)
+    fmt.add_parser(sub)
+    _add_optional_commands(sub)
+    return p
+
+
+def _add_optional_commands(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Commands of the runtime layers register here once those layers exist."""
+    try:
+        from cosleec.cli import decide, demo
+    except ImportError:  # pragma: no cover - during bootstrap only
+        return
+    decide.add_parser(sub)
+    demo.add_parser(sub)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+        rc: int = args.run(args)
+        return rc
+    except SystemExit as e:
+        return int(e.code) if isinstance(e.code, int) else USAGE_ERROR
+    except KeyboardInterrupt:
+        return 130
+    except BrokenPipeError:
+        return 0
+    except Exception as e:  # never show a traceback to a user
+        print(f"cosleec: internal error: {type(e).__name__}: {e} (please report this)", file=sys.stderr)
+        return INTERNAL_ERROR
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,536 @@
+"""Static semantics of SLEEC (sleec-language.md §5): names, kinds, types, constants.
+
+Every problem of a file is reported in one pass, as a diagnostic with a stable code. The
+checker also resolves the information later stages need (constant values, each scale
+literal's measure), exposed as a :class:`SymbolTable`.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass, field
+
+from cosleec.lang import ast as A
+from cosleec.lang import visit
+from cosleec.lang.diagnostics import DiagnosticSink
+
+KEYWORDS = frozenset(
+    "def_start def_end rule_start rule_end concern_start concern_end purpose_start purpose_end "
+    "relation_start relation_end event measure constant boolean numeric scale when then and or "
+    "not within otherwise unless else eventually exists while meanwhile true false seconds "
+    "minutes hours days".split()
+)
+# Names SLEEC-TK rejects because they clash with its CSP encoding (§3).
+TK_RESERVED = frozenset({"STOP", "P", "Q", "c", "d"})
+
+BOOL = "bool"
+NUM = "num"
+
+
+@dataclass(frozen=True)
+class Options:
+    """What the checker should be strict about."""
+
+    strict_precedence: bool = False  # mixed and/or without parentheses is an error
+    strict_extensions: bool = False  # cosleec extensions (response conjunction) are errors
+    lint: bool = False  # naming conventions and style suggestions
+    tk_names: bool = False  # warn about names SLEEC-TK rejects
+
+
+@dataclass
+class SymbolTable:
+    """What the names of a specification denote, after checking."""
+
+    events: dict[str, A.EventDecl] = field(default_factory=dict)
+    measures: dict[str, A.MeasureDecl] = field(default_factory=dict)
+    constants: dict[str, A.ConstantDecl] = field(default_factory=dict)
+    constant_values: dict[str, int] = field(default_factory=dict)
+
+    def kind(self, name: str) -> str | None:
+        if name in self.events:
+            return "event"
+        if name in self.measures:
+            return "measure"
+        if name in self.constants:
+            return "constant"
+        return None
+
+
+# An expression's type: BOOL, NUM, ("scale", measure) or ("lit", literal) -- a bare name
+# that is no measure or constant and can only be a scale literal -- or None after an error.
+Type = str | tuple[str, str] | None
+
+
+class Checker:
+    def __init__(self, spec: A.Specification, sink: DiagnosticSink, options: Options) -> None:
+        self.spec = spec
+        self.sink = sink
+        self.opt = options
+        self.table = SymbolTable()
+        self.scale_literals: set[str] = set()
+
+    # ------------------------------------------------------------------ entry point
+    def run(self) -> SymbolTable:
+        spec = self.spec
+        if not spec.has_def_block:
+            self.sink.error(
+                "no-def-block",
+                "no def block: events and measures are not declared",
+                spec.rules[0].span if spec.rules else A.NO_SPAN,
+                hint="add `def_start ... def_end`, or run with --infer-defs to infer the declarations",
+            )
+            return self.table
+        self._definitions()
+        self._constants()
+        if not spec.rules and any(b.kind == "rule" for b in spec.blocks):
+            mark = next(b for b in spec.blocks if b.kind == "rule")
+            self.sink.error("empty-rule-block", "empty rule block: a rule set needs at least one rule", mark.span)
+        self._rules()
+        self._situations()
+        self._relations()
+        return self.table
+
+    # ------------------------------------------------------------------ declarations
+    def _definitions(self) -> None:
+        t = self.table
+        first: dict[str, A.Definition] = {}
+        for d in self.spec.definitions:
+            if isinstance(d, A.FluentDecl):
+                self.sink.warning(
+                    "unsupported-fluent",
+                    f"`fluent {d.name}` is an extension of CPeluti/LEGOS-SLEEC (goal fluents for "
+                    "conflict explanation); cosleec ignores it",
+                    d.span,
+                )
+                continue
+            self._check_name(d.name, d.span)
+            if d.name in first:
+                prev = first[d.name]
+                if prev == d:  # the same declaration again: harmless, but worth cleaning up
+                    self.sink.warning("redeclared", f"`{d.name}` is declared twice, identically", d.span,
+                                      related=(("first declared here", prev.span),))
+                    continue
+                self.sink.error(
+                    "duplicate-name",
+                    f"`{d.name}` is already declared as {_kind_word(prev)}",
+                    d.span,
+                    related=((f"`{d.name}` first declared here", prev.span),),
+                )
+                continue
+            first[d.name] = d
+            if isinstance(d, A.EventDecl):
+                t.events[d.name] = d
+                if self.opt.lint and not d.name[:1].isupper():
+                    self.sink.warning("naming", f"event `{d.name}` should start with an upper-case letter", d.span)
+            elif isinstance(d, A.MeasureDecl):
+                t.measures[d.name] = d
+                if self.opt.lint and not d.name[:1].islower():
+                    self.sink.warning("naming", f"measure `{d.name}` should start with a lower-case letter", d.span)
+            else:
+                t.constants[d.name] = d
+                if self.opt.lint and d.name != d.name.upper():
+                    self.sink.warning("naming", f"constant `{d.name}` should be ALL_CAPS", d.span)
+        # scale literals: unique within their scale, distinct from every declared name
+        for m in t.measures.values():
+            if isinstance(m.type, A.ScaleType):
+                seen: set[str] = set()
+                spans = m.type.literal_spans or (m.span,) * len(m.type.literals)
+                for lit, span in zip(m.type.literals, spans):
+                    if lit in seen:
+                        self.sink.error("duplicate-literal", f"`{lit}` appears twice in the scale of `{m.name}`", span)
+                    seen.add(lit)
+                    if lit in first:
+                        self.sink.error(
+                            "literal-clash",
+                            f"scale literal `{lit}` of `{m.name}` has the name of {_kind_word(first[lit])}",
+                            span,
+                        )
+                    self._check_name(lit, span)
+                self.scale_literals |= seen
+
+    def _check_name(self, name: str, span: A.Span) -> None:
+        if name in KEYWORDS:
+            self.sink.error("keyword-name", f"`{name}` is a reserved keyword and cannot be used as a name", span)
+        elif self.opt.tk_names and name in TK_RESERVED:
+            self.sink.warning("tk-reserved", f"SLEEC-TK rejects the name `{name}` (it clashes with its CSP encoding)", span)
+
+    def _constants(self) -> None:
+        t = self.table
+        for c in t.constants.values():
+            self._constant_value(c.name, [])
+
+    def _constant_value(self, name: str, path: list[str]) -> int | None:
+        t = self.table
+        if name in t.constant_values:
+            return t.constant_values[name]
+        c = t.constants[name]
+        if isinstance(c.value, int):
+            t.constant_values[name] = c.value
+            return c.value
+        ref = c.value
+        if name in path:
+            if path[0] == name:
+                cycle = " -> ".join([*path, name])
+                self.sink.error("constant-cycle", f"constants refer to each other in a cycle: {cycle}", c.span)
+            return None
+        target = t.constants.get(ref)
+        if target is None:
+            kind = t.kind(ref)
+            if kind is not None:
+                self.sink.error("constant-ref", f"constant `{name}` refers to {kind} `{ref}`; only constants can", c.span)
+            else:
+                self.sink.error("undeclared", f"constant `{name}` refers to undeclared `{ref}`", c.span,
+                                hint=self._did_you_mean(ref, t.constants))
+            return None
+        v = self._constant_value(ref, [*path, name])
+        if v is not None:
+            t.constant_values[name] = v
+        return v
+
+    # ------------------------------------------------------------------ rules
+    def _rules(self) -> None:
+        names: dict[str, A.Rule] = {}
+        for r in self.spec.rules:
+            if r.name in names:
+                self.sink.error(
+                    "duplicate-rule",
+                    f"rule `{r.name}` is defined twice",
+                    r.span,
+                    related=((f"`{r.name}` first defined here", names[r.name].span),),
+                )
+            else:
+                names[r.name] = r
+            self._check_name(r.name, r.span)
+            self._trigger(r.trigger)
+            self._response(r.response, top=True)
+
+    def _trigger(self, trig: A.Trigger) -> None:
+        self._event(trig.event, trig.span, "trigger")
+        if trig.condition is not None:
+            self._condition(trig.condition)
+
+    def _event(self, name: str, span: A.Span, role: str) -> None:
+        t = self.table
+        if name in t.events:
+            return
+        kind = t.kind(name)
+        if kind is not None:
+            self.sink.error("not-an-event", f"{role} `{name}` is a {kind}, not an event", span)
+        else:
+            self.sink.error("undeclared-event", f"{role} `{name}` is not declared as an event", span,
+                            hint=self._did_you_mean(name, t.events))
+
+    def _response(self, resp: A.Response, top: bool) -> None:
+        if len(resp.items) > 1 and self.opt.strict_extensions:
+            self.sink.error(
+                "extension-conjunction",
+                "`then A and B` (a conjunction of responses) is a cosleec extension, rejected by --strict",
+                resp.items[1].span,
+            )
+        for item in resp.items:
+            occ = item.occurrence
+            self._event(occ.event, occ.span, "response")
+            if occ.limit is not None:
+                self._time_limit(occ.limit)
+            if item.otherwise is not None:
+                if occ.eventually:
+                    self.sink.warning("unreachable-otherwise",
+                                      f"`otherwise` after `{occ.event} eventually` can never start", item.otherwise.span)
+                elif occ.limit is None:
+                    self.sink.warning("untimed-otherwise",
+                                      f"`otherwise` after untimed `{occ.event}` is read as `within 0 seconds`",
+                                      item.otherwise.span)
+                self._response(item.otherwise, top=False)
+            if item.alternative is not None:
+                self._response(item.alternative, top=False)
+            if self.opt.lint and occ.negated and occ.limit is None and not occ.eventually:
+                self.sink.warning("untimed-prohibition",
+                                  f"`not {occ.event}` forbids it only at the trigger instant",
+                                  occ.span, hint="add `within T` or `eventually`")
+        for d in resp.defeaters:
+            self._condition(d.condition)
+            if d.response is not None:
+                self._response(d.response, top=False)
+        self._hedges(resp)
+
+    def _hedges(self, resp: A.Response) -> None:
+        """Warn about hedge clauses that can never be the active one (last wins)."""
+        ds = resp.defeaters
+        for i, d in enumerate(ds):
+            c = d.condition
+            if isinstance(c, A.BoolLit) and not c.value:
+                self.sink.warning("unreachable-hedge", f"clause {i + 1}: condition is `false`, it never applies", d.span)
+                continue
+            for j in range(i + 1, len(ds)):
+                later = ds[j].condition
+                if later == c:
+                    self.sink.warning("duplicate-hedge",
+                                      f"clause {i + 1} has the same condition as clause {j + 1}, which wins; "
+                                      f"clause {i + 1} never applies", d.span,
+                                      related=(("the later clause", ds[j].span),))
+                    break
+                if (isinstance(later, A.BoolLit) and later.value) or later in _conjuncts(c):
+                    self.sink.warning("unreachable-hedge",
+                                      f"clause {i + 1} never applies: whenever it holds, clause {j + 1} "
+                                      "holds too and the last clause that holds wins", d.span,
+                                      related=(("the later clause", ds[j].span),))
+                    break
+
+    def _time_limit(self, lim: A.TimeLimit) -> None:
+        hi = self._duration(lim.hi)
+        if lim.lo is not None:
+            lo = self._duration(lim.lo)
+            if lo is not None and hi is not None and lo > hi:
+                self.sink.error("bad-deadline", f"interval starts after it ends ({lo} s > {hi} s)", lim.span)
+
+    def _duration(self, d: A.Duration) -> float | None:
+        """Check a duration; return its length in seconds when it is constant."""
+        unit = A.TIME_UNITS.get(d.unit)
+        if unit is None:
+            plural = d.unit + "s"
+            hint = f"SLEEC uses plural units: `{plural}`" if plural in A.TIME_UNITS else None
+            if hint is None:
+                close = difflib.get_close_matches(d.unit, list(A.TIME_UNITS), n=1)
+                hint = f"did you mean `{close[0]}`?" if close else "units are seconds, minutes, hours, days"
+            self.sink.error("bad-unit", f"`{d.unit}` is not a time unit", d.span, hint=hint)
+        ty = self._expr(d.value)
+        if ty is not None and ty != NUM:
+            self.sink.error("bad-deadline", f"a deadline must be a number, not {_type_word(ty)}", _span(d.value))
+            return None
+        v = self._const_eval(d.value)
+        if v is not None and unit is not None:
+            if v < 0:
+                self.sink.error("bad-deadline", f"negative deadline ({v} {d.unit})", _span(d.value))
+            return v * unit
+        return None
+
+    def _const_eval(self, e: A.Expr) -> int | None:
+        if isinstance(e, A.IntLit):
+            return e.value
+        if isinstance(e, A.Name):
+            return self.table.constant_values.get(e.name)
+        if isinstance(e, A.BinOp) and e.op in A.ARITH_OPS:
+            a, b = self._const_eval(e.left), self._const_eval(e.right)
+            if a is None or b is None:
+                return None
+            return a + b if e.op == "+" else a - b if e.op == "-" else a * b
+        return None
+
+    # ------------------------------------------------------------------ expressions
+    def _condition(self, e: A.Expr) -> None:
+        ty = self._expr(e)
+        if ty is not None and ty != BOOL:
+            self.sink.error("not-boolean", f"a condition must be true or false, not {_type_word(ty)}", _span(e))
+
+    def _expr(self, e: A.Expr) -> Type:
+        if isinstance(e, A.Name):
+            return self._name(e)
+        if isinstance(e, A.BoolLit):
+            return BOOL
+        if isinstance(e, A.IntLit):
+            return NUM
+        if isinstance(e, A.DecimalLit):
+            self.sink.error("decimal", f"`{e.text}`: SLEEC numbers are integers (no decimal literals)", e.span,
+                            hint="scale the measure, e.g. tenths of a degree")
+            return NUM
+        if isinstance(e, A.Not):
+            ty = self._expr(e.operand)
+            if ty is not None and ty != BOOL:
+                self.sink.error("type", f"`not` needs a truth value, not {_type_word(ty)}", e.span)
+            return BOOL
+        if isinstance(e, A.BinOp):
+            if e.op in A.BOOL_OPS:
+                self._mixed(e)
+                for side in (e.left, e.right):
+                    ty = self._expr(side)
+                    if ty is not None and ty != BOOL:
+                        self.sink.error("type", f"`{e.op}` needs truth values, not {_type_word(ty)}", _span(side))
+                return BOOL
+            for side in (e.left, e.right):
+                ty = self._expr(side)
+                if ty is not None and ty != NUM:
+                    self.sink.error("arith-type", f"arithmetic `{e.op}` needs numbers, not {_type_word(ty)}", _span(side))
+            return NUM
+        return self._compare(e)
+
+    def _mixed(self, e: A.BinOp) -> None:
+        left = e.left
+        if isinstance(left, A.BinOp) and left.op in A.BOOL_OPS and left.op != e.op and not left.parenthesized:
+            msg = (f"`{left.op}` and `{e.op}` mixed without parentheses: read left to right as "
+                   f"`(... {left.op} ...) {e.op} ...`")
+            hint = "add parentheses to say which you mean"
+            if self.opt.strict_precedence:
+                self.sink.error("mixed-and-or", msg, e.span, hint=hint)
+            else:
+                self.sink.warning("mixed-and-or", msg, e.span, hint=hint)
+
+    def _name(self, n: A.Name) -> Type:
+        t = self.table
+        m = t.measures.get(n.name)
+        if m is not None:
+            if n.arrow:
+                self.sink.error("kind", f"`->{n.name}` refers to a constant, but `{n.name}` is a measure", n.span)
+            if isinstance(m.type, A.BooleanType):
+                return BOOL
+            if isinstance(m.type, A.NumericType):
+                return NUM
+            return ("scale", n.name)
+        if n.name in t.constants:
+            if n.braced:
+                self.sink.error("kind", f"`{{{n.name}}}`: `{n.name}` is a constant; braces mark measures", n.span)
+            return NUM
+        if n.name in t.events:
+            self.sink.error("not-a-measure", f"`{n.name}` is an event, not a measure", n.span)
+            return None
+        if n.name in self.scale_literals and not n.braced and not n.arrow:
+            return ("lit", n.name)
+        what = "constant" if n.arrow else "measure"
+        pool = {**t.measures, **t.constants}
+        self.sink.error("undeclared", f"`{n.name}` is not declared (expected a {what})", n.span,
+                        hint=self._did_you_mean(n.name, pool))
+        return None
+
+    def _compare(self, e: A.Compare) -> Type:
+        lt, rt = self._expr(e.left), self._expr(e.right)
+        if lt is None or rt is None:
+            return BOOL
+        # a scale literal takes the scale of the other side
+        if isinstance(lt, tuple) and lt[0] == "lit":
+            lt, rt = rt, lt
+            lit_side, other = e.left, e.right
+        else:
+            lit_side, other = e.right, e.left
+        if isinstance(rt, tuple) and rt[0] == "lit":
+            lit = rt[1]
+            if isinstance(lt, tuple) and lt[0] == "scale":
+                m = self.table.measures[lt[1]]
+                assert isinstance(m.type, A.ScaleType)
+                if lit not in m.type.literals:
+                    owners = self._owners(lit)
+                    self.sink.error("scale-literal",
+                                    f"`{lit}` is not in the scale of `{lt[1]}` ({', '.join(m.type.literals)}); "
+                                    f"it is a literal of `{'`, `'.join(owners)}`",
+                                    _span(lit_side),
+                                    hint="scale literals belong to their measure (LEGOS-SLEEC's global "
+                                    "literal table lets such cross-scale comparisons through)")
+                return BOOL
+            if isinstance(lt, tuple) and lt[0] == "lit":
+                self.sink.error("type", f"`{e.op}` compares two scale literals; one side must be a measure", e.span)
+                return BOOL
+            owners = self._owners(lit)
+            self.sink.error("type", f"scale literal `{lit}` (of `{'`, `'.join(owners)}`) compared with "
+                            f"{_type_word(lt)}", _span(lit_side))
+            return BOOL
+        if lt == BOOL or rt == BOOL:
+            if e.op in ("=", "<>") and lt == rt == BOOL:
+                return BOOL
+            self.sink.error("bool-relop", f"`{e.op}` cannot order truth values"
+                            if e.op not in ("=", "<>") else f"`{e.op}` compares a truth value with "
+                            f"{_type_word(rt if lt == BOOL else lt)}", e.span)
+            return BOOL
+        if lt != rt:
+            self.sink.error("type", f"`{e.op}` compares {_type_word(lt)} with {_type_word(rt)}", e.span)
+        del other
+        return BOOL
+
+    # ------------------------------------------------------------------ LEGOS blocks
+    def _situations(self) -> None:
+        for block, items in (("concern", self.spec.concerns), ("purpose", self.spec.purposes)):
+            seen: dict[str, A.Situation] = {}
+            for s in items:
+                if s.name in seen:
+                    self.sink.error("duplicate-name", f"{block} `{s.name}` is defined twice", s.span,
+                                    related=(("first defined here", seen[s.name].span),))
+                seen.setdefault(s.name, s)
+                cur: A.Situation | None = s
+                while cur is not None:
+                    self._trigger(cur.trigger)
+                    for r in cur.responses:
+                        self._response(r, top=True)
+                    cur = cur.meanwhile
+
+    def _relations(self) -> None:
+        for rel in self.spec.relations:
+            if isinstance(rel, A.EventRelation):
+                if rel.kind == "conflict":
+                    self._nonstandard(rel.span, "conflict", "mutualExclusive")
+                    continue
+                self._event(rel.first, rel.span, "relation")
+                self._event(rel.second, rel.span, "relation")
+            elif isinstance(rel, A.MeasureRelation):
+                if rel.kind == "conflict":
+                    self._nonstandard(rel.span, "measure conflict", "measure mutualExclusive")
+                    continue
+                self._condition(rel.first)
+                if rel.second is not None:
+                    self._condition(rel.second)
+            elif isinstance(rel, A.EventMeasureRelation):
+                if rel.kind == "effect":
+                    self._nonstandard(rel.span, "effect", "includes")
+                    continue
+                self._event(rel.event, rel.span, "relation")
+                self._condition(rel.condition)
+            elif isinstance(rel, A.UntilRelation):
+                self._trigger(rel.trigger)
+                self._condition(rel.condition)
+                self._event(rel.until_event, rel.span, "relation")
+                if rel.until_condition is not None:
+                    self._condition(rel.until_condition)
+            else:
+                self._trigger(rel.trigger)
+                self._condition(rel.condition)
+                self._duration(rel.duration)
+
+    def _owners(self, lit: str) -> list[str]:
+        return [m.name for m in self.table.measures.values()
+                if isinstance(m.type, A.ScaleType) and lit in m.type.literals]
+
+    def _nonstandard(self, span: A.Span, word: str, instead: str) -> None:
+        self.sink.error(
+            "nonstandard-relation",
+            f"`{word}` is not a relation in any published SLEEC grammar (it appears only in "
+            "sleecvalDef's LLM-sanitised files)",
+            span,
+            hint=f"did you mean `{instead}`?",
+        )
+
+    @staticmethod
+    def _did_you_mean(name: str, pool: dict[str, object]) -> str | None:
+        close = difflib.get_close_matches(name, list(pool), n=1, cutoff=0.75)
+        return f"did you mean `{close[0]}`?" if close else None
+
+
+def _conjuncts(e: A.Expr) -> list[A.Expr]:
+    if isinstance(e, A.BinOp) and e.op == "and":
+        return [*_conjuncts(e.left), *_conjuncts(e.right)]
+    return [e]
+
+
+def _span(e: A.Expr) -> A.Span:
+    return e.span
+
+
+def _kind_word(d: A.Definition) -> str:
+    if isinstance(d, A.EventDecl):
+        return "an event"
+    if isinstance(d, A.MeasureDecl):
+        return "a measure"
+    return "a constant"
+
+
+def _type_word(ty: Type) -> str:
+    if ty == BOOL:
+        return "a truth value"
+    if ty == NUM:
+        return "a number"
+    if isinstance(ty, tuple):
+        return f"the scale of `{ty[1]}`" if ty[0] == "scale" else f"scale literal `{ty[1]}`"
+    return "an unknown value"
+
+
+def check(spec: A.Specification, sink: DiagnosticSink, options: Options | None = None) -> SymbolTable:
+    """Check ``spec``; diagnostics go to ``sink``. Returns the resolved symbol table."""
+    return Checker(spec, sink, options or Options()).run()
+
+
+__all__ = ["Options", "SymbolTable", "check", "visit"]
