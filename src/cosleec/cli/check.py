@@ -14,13 +14,23 @@ from cosleec.lang.checker import Options
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p = sub.add_parser("check", help="parse and check SLEEC rule files")
-    p.add_argument("files", nargs="+", metavar="FILE", help="rule files (a directory means its *.sleec files)")
+    p.add_argument(
+        "files", nargs="+", metavar="FILE", help="rule files (a directory means its *.sleec files)"
+    )
     p.add_argument("--json", action="store_true", help="print one JSON document instead of text")
-    p.add_argument("--dialect", choices=["auto", "tk", "legos", "paper"], default="auto",
-                   help="force a dialect: tk/legos also check that tool's grammar strictly")
+    p.add_argument(
+        "--dialect",
+        choices=["auto", "tk", "legos", "paper"],
+        default="auto",
+        help="force a dialect: tk/legos also check that tool's grammar strictly",
+    )
     p.add_argument("--strict", action="store_true", help="reject cosleec extensions (response conjunction)")
-    p.add_argument("--infer-defs", action="store_true", help="infer declarations for files without a def block")
-    p.add_argument("--strict-precedence", action="store_true", help="mixed and/or without parentheses is an error")
+    p.add_argument(
+        "--infer-defs", action="store_true", help="infer declarations for files without a def block"
+    )
+    p.add_argument(
+        "--strict-precedence", action="store_true", help="mixed and/or without parentheses is an error"
+    )
     p.add_argument("--lint", action="store_true", help="also warn about naming conventions and style")
     p.set_defaults(run=run)
 
@@ -49,8 +59,14 @@ def run(args: argparse.Namespace) -> int:
             n_warn = sum(1 for d in r.diagnostics if str(d.severity) == "warning")
             if r.spec is not None and n_err == 0:
                 extra = f", {n_warn} warnings" if n_warn else ""
-                out.print(Text(f"{r.path}: ok ({r.dialect}, {len(r.spec.rules)} rules, {len(r.spec.events)} "
-                               f"events, {len(r.spec.measures)} measures{extra})"))
+                out.print(
+                    Text(
+                        f"{r.path}: ok ({r.dialect}, {len(r.spec.rules)} rules, {len(r.spec.events)} "
+                        f"events, {len(r.spec.measures)} measures{extra})"
+                    )
+                )
             else:
-                out.print(Text.assemble(f"{r.path}: ", (f"{n_err} error{'s' if n_err != 1 else ''}", "bold red")))
+                out.print(
+                    Text.assemble(f"{r.path}: ", (f"{n_err} error{'s' if n_err != 1 else ''}", "bold red"))
+                )
     return 0 if all(r.ok for r in results) else 1

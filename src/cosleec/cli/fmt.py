@@ -12,9 +12,15 @@ from cosleec.lang.printer import format_spec
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p = sub.add_parser("fmt", help="print a rule file in canonical form (converts between dialects)")
     p.add_argument("file", metavar="FILE")
-    p.add_argument("--dialect", choices=["tk", "legos"], default=None,
-                   help="dialect to print in (default: the file's own; the paper notation prints as TK)")
-    p.add_argument("--infer-defs", action="store_true", help="infer declarations for files without a def block")
+    p.add_argument(
+        "--dialect",
+        choices=["tk", "legos"],
+        default=None,
+        help="dialect to print in (default: the file's own; the paper notation prints as TK)",
+    )
+    p.add_argument(
+        "--infer-defs", action="store_true", help="infer declarations for files without a def block"
+    )
     p.set_defaults(run=run)
 
 

@@ -29,18 +29,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     check.add_parser(sub)
     fmt.add_parser(sub)
-    _add_optional_commands(sub)
     return p
-
-
-def _add_optional_commands(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    """Commands of the runtime layers register here once those layers exist."""
-    try:
-        from cosleec.cli import decide, demo
-    except ImportError:  # pragma: no cover - during bootstrap only
-        return
-    decide.add_parser(sub)
-    demo.add_parser(sub)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

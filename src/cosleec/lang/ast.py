@@ -9,7 +9,7 @@ and parse -> print -> parse is the identity on ASTs.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from enum import Enum
+from enum import StrEnum
 from typing import Literal, TypeAlias
 
 
@@ -37,7 +37,7 @@ def _span() -> Span:
     return field(default=NO_SPAN, compare=False, repr=False, kw_only=True)  # type: ignore[return-value]
 
 
-class Dialect(str, Enum):
+class Dialect(StrEnum):
     """The concrete syntax a file was written in."""
 
     TK = "tk"

@@ -8,6 +8,7 @@ literal's measure), exposed as a :class:`SymbolTable`.
 from __future__ import annotations
 
 import difflib
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from cosleec.lang import ast as A
@@ -15,10 +16,43 @@ from cosleec.lang import visit
 from cosleec.lang.diagnostics import DiagnosticSink
 
 KEYWORDS = frozenset(
-    "def_start def_end rule_start rule_end concern_start concern_end purpose_start purpose_end "
-    "relation_start relation_end event measure constant boolean numeric scale when then and or "
-    "not within otherwise unless else eventually exists while meanwhile true false seconds "
-    "minutes hours days".split()
+    [
+        "def_start",
+        "def_end",
+        "rule_start",
+        "rule_end",
+        "concern_start",
+        "concern_end",
+        "purpose_start",
+        "purpose_end",
+        "relation_start",
+        "relation_end",
+        "event",
+        "measure",
+        "constant",
+        "boolean",
+        "numeric",
+        "scale",
+        "when",
+        "then",
+        "and",
+        "or",
+        "not",
+        "within",
+        "otherwise",
+        "unless",
+        "else",
+        "eventually",
+        "exists",
+        "while",
+        "meanwhile",
+        "true",
+        "false",
+        "seconds",
+        "minutes",
+        "hours",
+        "days",
+    ]
 )
 # Names SLEEC-TK rejects because they clash with its CSP encoding (§3).
 TK_RESERVED = frozenset({"STOP", "P", "Q", "c", "d"})
@@ -68,6 +102,7 @@ class Checker:
         self.opt = options
         self.table = SymbolTable()
         self.scale_literals: set[str] = set()
+        self._cycles: set[frozenset[str]] = set()
 
     # ------------------------------------------------------------------ entry point
     def run(self) -> SymbolTable:
@@ -84,7 +119,9 @@ class Checker:
         self._constants()
         if not spec.rules and any(b.kind == "rule" for b in spec.blocks):
             mark = next(b for b in spec.blocks if b.kind == "rule")
-            self.sink.error("empty-rule-block", "empty rule block: a rule set needs at least one rule", mark.span)
+            self.sink.error(
+                "empty-rule-block", "empty rule block: a rule set needs at least one rule", mark.span
+            )
         self._rules()
         self._situations()
         self._relations()
@@ -107,8 +144,12 @@ class Checker:
             if d.name in first:
                 prev = first[d.name]
                 if prev == d:  # the same declaration again: harmless, but worth cleaning up
-                    self.sink.warning("redeclared", f"`{d.name}` is declared twice, identically", d.span,
-                                      related=(("first declared here", prev.span),))
+                    self.sink.warning(
+                        "redeclared",
+                        f"`{d.name}` is declared twice, identically",
+                        d.span,
+                        related=(("first declared here", prev.span),),
+                    )
                     continue
                 self.sink.error(
                     "duplicate-name",
@@ -121,11 +162,15 @@ class Checker:
             if isinstance(d, A.EventDecl):
                 t.events[d.name] = d
                 if self.opt.lint and not d.name[:1].isupper():
-                    self.sink.warning("naming", f"event `{d.name}` should start with an upper-case letter", d.span)
+                    self.sink.warning(
+                        "naming", f"event `{d.name}` should start with an upper-case letter", d.span
+                    )
             elif isinstance(d, A.MeasureDecl):
                 t.measures[d.name] = d
                 if self.opt.lint and not d.name[:1].islower():
-                    self.sink.warning("naming", f"measure `{d.name}` should start with a lower-case letter", d.span)
+                    self.sink.warning(
+                        "naming", f"measure `{d.name}` should start with a lower-case letter", d.span
+                    )
             else:
                 t.constants[d.name] = d
                 if self.opt.lint and d.name != d.name.upper():
@@ -137,7 +182,9 @@ class Checker:
                 spans = m.type.literal_spans or (m.span,) * len(m.type.literals)
                 for lit, span in zip(m.type.literals, spans):
                     if lit in seen:
-                        self.sink.error("duplicate-literal", f"`{lit}` appears twice in the scale of `{m.name}`", span)
+                        self.sink.error(
+                            "duplicate-literal", f"`{lit}` appears twice in the scale of `{m.name}`", span
+                        )
                     seen.add(lit)
                     if lit in first:
                         self.sink.error(
@@ -150,9 +197,13 @@ class Checker:
 
     def _check_name(self, name: str, span: A.Span) -> None:
         if name in KEYWORDS:
-            self.sink.error("keyword-name", f"`{name}` is a reserved keyword and cannot be used as a name", span)
+            self.sink.error(
+                "keyword-name", f"`{name}` is a reserved keyword and cannot be used as a name", span
+            )
         elif self.opt.tk_names and name in TK_RESERVED:
-            self.sink.warning("tk-reserved", f"SLEEC-TK rejects the name `{name}` (it clashes with its CSP encoding)", span)
+            self.sink.warning(
+                "tk-reserved", f"SLEEC-TK rejects the name `{name}` (it clashes with its CSP encoding)", span
+            )
 
     def _constants(self) -> None:
         t = self.table
@@ -169,18 +220,28 @@ class Checker:
             return c.value
         ref = c.value
         if name in path:
-            if path[0] == name:
+            members = frozenset(path)
+            if path[0] == name and members not in self._cycles:
+                self._cycles.add(members)
                 cycle = " -> ".join([*path, name])
-                self.sink.error("constant-cycle", f"constants refer to each other in a cycle: {cycle}", c.span)
+                self.sink.error(
+                    "constant-cycle", f"constants refer to each other in a cycle: {cycle}", c.span
+                )
             return None
         target = t.constants.get(ref)
         if target is None:
             kind = t.kind(ref)
             if kind is not None:
-                self.sink.error("constant-ref", f"constant `{name}` refers to {kind} `{ref}`; only constants can", c.span)
+                self.sink.error(
+                    "constant-ref", f"constant `{name}` refers to {kind} `{ref}`; only constants can", c.span
+                )
             else:
-                self.sink.error("undeclared", f"constant `{name}` refers to undeclared `{ref}`", c.span,
-                                hint=self._did_you_mean(ref, t.constants))
+                self.sink.error(
+                    "undeclared",
+                    f"constant `{name}` refers to undeclared `{ref}`",
+                    c.span,
+                    hint=self._did_you_mean(ref, t.constants),
+                )
             return None
         v = self._constant_value(ref, [*path, name])
         if v is not None:
@@ -217,8 +278,12 @@ class Checker:
         if kind is not None:
             self.sink.error("not-an-event", f"{role} `{name}` is a {kind}, not an event", span)
         else:
-            self.sink.error("undeclared-event", f"{role} `{name}` is not declared as an event", span,
-                            hint=self._did_you_mean(name, t.events))
+            self.sink.error(
+                "undeclared-event",
+                f"{role} `{name}` is not declared as an event",
+                span,
+                hint=self._did_you_mean(name, t.events),
+            )
 
     def _response(self, resp: A.Response, top: bool) -> None:
         if len(resp.items) > 1 and self.opt.strict_extensions:
@@ -234,19 +299,27 @@ class Checker:
                 self._time_limit(occ.limit)
             if item.otherwise is not None:
                 if occ.eventually:
-                    self.sink.warning("unreachable-otherwise",
-                                      f"`otherwise` after `{occ.event} eventually` can never start", item.otherwise.span)
+                    self.sink.warning(
+                        "unreachable-otherwise",
+                        f"`otherwise` after `{occ.event} eventually` can never start",
+                        item.otherwise.span,
+                    )
                 elif occ.limit is None:
-                    self.sink.warning("untimed-otherwise",
-                                      f"`otherwise` after untimed `{occ.event}` is read as `within 0 seconds`",
-                                      item.otherwise.span)
+                    self.sink.warning(
+                        "untimed-otherwise",
+                        f"`otherwise` after untimed `{occ.event}` is read as `within 0 seconds`",
+                        item.otherwise.span,
+                    )
                 self._response(item.otherwise, top=False)
             if item.alternative is not None:
                 self._response(item.alternative, top=False)
             if self.opt.lint and occ.negated and occ.limit is None and not occ.eventually:
-                self.sink.warning("untimed-prohibition",
-                                  f"`not {occ.event}` forbids it only at the trigger instant",
-                                  occ.span, hint="add `within T` or `eventually`")
+                self.sink.warning(
+                    "untimed-prohibition",
+                    f"`not {occ.event}` forbids it only at the trigger instant",
+                    occ.span,
+                    hint="add `within T` or `eventually`",
+                )
         for d in resp.defeaters:
             self._condition(d.condition)
             if d.response is not None:
@@ -259,21 +332,29 @@ class Checker:
         for i, d in enumerate(ds):
             c = d.condition
             if isinstance(c, A.BoolLit) and not c.value:
-                self.sink.warning("unreachable-hedge", f"clause {i + 1}: condition is `false`, it never applies", d.span)
+                self.sink.warning(
+                    "unreachable-hedge", f"clause {i + 1}: condition is `false`, it never applies", d.span
+                )
                 continue
             for j in range(i + 1, len(ds)):
                 later = ds[j].condition
                 if later == c:
-                    self.sink.warning("duplicate-hedge",
-                                      f"clause {i + 1} has the same condition as clause {j + 1}, which wins; "
-                                      f"clause {i + 1} never applies", d.span,
-                                      related=(("the later clause", ds[j].span),))
+                    self.sink.warning(
+                        "duplicate-hedge",
+                        f"clause {i + 1} has the same condition as clause {j + 1}, which wins; "
+                        f"clause {i + 1} never applies",
+                        d.span,
+                        related=(("the later clause", ds[j].span),),
+                    )
                     break
                 if (isinstance(later, A.BoolLit) and later.value) or later in _conjuncts(c):
-                    self.sink.warning("unreachable-hedge",
-                                      f"clause {i + 1} never applies: whenever it holds, clause {j + 1} "
-                                      "holds too and the last clause that holds wins", d.span,
-                                      related=(("the later clause", ds[j].span),))
+                    self.sink.warning(
+                        "unreachable-hedge",
+                        f"clause {i + 1} never applies: whenever it holds, clause {j + 1} "
+                        "holds too and the last clause that holds wins",
+                        d.span,
+                        related=(("the later clause", ds[j].span),),
+                    )
                     break
 
     def _time_limit(self, lim: A.TimeLimit) -> None:
@@ -295,7 +376,9 @@ class Checker:
             self.sink.error("bad-unit", f"`{d.unit}` is not a time unit", d.span, hint=hint)
         ty = self._expr(d.value)
         if ty is not None and ty != NUM:
-            self.sink.error("bad-deadline", f"a deadline must be a number, not {_type_word(ty)}", _span(d.value))
+            self.sink.error(
+                "bad-deadline", f"a deadline must be a number, not {_type_word(ty)}", _span(d.value)
+            )
             return None
         v = self._const_eval(d.value)
         if v is not None and unit is not None:
@@ -320,7 +403,9 @@ class Checker:
     def _condition(self, e: A.Expr) -> None:
         ty = self._expr(e)
         if ty is not None and ty != BOOL:
-            self.sink.error("not-boolean", f"a condition must be true or false, not {_type_word(ty)}", _span(e))
+            self.sink.error(
+                "not-boolean", f"a condition must be true or false, not {_type_word(ty)}", _span(e)
+            )
 
     def _expr(self, e: A.Expr) -> Type:
         if isinstance(e, A.Name):
@@ -330,8 +415,12 @@ class Checker:
         if isinstance(e, A.IntLit):
             return NUM
         if isinstance(e, A.DecimalLit):
-            self.sink.error("decimal", f"`{e.text}`: SLEEC numbers are integers (no decimal literals)", e.span,
-                            hint="scale the measure, e.g. tenths of a degree")
+            self.sink.error(
+                "decimal",
+                f"`{e.text}`: SLEEC numbers are integers (no decimal literals)",
+                e.span,
+                hint="scale the measure, e.g. tenths of a degree",
+            )
             return NUM
         if isinstance(e, A.Not):
             ty = self._expr(e.operand)
@@ -344,20 +433,26 @@ class Checker:
                 for side in (e.left, e.right):
                     ty = self._expr(side)
                     if ty is not None and ty != BOOL:
-                        self.sink.error("type", f"`{e.op}` needs truth values, not {_type_word(ty)}", _span(side))
+                        self.sink.error(
+                            "type", f"`{e.op}` needs truth values, not {_type_word(ty)}", _span(side)
+                        )
                 return BOOL
             for side in (e.left, e.right):
                 ty = self._expr(side)
                 if ty is not None and ty != NUM:
-                    self.sink.error("arith-type", f"arithmetic `{e.op}` needs numbers, not {_type_word(ty)}", _span(side))
+                    self.sink.error(
+                        "arith-type", f"arithmetic `{e.op}` needs numbers, not {_type_word(ty)}", _span(side)
+                    )
             return NUM
         return self._compare(e)
 
     def _mixed(self, e: A.BinOp) -> None:
         left = e.left
         if isinstance(left, A.BinOp) and left.op in A.BOOL_OPS and left.op != e.op and not left.parenthesized:
-            msg = (f"`{left.op}` and `{e.op}` mixed without parentheses: read left to right as "
-                   f"`(... {left.op} ...) {e.op} ...`")
+            msg = (
+                f"`{left.op}` and `{e.op}` mixed without parentheses: read left to right as "
+                f"`(... {left.op} ...) {e.op} ...`"
+            )
             hint = "add parentheses to say which you mean"
             if self.opt.strict_precedence:
                 self.sink.error("mixed-and-or", msg, e.span, hint=hint)
@@ -369,7 +464,9 @@ class Checker:
         m = t.measures.get(n.name)
         if m is not None:
             if n.arrow:
-                self.sink.error("kind", f"`->{n.name}` refers to a constant, but `{n.name}` is a measure", n.span)
+                self.sink.error(
+                    "kind", f"`->{n.name}` refers to a constant, but `{n.name}` is a measure", n.span
+                )
             if isinstance(m.type, A.BooleanType):
                 return BOOL
             if isinstance(m.type, A.NumericType):
@@ -377,7 +474,9 @@ class Checker:
             return ("scale", n.name)
         if n.name in t.constants:
             if n.braced:
-                self.sink.error("kind", f"`{{{n.name}}}`: `{n.name}` is a constant; braces mark measures", n.span)
+                self.sink.error(
+                    "kind", f"`{{{n.name}}}`: `{n.name}` is a constant; braces mark measures", n.span
+                )
             return NUM
         if n.name in t.events:
             self.sink.error("not-a-measure", f"`{n.name}` is an event, not a measure", n.span)
@@ -386,8 +485,12 @@ class Checker:
             return ("lit", n.name)
         what = "constant" if n.arrow else "measure"
         pool = {**t.measures, **t.constants}
-        self.sink.error("undeclared", f"`{n.name}` is not declared (expected a {what})", n.span,
-                        hint=self._did_you_mean(n.name, pool))
+        self.sink.error(
+            "undeclared",
+            f"`{n.name}` is not declared (expected a {what})",
+            n.span,
+            hint=self._did_you_mean(n.name, pool),
+        )
         return None
 
     def _compare(self, e: A.Compare) -> Type:
@@ -407,26 +510,37 @@ class Checker:
                 assert isinstance(m.type, A.ScaleType)
                 if lit not in m.type.literals:
                     owners = self._owners(lit)
-                    self.sink.error("scale-literal",
-                                    f"`{lit}` is not in the scale of `{lt[1]}` ({', '.join(m.type.literals)}); "
-                                    f"it is a literal of `{'`, `'.join(owners)}`",
-                                    _span(lit_side),
-                                    hint="scale literals belong to their measure (LEGOS-SLEEC's global "
-                                    "literal table lets such cross-scale comparisons through)")
+                    self.sink.error(
+                        "scale-literal",
+                        f"`{lit}` is not in the scale of `{lt[1]}` ({', '.join(m.type.literals)}); "
+                        f"it is a literal of `{'`, `'.join(owners)}`",
+                        _span(lit_side),
+                        hint="scale literals belong to their measure (LEGOS-SLEEC's global "
+                        "literal table lets such cross-scale comparisons through)",
+                    )
                 return BOOL
             if isinstance(lt, tuple) and lt[0] == "lit":
-                self.sink.error("type", f"`{e.op}` compares two scale literals; one side must be a measure", e.span)
+                self.sink.error(
+                    "type", f"`{e.op}` compares two scale literals; one side must be a measure", e.span
+                )
                 return BOOL
             owners = self._owners(lit)
-            self.sink.error("type", f"scale literal `{lit}` (of `{'`, `'.join(owners)}`) compared with "
-                            f"{_type_word(lt)}", _span(lit_side))
+            self.sink.error(
+                "type",
+                f"scale literal `{lit}` (of `{'`, `'.join(owners)}`) compared with {_type_word(lt)}",
+                _span(lit_side),
+            )
             return BOOL
         if lt == BOOL or rt == BOOL:
             if e.op in ("=", "<>") and lt == rt == BOOL:
                 return BOOL
-            self.sink.error("bool-relop", f"`{e.op}` cannot order truth values"
-                            if e.op not in ("=", "<>") else f"`{e.op}` compares a truth value with "
-                            f"{_type_word(rt if lt == BOOL else lt)}", e.span)
+            self.sink.error(
+                "bool-relop",
+                f"`{e.op}` cannot order truth values"
+                if e.op not in ("=", "<>")
+                else f"`{e.op}` compares a truth value with {_type_word(rt if lt == BOOL else lt)}",
+                e.span,
+            )
             return BOOL
         if lt != rt:
             self.sink.error("type", f"`{e.op}` compares {_type_word(lt)} with {_type_word(rt)}", e.span)
@@ -439,8 +553,12 @@ class Checker:
             seen: dict[str, A.Situation] = {}
             for s in items:
                 if s.name in seen:
-                    self.sink.error("duplicate-name", f"{block} `{s.name}` is defined twice", s.span,
-                                    related=(("first defined here", seen[s.name].span),))
+                    self.sink.error(
+                        "duplicate-name",
+                        f"{block} `{s.name}` is defined twice",
+                        s.span,
+                        related=(("first defined here", seen[s.name].span),),
+                    )
                 seen.setdefault(s.name, s)
                 cur: A.Situation | None = s
                 while cur is not None:
@@ -482,8 +600,11 @@ class Checker:
                 self._duration(rel.duration)
 
     def _owners(self, lit: str) -> list[str]:
-        return [m.name for m in self.table.measures.values()
-                if isinstance(m.type, A.ScaleType) and lit in m.type.literals]
+        return [
+            m.name
+            for m in self.table.measures.values()
+            if isinstance(m.type, A.ScaleType) and lit in m.type.literals
+        ]
 
     def _nonstandard(self, span: A.Span, word: str, instead: str) -> None:
         self.sink.error(
@@ -495,7 +616,7 @@ class Checker:
         )
 
     @staticmethod
-    def _did_you_mean(name: str, pool: dict[str, object]) -> str | None:
+    def _did_you_mean(name: str, pool: Mapping[str, object]) -> str | None:
         close = difflib.get_close_matches(name, list(pool), n=1, cutoff=0.75)
         return f"did you mean `{close[0]}`?" if close else None
 

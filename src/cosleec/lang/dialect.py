@@ -55,7 +55,7 @@ def legos_features(spec: A.Specification) -> Iterator[tuple[str, A.Span]]:
 
 def tk_features(spec: A.Specification, text: str) -> Iterator[tuple[str, A.Span]]:
     """Constructs the LEGOS grammar rejects (bare measures, loose operators, /* */...)."""
-    for m in _BLOCK_COMMENT.finditer(text):
+    for m in _BLOCK_COMMENT.finditer(text) if "/*" in text else ():
         if m.group(1):
             line = text.count("\n", 0, m.start()) + 1
             col = m.start() - (text.rfind("\n", 0, m.start()) + 1) + 1
@@ -118,7 +118,11 @@ def check_strict(spec: A.Specification, dialect: A.Dialect, text: str, sink: Dia
                 for item in r.items:
                     occ = item.occurrence
                     if occ.negated and occ.limit is not None and item.otherwise is not None:
-                        sink.error("dialect", "SLEEC-TK allows no `otherwise` after `not E within T`", item.otherwise.span)
+                        sink.error(
+                            "dialect",
+                            "SLEEC-TK allows no `otherwise` after `not E within T`",
+                            item.otherwise.span,
+                        )
             for d in visit.durations(resp):
                 if not isinstance(d.value, A.IntLit | A.Name):
                     sink.error("dialect", "SLEEC-TK deadlines are a number or a constant", d.span)

@@ -21,9 +21,32 @@ from cosleec.lang.diagnostics import DiagnosticSink
 
 # Graded words, lowest first, as they appear in the corpus' scales.
 _GRADES = (
-    "none", "null", "verylow", "very_low", "vlow", "low", "light", "minor", "mild",
-    "slow", "moderate", "medium", "mid", "smedium", "average", "normal", "high", "shigh",
-    "strong", "severe", "major", "veryhigh", "very_high", "vhigh", "critical", "extreme",
+    "none",
+    "null",
+    "verylow",
+    "very_low",
+    "vlow",
+    "low",
+    "light",
+    "minor",
+    "mild",
+    "slow",
+    "moderate",
+    "medium",
+    "mid",
+    "smedium",
+    "average",
+    "normal",
+    "high",
+    "shigh",
+    "strong",
+    "severe",
+    "major",
+    "veryhigh",
+    "very_high",
+    "vhigh",
+    "critical",
+    "extreme",
 )
 _RANK = {w: i for i, w in enumerate(_GRADES)}
 

@@ -23,9 +23,22 @@ from lark.lexer import Lexer, PatternStr
 # non-standard sleecvalDef relation words that the grammar parses only to reject them.
 CONTEXTUAL_KEYWORDS = frozenset(
     {
-        "witness", "mutualExclusive", "equal", "happenBefore", "isContradictoryWith",
-        "imply", "iff", "opposite", "invariant", "causation", "includes", "forbid",
-        "until", "for", "conflict", "effect",
+        "witness",
+        "mutualExclusive",
+        "equal",
+        "happenBefore",
+        "isContradictoryWith",
+        "imply",
+        "iff",
+        "opposite",
+        "invariant",
+        "causation",
+        "includes",
+        "forbid",
+        "until",
+        "for",
+        "conflict",
+        "effect",
     }
 )
 
@@ -103,7 +116,7 @@ class SleecLexer(Lexer):
                 append((t, name, pos, line, pos - line_start + 1))
                 pos += len(name)
             elif p:
-                append((punct[p], p, pos, line, pos - line_start + 1))
+                append((punct.get(p, BAD_CHAR), p, pos, line, pos - line_start + 1))
                 pos += len(p)
             elif num:
                 append(("DECIMAL" if "." in num else "INT", num, pos, line, pos - line_start + 1))

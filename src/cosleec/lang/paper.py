@@ -16,7 +16,7 @@ from cosleec.lang.transformer import ToAst, ident, tok_span
 class PaperToAst(ToAst):
     """Builds rules from the paper notation, sharing the DSL's expression callbacks."""
 
-    def start(self, c: list[Any]) -> list[A.Rule]:
+    def start(self, c: list[Any]) -> Any:
         rules: list[A.Rule] = []
         for i, (name_tok, rule) in enumerate(c, start=1):
             name = ident(name_tok) if name_tok is not None else f"R{i}"

@@ -43,7 +43,9 @@ def _grammar(name: str, transformer: Any) -> _Grammar:
         g = _grammars.get(name)
         if g is None:
             text = resources.files("cosleec.lang").joinpath(f"grammar/{name}.lark").read_text("utf-8")
-            lark = Lark(text, parser="lalr", lexer=SleecLexer, maybe_placeholders=True, transformer=transformer)
+            lark = Lark(
+                text, parser="lalr", lexer=SleecLexer, maybe_placeholders=True, transformer=transformer
+            )
             display = {END: "end of file", "NAME": "a name", "INT": "a number", "DECIMAL": "a number"}
             for term in lark.terminals:
                 if hasattr(term.pattern, "value") and type(term.pattern).__name__ == "PatternStr":
@@ -64,7 +66,12 @@ def looks_like_paper(text: str) -> bool:
 def parse_blocks(text: str, sink: DiagnosticSink) -> list[Block] | None:
     """Parse DSL text into its blocks; syntax errors go to ``sink``."""
     if text.lstrip().startswith("{\\rtf"):  # one clear error, not one per RTF control word
-        sink.error("rtf", "this file is RTF, not plain text", A.Span(1, 1, 1, 6), hint="save it as plain text (UTF-8)")
+        sink.error(
+            "rtf",
+            "this file is RTF, not plain text",
+            A.Span(1, 1, 1, 6),
+            hint="save it as plain text (UTF-8)",
+        )
         return None
     g = _grammar("sleec", ToAst())
     problems: list[SyntaxProblem] = []
@@ -131,12 +138,43 @@ def assemble(blocks: list[Block], path: str, sink: DiagnosticSink) -> A.Specific
 
 # ------------------------------------------------------------------ syntax messages
 
-_ALL_KEYWORDS = (
-    "def_start def_end rule_start rule_end concern_start concern_end purpose_start purpose_end "
-    "relation_start relation_end event measure constant boolean numeric scale when then and or "
-    "not within otherwise unless else eventually exists while meanwhile true false seconds "
-    "minutes hours days"
-).split()
+_ALL_KEYWORDS = [
+    "def_start",
+    "def_end",
+    "rule_start",
+    "rule_end",
+    "concern_start",
+    "concern_end",
+    "purpose_start",
+    "purpose_end",
+    "relation_start",
+    "relation_end",
+    "event",
+    "measure",
+    "constant",
+    "boolean",
+    "numeric",
+    "scale",
+    "when",
+    "then",
+    "and",
+    "or",
+    "not",
+    "within",
+    "otherwise",
+    "unless",
+    "else",
+    "eventually",
+    "exists",
+    "while",
+    "meanwhile",
+    "true",
+    "false",
+    "seconds",
+    "minutes",
+    "hours",
+    "days",
+]
 
 
 def _report(p: SyntaxProblem, g: _Grammar, text: str, sink: DiagnosticSink) -> None:
@@ -152,7 +190,7 @@ def _report(p: SyntaxProblem, g: _Grammar, text: str, sink: DiagnosticSink) -> N
         return
     shown = "end of file" if ttype == END else f"`{value}`"
     if len(expected) > 8:
-        expected = [e for e in expected if e.startswith("`")][:7] + ["..."]
+        expected = [*[e for e in expected if e.startswith("`")][:7], "..."]
     exp = ", ".join(expected) if expected else "nothing more"
     hint = None
     if ttype == "NAME":

@@ -49,7 +49,7 @@ class ToAst(Transformer[Token, Any]):
     """Builds :mod:`cosleec.lang.ast` nodes; ``start`` returns the list of blocks."""
 
     # -- blocks
-    def start(self, c: list[Any]) -> list[Block]:
+    def start(self, c: list[Any]) -> Any:
         return c
 
     def def_block(self, c: list[Any]) -> Block:
@@ -130,7 +130,8 @@ class ToAst(Transformer[Token, Any]):
         return A.Occurrence(ident(name), not_tok is not None, limit, ev is not None, span=span)
 
     def braced(self, c: list[Any]) -> A.Response:
-        return replace(c[0], braced=True)
+        r: A.Response = c[0]
+        return replace(r, braced=True)
 
     def otherwise(self, c: list[Any]) -> A.Response:
         r: A.Response = c[0]
@@ -205,7 +206,7 @@ class ToAst(Transformer[Token, Any]):
     def paren(self, c: list[Any]) -> A.Expr:
         e = c[0]
         if type(e) in (A.BinOp, A.Compare, A.Not, A.Name):
-            return replace(e, parenthesized=True)
+            return replace(e, parenthesized=True)  # type: ignore[no-any-return]
         return e  # type: ignore[no-any-return]
 
     # -- LEGOS concerns and purposes

@@ -1,0 +1,50 @@
+"""Shared helpers for benchmarks: arguments, timing, the table and the JSON line."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+ROOT = Path(__file__).resolve().parent.parent
+CORPUS = Path(os.environ.get("COSLEEC_CORPUS", ROOT.parent / "shared" / "sleec-corpus"))
+
+
+def args(description: str) -> argparse.Namespace:
+    p = argparse.ArgumentParser(description=description)
+    p.add_argument("--quick", action="store_true", help="finish within about 30 s")
+    p.add_argument("--json", action="store_true", help="end with one JSON object on the last line")
+    return p.parse_args()
+
+
+def best_of(fn: Callable[[], object], repeats: int) -> float:
+    """Best wall time of ``repeats`` runs: the least disturbed by a noisy machine."""
+    best = float("inf")
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def machine() -> str:
+    return f"{platform.python_implementation()} {platform.python_version()}, {os.cpu_count()} cores, {platform.machine()}"
+
+
+def report(title: str, rows: list[tuple[str, str, str]], result: dict[str, object], as_json: bool) -> None:
+    table = Table(title=title, caption=machine())
+    table.add_column("measure")
+    table.add_column("value", justify="right")
+    table.add_column("note")
+    for r in rows:
+        table.add_row(*r)
+    Console().print(table)
+    if as_json:
+        print(json.dumps(result))

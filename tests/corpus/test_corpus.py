@@ -1,0 +1,75 @@
+"""Conformance on the real corpus (../shared/sleec-corpus; skipped when absent)."""
+
+from __future__ import annotations
+
+import collections
+from pathlib import Path
+
+import pytest
+
+from cosleec.lang import analyse, analyse_file
+from cosleec.lang.printer import format_spec
+from tests.conftest import CORPUS
+
+from .expected import REJECTED
+
+
+def index() -> dict[str, tuple[bool, str]]:
+    """file -> (accepted by at least one tool, notes), from the corpus' INDEX.md."""
+    out: dict[str, tuple[bool, str]] = {}
+    for line in (CORPUS / "INDEX.md").read_text(encoding="utf-8").splitlines():
+        if line.startswith("| ") and ".sleec`" in line:
+            cols = [c.strip() for c in line.split("|")]
+            out[cols[2].strip("`")] = (cols[7].startswith("yes") or cols[8].startswith("yes"), cols[10])
+    return out
+
+
+def test_corpus_conformance(corpus: list[Path], capsys: pytest.CaptureFixture[str]) -> None:
+    idx = index()
+    assert len(idx) == len(corpus) == 215
+    tally: collections.Counter[str] = collections.Counter()
+    problems = []
+    for path in corpus:
+        accepted, notes = idx[path.name]
+        result = analyse_file(path)
+        codes = {d.code for d in result.errors}
+        if accepted:
+            if result.spec is None:
+                problems.append(
+                    f"{path.name}: accepted by its tool but does not parse: {result.render()[:300]}"
+                )
+            elif codes:
+                expected = REJECTED.get(path.name)
+                if expected is None or expected[0] != codes:
+                    problems.append(f"{path.name}: unexpected errors {sorted(codes)}")
+                tally["accepted, rejected for a named defect"] += 1
+            else:
+                tally["accepted and clean"] += 1
+        else:
+            if not codes:
+                problems.append(f"{path.name}: no tool accepts it, but cosleec reports no error")
+            elif any(d.span.line == 0 for d in result.errors if d.code != "no-def-block"):
+                problems.append(f"{path.name}: an error without a position")
+            tally["rejected by every tool, and by cosleec"] += 1
+        if "fragment" in notes:
+            assert codes == {"no-def-block"}, path.name
+            inferred = analyse_file(path, infer_defs=True)
+            assert inferred.spec is not None and inferred.spec.measures, path.name
+            tally["fragments readable with --infer-defs"] += 1 if inferred.ok else 0
+    assert set(REJECTED) <= {p.name for p in corpus}
+    assert not problems, "\n".join(problems)
+    with capsys.disabled():
+        print("\ncorpus tally:", dict(tally))
+
+
+def test_every_parsed_corpus_file_round_trips_in_both_dialects(corpus: list[Path]) -> None:
+    count = 0
+    for path in corpus:
+        result = analyse_file(path, infer_defs=True)
+        if result.spec is None:
+            continue
+        for dialect in ("tk", "legos"):
+            again = analyse(format_spec(result.spec, dialect), infer_defs=True)
+            assert again.spec == result.spec, (path.name, dialect)
+            count += 1
+    assert count >= 2 * 190

@@ -1,0 +1,70 @@
+"""The CLI contract: exit codes, JSON shape, canonical printing."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from cosleec.cli.main import main
+
+GOOD = "def_start event E event F measure a : boolean def_end rule_start R1 when E then F unless a rule_end\n"
+BAD = "def_start event E def_end rule_start R1 when E then G rule_end\n"
+
+
+@pytest.fixture
+def files(tmp_path: Path) -> tuple[Path, Path]:
+    good, bad = tmp_path / "good.sleec", tmp_path / "bad.sleec"
+    good.write_text(GOOD)
+    bad.write_text(BAD)
+    return good, bad
+
+
+def test_check_exit_codes(files: tuple[Path, Path], capsys: pytest.CaptureFixture[str]) -> None:
+    good, bad = files
+    assert main(["check", str(good)]) == 0
+    assert main(["check", str(good), str(bad)]) == 1
+    out = capsys.readouterr().out
+    assert f"{bad}:1:{BAD.index(' G ') + 2}: error: response `G` is not declared as an event" in out
+    assert "^" in out
+    assert main(["check"]) == 2
+    assert main(["check", "--dialect", "nope", str(good)]) == 2
+
+
+def test_check_json(files: tuple[Path, Path], capsys: pytest.CaptureFixture[str]) -> None:
+    good, bad = files
+    assert main(["check", "--json", str(good), str(bad)]) == 1
+    doc = json.loads(capsys.readouterr().out)
+    g, b = doc["files"]
+    assert g == {
+        "path": str(good),
+        "ok": True,
+        "dialect": "tk",
+        "rules": 1,
+        "events": 2,
+        "measures": 1,
+        "diagnostics": [],
+    }
+    assert (
+        b["ok"] is False and b["diagnostics"][0]["line"] == 1 and b["diagnostics"][0]["severity"] == "error"
+    )
+    assert set(b["diagnostics"][0]) >= {"line", "col", "severity", "message"}
+
+
+def test_unreadable_and_non_utf8_files_are_diagnostics(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    latin = tmp_path / "latin.sleec"
+    latin.write_bytes(b"def_start event \xe9 def_end")
+    assert main(["check", str(latin), str(tmp_path / "missing.sleec")]) == 1
+    out = capsys.readouterr().out
+    assert "not UTF-8" in out and "cannot read file" in out
+
+
+def test_fmt_converts_dialects(files: tuple[Path, Path], capsys: pytest.CaptureFixture[str]) -> None:
+    good, _ = files
+    assert main(["fmt", str(good), "--dialect", "legos"]) == 0
+    out = capsys.readouterr().out
+    assert "R1 when E then F unless {a}" in out
+    assert main(["fmt", str(files[1])]) == 1
