@@ -1,0 +1,54 @@
+"""Event-triggered switching (SD10): a declarative transition table over global layers."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import Any
+
+from cosleec.cop.layer import Layer
+from cosleec.cop.state import swap_globally
+
+
+@dataclass(frozen=True)
+class Transition:
+    event: str
+    activate: tuple[Layer, ...]
+    deactivate: tuple[Layer, ...]
+    when: Callable[[Any], bool] | None = None
+
+
+class Transitions:
+    """``on(event, when=..., activate=[...], deactivate=[...])``, applied by ``fire(event)``.
+
+    Each fired event is one atomic swap of the global composition: a concurrent reader sees
+    the configuration before or after, never in between (F41).
+    """
+
+    def __init__(self) -> None:
+        self._table: dict[str, list[Transition]] = {}
+
+    def on(
+        self,
+        event: str,
+        *,
+        when: Callable[[Any], bool] | None = None,
+        activate: Iterable[Layer] = (),
+        deactivate: Iterable[Layer] = (),
+    ) -> Transition:
+        t = Transition(event, tuple(activate), tuple(deactivate), when)
+        self._table.setdefault(event, []).append(t)
+        return t
+
+    def fire(self, event: str, context: Any = None) -> bool:
+        """Apply the transitions of ``event`` whose guards hold; True if any applied."""
+        on: list[Layer] = []
+        off: list[Layer] = []
+        for t in self._table.get(event, ()):
+            if t.when is None or t.when(context):
+                on.extend(t.activate)
+                off.extend(t.deactivate)
+        if not on and not off:
+            return False
+        swap_globally(on, off)
+        return True
