@@ -10,7 +10,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from cosleec.cli import check, fmt
+from cosleec.cli import check, decide, demo, fmt
 
 USAGE_ERROR = 2
 INTERNAL_ERROR = 70
@@ -29,6 +29,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     check.add_parser(sub)
     fmt.add_parser(sub)
+    decide.add_parser(sub)
+    demo.add_parser(sub)
     return p
 
 

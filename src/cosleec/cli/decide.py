@@ -1,0 +1,93 @@
+"""``cosleec decide``: what the rules require when EVENT happens in a given context."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from cosleec.lang import SleecError
+from cosleec.runtime import ContextError, Manager, VirtualClock
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = sub.add_parser("decide", help="evaluate the rules triggered by an event against given values")
+    p.add_argument("rules", metavar="RULES")
+    p.add_argument("--event", required=True, metavar="EVENT")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        dest="values",
+        help="a measure value: true/false, a number, or a scale literal",
+    )
+    p.add_argument("--semantics", choices=["last-wins", "nested"], default="last-wins")
+    p.add_argument("--json", action="store_true")
+    p.add_argument("--infer-defs", action="store_true")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    try:
+        m = Manager(
+            args.rules,
+            semantics=args.semantics,
+            clock=VirtualClock(),
+            infer_defs=args.infer_defs,
+            dispatch=False,
+        )
+    except SleecError as e:
+        print(e.render(), file=sys.stderr)
+        return 1
+    values = {}
+    for item in args.values:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        spec = m.ruleset.measures.get(name)
+        if not sep:
+            print(f"cosleec decide: --set {item!r}: expected NAME=VALUE", file=sys.stderr)
+            return 2
+        if spec is None:
+            print(f"cosleec decide: --set {name}: no measure named {name!r}", file=sys.stderr)
+            return 2
+        try:
+            values[name] = spec.external(spec.parse(text))
+        except ContextError as e:
+            print(f"cosleec decide: --set {name}: {e}", file=sys.stderr)
+            return 2
+    if args.event not in m.ruleset.events:
+        print(f"cosleec decide: --event {args.event}: no event named {args.event!r}", file=sys.stderr)
+        return 2
+    if values:
+        m.update(values)
+    decisions = m.event(args.event)
+    undetermined = [d for d in decisions if d.clause is None]
+    if undetermined:
+        names = sorted({n for d in undetermined for n in d.missing})
+        print(
+            f"cosleec decide: no value for {', '.join(names)} (needed by "
+            f"{', '.join(d.rule for d in undetermined)}); give it with --set",
+            file=sys.stderr,
+        )
+        return 2
+    if args.json:
+        doc = {
+            "event": args.event,
+            "decisions": [
+                {
+                    "rule": d.rule,
+                    "clause": d.clause,
+                    "layer": d.layer,
+                    "obligations": [o.to_json() for o in d.obligations],
+                }
+                for d in decisions
+            ],
+        }
+        print(json.dumps(doc, indent=2))
+    else:
+        if not decisions:
+            print(f"{args.event}: no rule applies")
+        for d in decisions:
+            print(d.explanation)
+    return 0

@@ -1,0 +1,19 @@
+"""``cosleec demo``: the assistive-care example, embedded in one process (no ROS)."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = sub.add_parser("demo", help="run the assistive-care example in one process")
+    p.add_argument("--json", action="store_true", help="print runtime events as JSON lines")
+    p.add_argument("--semantics", choices=["last-wins", "nested"], default="last-wins")
+    p.add_argument("--audit", metavar="FILE", help="also write the audit trail (JSON Lines)")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from cosleec.demo.runner import main
+
+    return main(as_json=args.json, semantics=args.semantics, audit=args.audit)

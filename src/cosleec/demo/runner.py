@@ -1,0 +1,185 @@
+"""Run the assistive-care scenario in one process and show what the runtime does.
+
+Used by ``cosleec demo`` (a readable terminal display, or JSON lines with ``--json``) and by
+the end-to-end tests, which check every decision against ``scenario.EXPECTED``.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from importlib import resources
+from typing import Any
+
+from rich.console import Console
+from rich.text import Text
+
+from cosleec.demo.assistive_care import scenario, tasks
+from cosleec.runtime import Manager, RuntimeEvent, VirtualClock
+from cosleec.runtime.audit import AuditLog
+
+
+def rules_path() -> str:
+    return str(resources.files("cosleec.demo.assistive_care").joinpath("rules.sleec"))
+
+
+@dataclass
+class Run:
+    manager: Manager
+    robot: tasks.Robot
+    events: list[RuntimeEvent] = field(default_factory=list)
+
+    def decisions(self) -> list[dict[str, Any]]:
+        return [e.data for e in self.events if e.kind == "decision"]
+
+
+def run(
+    steps: list[scenario.Step] | None = None,
+    *,
+    semantics: str = "last-wins",
+    audit: str | None = None,
+    on_step: Callable[[float, scenario.Step], None] | None = None,
+    on_event: Callable[[RuntimeEvent], None] | None = None,
+) -> Run:
+    clock = VirtualClock()
+    manager = Manager(
+        rules_path(), clock=clock, semantics=semantics, audit=AuditLog(audit) if audit else None
+    )
+    robot = tasks.install(manager)
+    manager.start()
+    result = Run(manager, robot)
+
+    def observe(ev: RuntimeEvent) -> None:
+        result.events.append(ev)
+        if on_event is not None:
+            on_event(ev)
+
+    manager.subscribe(observe)
+    for step in steps if steps is not None else scenario.STEPS:
+        kind, arg, _note = step
+        if on_step is not None:
+            on_step(clock.now(), step)
+        if kind == "set":
+            manager.update(arg)
+        elif kind == "event":
+            manager.event(arg)
+        elif kind == "advance":
+            clock.advance(arg)
+            manager.tick()
+        elif kind == "request":
+            manager.request(arg)
+        elif kind == "fail":
+            robot.failing.add(arg)
+        elif kind == "recover":
+            robot.failing.discard(arg)
+        else:
+            raise ValueError(f"unknown scenario step {kind!r}")
+    manager.close()
+    return result
+
+
+# ---------------------------------------------------------------------- terminal display
+
+
+def _fmt(v: Any) -> str:
+    return ("true" if v else "false") if isinstance(v, bool) else str(v)
+
+
+class Display:
+    """Prints the scenario as it runs: context, layers, decisions and obligation outcomes."""
+
+    def __init__(self, console: Console) -> None:
+        self.out = console
+        self.time = 0.0
+
+    def step(self, t: float, step: scenario.Step) -> None:
+        self.time = t
+        kind, arg, note = step
+        icon = {"set": "▶", "event": "⚡", "advance": "⏱", "request": "?"}.get(kind, "·")
+        head = Text(f"t={t:>5g}s ", style="dim")
+        if kind == "event":
+            head.append(f"{icon} {arg}", style="bold magenta")
+        elif kind == "advance":
+            head.append(f"{icon} +{arg:g}s", style="bold blue")
+        elif kind == "request":
+            head.append(f"{icon} may the robot {arg}?", style="bold")
+        else:
+            head.append(f"{icon} ", style="bold")
+        head.append(f"  {note}", style="italic")
+        self.out.print()
+        self.out.print(head)
+
+    def event(self, ev: RuntimeEvent) -> None:
+        d = ev.data
+        pad = "        "
+        if ev.kind == "context":
+            vals = " ".join(f"{k}={_fmt(v) if v is not None else '?'}" for k, v in d["values"].items())
+            self.out.print(Text(pad + "context  ", style="cyan") + Text(vals))
+        elif ev.kind == "layers":
+            sw = ", ".join(
+                f"{s['rule']}: {s['from'] or 'default'} → {s['to'] or 'default'}" for s in d["switches"]
+            )
+            act = ", ".join(d["active"]) or "none (every rule at its default)"
+            self.out.print(Text(pad + "layers   ", style="green") + Text(sw + "   active: " + act))
+        elif ev.kind == "decision":
+            where = (
+                "default"
+                if d["clause"] == 0
+                else d["layer"] or ("undetermined" if d["clause"] is None else "")
+            )
+            if d["event"] == "otherwise":
+                where = "otherwise"
+            line = Text(pad + "decision ", style="bold yellow")
+            line.append(f"{d['rule']} [{where}] ", style="bold")
+            obs = " and ".join(
+                ("not " if o["negated"] else "")
+                + o["event"]
+                + (f" within {o['within_s']:g}s" if o["within_s"] is not None else "")
+                for o in d["obligations"]
+            )
+            line.append("→ " + (obs or "nothing required"))
+            self.out.print(line)
+            self.out.print(Text(pad + "  why: " + d["explanation"], style="dim"))
+        elif ev.kind == "obligation" and d["status"] != "pending":
+            mark = {"fulfilled": ("✔", "green"), "violated": ("✘", "bold red"), "respected": ("✔", "green")}
+            icon, style = mark.get(d["status"], ("·", ""))
+            what = ("not " if d["negated"] else "") + d["event"]
+            late = f", late at {d['late'][-1]:g}s" if d["late"] else ""
+            self.out.print(
+                Text(pad + f"{icon} {what} {d['status']} ({d['rule']}, at {d['at']:g}s{late})", style=style)
+            )
+        elif ev.kind == "refused":
+            self.out.print(Text(pad + f"⛔ {d['event']} refused by {', '.join(d['by'])}", style="bold red"))
+        elif ev.kind == "rejected":
+            self.out.print(Text(pad + f"rejected: {d['reason']}", style="red"))
+
+
+def main(as_json: bool = False, semantics: str = "last-wins", audit: str | None = None) -> int:
+    if as_json:
+
+        def emit(ev: RuntimeEvent) -> None:
+            print(json.dumps({"kind": ev.kind, "time": ev.time, **ev.data}, default=str))
+
+        run(semantics=semantics, audit=audit, on_event=emit)
+        return 0
+    console = Console(highlight=False)
+    console.print(
+        Text("cosleec demo: an assistive-care robot under SLEEC rules (virtual time)", style="bold")
+    )
+    console.print(Text(f"rules: {rules_path()}   semantics: {semantics}", style="dim"))
+    display = Display(console)
+    result = run(semantics=semantics, audit=audit, on_step=display.step, on_event=display.event)
+    m = result.manager
+    console.print()
+    s = m.stats
+    console.print(
+        Text(
+            f"{s['decisions']} decisions, {s['violations']} violations, {s['refused']} refused actions, "
+            f"{len(m.outstanding())} obligations outstanding",
+            style="bold",
+        )
+    )
+    if audit:
+        console.print(Text(f"audit trail: {audit}", style="dim"))
+    return 0

@@ -1,0 +1,75 @@
+"""The runtime context: typed measure values, validated, with optional staleness.
+
+An update is all-or-nothing: one bad value rejects the whole update with a reason and the
+state is unchanged. A measure never set, or older than its ``max_age``, is *unknown*.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from cosleec.runtime.errors import ContextError
+from cosleec.runtime.values import MeasureSpec, Value
+
+
+class Context:
+    """Current measure values (stored form: scale values as positions). Not thread-safe:
+    the Manager serialises access."""
+
+    def __init__(self, measures: Mapping[str, MeasureSpec]) -> None:
+        self.measures = dict(measures)
+        self.values: dict[str, Any] = {}
+        self.stamps: dict[str, float] = {}
+        self.version = 0
+
+    def validate(self, updates: Mapping[str, object]) -> dict[str, Any]:
+        """The stored form of every update, or ContextError naming the first bad one."""
+        out: dict[str, Any] = {}
+        for name, value in updates.items():
+            spec = self.measures.get(name)
+            if spec is None:
+                raise ContextError(f"unknown measure {name!r}")
+            out[name] = spec.coerce(value)
+        return out
+
+    def apply(self, stored: Mapping[str, Any], now: float) -> set[str]:
+        """Apply validated values; return the measures whose value changed (or became known)."""
+        changed = set()
+        values = self.values
+        for name, v in stored.items():
+            if name not in values or values[name] != v or type(values[name]) is not type(v):
+                changed.add(name)
+            values[name] = v
+            self.stamps[name] = now
+        if changed:
+            self.version += 1
+        return changed
+
+    def expire(self, now: float) -> set[str]:
+        """Forget values older than their measure's max_age: they become unknown."""
+        gone = set()
+        for name, spec in self.measures.items():
+            if spec.max_age is not None and name in self.values and now - self.stamps[name] > spec.max_age:
+                del self.values[name]
+                gone.add(name)
+        if gone:
+            self.version += 1
+        return gone
+
+    def next_expiry(self) -> float | None:
+        times = [
+            self.stamps[n] + s.max_age
+            for n, s in self.measures.items()
+            if s.max_age is not None and n in self.values
+        ]
+        return min(times) if times else None
+
+    def external(self, names: Any = None) -> dict[str, Value | None]:
+        """Values as users see them; ``None`` for unknown."""
+        keys = self.measures if names is None else names
+        out: dict[str, Value | None] = {}
+        for n in keys:
+            v = self.values.get(n)
+            out[n] = None if v is None else self.measures[n].external(v)
+        return out

@@ -1,0 +1,177 @@
+"""The lifecycle of obligations: pending -> fulfilled | violated (sleec-language.md §6.4-6.6).
+
+- ``E within T`` is fulfilled by an occurrence of E reported in [t, t+T] (inclusive) and
+  violated as soon as the clock passes t+T without one; ``within [a, b]`` ignores earlier
+  occurrences. An untimed ``E`` has no deadline (pending, reported as outstanding) unless
+  the runtime is configured otherwise.
+- ``otherwise`` starts only on a real miss, at the deadline; an E that arrives after the
+  deadline is recorded as *late* and does not cancel the fallback.
+- ``not E within T`` holds while E is not reported in its window: a request for E is
+  refused and recorded; an E reported anyway violates it (and starts its ``otherwise`` at
+  that moment).
+- ``P else Q``: an occurrence of Q fulfils it too.
+
+Causal order: an occurrence counts only for obligations created before it was handled.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from typing import Any
+
+from cosleec.runtime.model import Obligation
+
+PENDING, FULFILLED, VIOLATED, RESPECTED = "pending", "fulfilled", "violated", "respected"
+
+
+@dataclass
+class Tracked:
+    """One obligation in force, with its absolute window and outcome."""
+
+    id: int
+    decision_id: int
+    rule: str
+    obligation: Obligation
+    start: float
+    lo: float
+    hi: float | None  # None: no deadline
+    seq: int  # causal position: occurrences with a larger seq may count
+    depth: int = 0  # 0: from a decision; n: the n-th otherwise down a chain
+    status: str = PENDING
+    outcome_at: float | None = None
+    by: str | None = None  # the event that fulfilled (or violated) it
+    late: list[float] = field(default_factory=list)
+    refused: int = 0  # requests refused by this prohibition
+
+    @property
+    def event(self) -> str:
+        return self.obligation.event
+
+    @property
+    def prohibition(self) -> bool:
+        return self.obligation.negated
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "type": "obligation",
+            "id": self.id,
+            "decision": self.decision_id,
+            "rule": self.rule,
+            "event": self.event,
+            "negated": self.prohibition,
+            "start": self.start,
+            "window": [self.lo, self.hi],
+            "status": self.status,
+            "at": self.outcome_at,
+            "by": self.by,
+            "late": self.late,
+            "refused": self.refused,
+            "depth": self.depth,
+        }
+
+
+@dataclass
+class Outcome:
+    """What an occurrence or the passing of time changed."""
+
+    changed: list[Tracked] = field(default_factory=list)
+    fallbacks: list[tuple[Tracked, float]] = field(default_factory=list)  # (violated, start of fallback)
+
+
+class Tracker:
+    def __init__(self, untimed: str | float = "none", immediate_tolerance: float = 1.0) -> None:
+        self.untimed = untimed
+        self.tolerance = immediate_tolerance
+        self.active: list[Tracked] = []
+        self.closed: list[Tracked] = []
+        self._ids = itertools.count(1)
+
+    def start(self, decision_id: int, ob: Obligation, now: float, seq: int, depth: int = 0) -> Tracked:
+        hi = ob.within_s
+        if hi is None and not ob.eventually:
+            if ob.negated:
+                hi = 0.0  # untimed `not E`: only at the trigger instant
+            elif self.untimed == "immediate":
+                hi = self.tolerance
+            elif isinstance(self.untimed, int | float) and not isinstance(self.untimed, bool):
+                hi = float(self.untimed)
+        t = Tracked(
+            next(self._ids),
+            decision_id,
+            ob.rule,
+            ob,
+            now,
+            now + ob.from_s,
+            None if hi is None else now + hi,
+            seq,
+            depth,
+        )
+        if t.hi is not None and t.hi < t.lo:
+            t.hi = t.lo  # a negative deadline (LEGOS expression): already closed
+        self.active.append(t)
+        return t
+
+    def occur(self, event: str, now: float, seq: int) -> Outcome:
+        out = Outcome()
+        keep: list[Tracked] = []
+        for t in self.active:
+            ob = t.obligation
+            if t.seq >= seq or (ob.event != event and event not in ob.alternatives):
+                keep.append(t)
+                continue
+            if ob.negated:
+                if ob.event == event and t.lo <= now and (t.hi is None or now <= t.hi):
+                    t.status, t.outcome_at, t.by = VIOLATED, now, event
+                    out.changed.append(t)
+                    if ob.otherwise is not None:
+                        out.fallbacks.append((t, now))
+                    self.closed.append(t)
+                    continue
+                keep.append(t)
+            elif now < t.lo:
+                keep.append(t)  # before an interval opens: neither fulfils nor violates
+            else:
+                t.status, t.outcome_at, t.by = FULFILLED, now, event
+                out.changed.append(t)
+                self.closed.append(t)
+        self.active = keep
+        for t in self.closed[-50:]:  # an E after its deadline is recorded as late, nothing more
+            late = t.status == VIOLATED and not t.prohibition and t.hi is not None and now > t.hi
+            if late and t.event == event and t.seq < seq and now not in t.late:
+                t.late.append(now)
+                out.changed.append(t)
+        return out
+
+    def due(self, now: float) -> Outcome:
+        """Close every window that ended before ``now``."""
+        out = Outcome()
+        keep: list[Tracked] = []
+        for t in self.active:
+            if t.hi is not None and now > t.hi:
+                if t.prohibition:
+                    t.status, t.outcome_at = RESPECTED, t.hi
+                else:
+                    t.status, t.outcome_at = VIOLATED, t.hi
+                    if t.obligation.otherwise is not None:
+                        out.fallbacks.append((t, t.hi))
+                out.changed.append(t)
+                self.closed.append(t)
+            else:
+                keep.append(t)
+        self.active = keep
+        return out
+
+    def forbidding(self, event: str, now: float) -> list[Tracked]:
+        return [
+            t
+            for t in self.active
+            if t.prohibition and t.event == event and t.lo <= now and (t.hi is None or now <= t.hi)
+        ]
+
+    def next_deadline(self) -> float | None:
+        his = [t.hi for t in self.active if t.hi is not None]
+        return min(his) if his else None
+
+    def outstanding(self) -> list[Tracked]:
+        return [t for t in self.active if not t.prohibition]

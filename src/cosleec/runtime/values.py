@@ -1,0 +1,74 @@
+"""Typed measure values: validation and conversion (booleans, numbers, scale literals).
+
+Scale values travel as literal names and are stored as their position, so that a
+comparison such as ``m >= medium`` is one integer comparison.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from cosleec.lang import ast as A
+from cosleec.runtime.errors import ContextError
+
+Value = bool | int | float | str
+
+
+@dataclass(frozen=True, slots=True)
+class MeasureSpec:
+    name: str
+    kind: str  # "boolean" | "numeric" | "scale"
+    literals: tuple[str, ...] = ()
+    max_age: float | None = None  # seconds after which a value is stale (unknown)
+
+    @classmethod
+    def of(cls, decl: A.MeasureDecl, max_age: float | None = None) -> MeasureSpec:
+        t = decl.type
+        if isinstance(t, A.ScaleType):
+            return cls(decl.name, "scale", t.literals, max_age)
+        return cls(decl.name, "boolean" if isinstance(t, A.BooleanType) else "numeric", (), max_age)
+
+    def coerce(self, value: object) -> bool | int | float:
+        """The stored form of ``value``, or ContextError saying why it is not acceptable."""
+        if self.kind == "boolean":
+            if isinstance(value, bool):
+                return value
+            raise ContextError(f"{self.name} is boolean; got {type(value).__name__} {value!r}")
+        if self.kind == "numeric":
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise ContextError(f"{self.name} is numeric; got {type(value).__name__} {value!r}")
+            if isinstance(value, float) and not math.isfinite(value):
+                raise ContextError(f"{self.name} must be a finite number; got {value!r}")
+            return value
+        if isinstance(value, str):
+            try:
+                return self.literals.index(value)
+            except ValueError:
+                raise ContextError(
+                    f"{value!r} is not in the scale of {self.name} ({', '.join(self.literals)})"
+                ) from None
+        raise ContextError(f"{self.name} is a scale ({', '.join(self.literals)}); got {value!r}")
+
+    def external(self, stored: bool | int | float) -> Value:
+        """The value as users see it (scale positions back to literal names)."""
+        if self.kind == "scale":
+            return self.literals[int(stored)]
+        return stored
+
+    def parse(self, text: str) -> bool | int | float:
+        """A value written on a command line: true/false, a number, or a scale literal."""
+        t = text.strip()
+        if self.kind == "boolean":
+            if t.lower() in ("true", "false"):
+                return t.lower() == "true"
+            raise ContextError(f"{self.name} is boolean: write true or false, not {text!r}")
+        if self.kind == "numeric":
+            try:
+                return int(t)
+            except ValueError:
+                try:
+                    return self.coerce(float(t))
+                except ValueError:
+                    raise ContextError(f"{self.name} is numeric: {text!r} is not a number") from None
+        return self.coerce(t)
