@@ -293,6 +293,22 @@ class LayeredFunction:
         members = grp.members
         policy = grp.policy
         assert policy is not None
+        if grp.selector is not None:
+            try:
+                idx = grp.selector(ctx)
+            except Exception as e:
+                raise HedgeEvaluationError(grp.name, "<selector>", e) from e
+            return members[idx] if idx is not None else None
+        if policy is policy_last and not record_all:  # stop at the first that holds: same result
+            for m in reversed(members):
+                try:
+                    held = m.predicate(ctx)  # type: ignore[misc]
+                except Exception as e:
+                    values[m.name] = None
+                    raise HedgeEvaluationError(grp.name, m.name, e) from e
+                if held:
+                    return m
+            return None
 
         def value(m: Layer) -> bool:
             try:
@@ -303,11 +319,6 @@ class LayeredFunction:
             values[m.name] = v
             return v
 
-        if policy is policy_last and not record_all:
-            for m in reversed(members):  # stop at the first that holds: same result, fewer reads
-                if value(m):
-                    return m
-            return None
         idx = policy([value(m) for m in members])
         return members[idx] if idx is not None else None
 
@@ -717,11 +728,11 @@ def on_dispatch(hook: Callable[[DispatchRecord], None]) -> Callable[[], None]:
     """Call ``hook(record)`` after every dispatch decision; returns a function that removes it."""
     with state._lock:
         RT.dispatch_hooks = (*RT.dispatch_hooks, hook)
-        state._refresh_idle()
+        state._refresh_idle(force=True)
 
     def remove() -> None:
         with state._lock:
             RT.dispatch_hooks = tuple(h for h in RT.dispatch_hooks if h is not hook)
-            state._refresh_idle()
+            state._refresh_idle(force=True)
 
     return remove

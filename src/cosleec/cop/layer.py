@@ -98,6 +98,9 @@ class LayerGroup:
     active raises :class:`ExclusionError` and changes nothing. ``"weak"``: the new member
     replaces the old one.
 
+    ``selector`` (optional) maps the context snapshot directly to a member index, instead of
+    evaluating predicates under a policy.
+
     ``on_error`` says what a dispatch does when a member's predicate raises: ``"raise"``
     (default: abort with :class:`HedgeEvaluationError`), ``"default"`` (select no member),
     or the name of a member to select (a conservative choice).
@@ -111,11 +114,17 @@ class LayerGroup:
         policy: str | Policy | None = None,
         exclusion: Literal["strict", "weak"] = "strict",
         on_error: OnError = "raise",
+        selector: Callable[[Any], int | None] | None = None,
     ) -> None:
         if exclusion not in ("strict", "weak"):
             raise DefinitionError(f"exclusion must be 'strict' or 'weak', not {exclusion!r}")
         self.name = name
         self.members: tuple[Layer, ...] = tuple(layers)
+        # A selector maps the context straight to a member index (None: no member): for
+        # groups whose choice is already known, e.g. decided by a layer manager upstream.
+        self.selector = selector
+        if selector is not None and policy is None:
+            policy = "last"
         self.exclusion = exclusion
         self._policy: Policy | None = None
         self.policy_name = ""
@@ -128,7 +137,7 @@ class LayerGroup:
             if m.group is not None and m.group is not self:
                 raise DefinitionError(f"{m!r} already belongs to group {m.group.name!r}")
             m.group = self
-        if self._policy is not None:
+        if self._policy is not None and selector is None:
             missing = [m.name for m in self.members if m.predicate is None]
             if missing:
                 raise DefinitionError(f"hedge group {name!r}: members without a predicate: {missing}")

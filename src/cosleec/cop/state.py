@@ -86,8 +86,12 @@ dyn_get = _dyn.get
 DISPATCH_CODES: set[Any] = set()
 
 
-def _refresh_idle() -> None:
-    RT.idle = not RT.state.layers and not RT.dispatch_hooks
+def _refresh_idle(force: bool = False) -> None:
+    """Recompute the fast-path flags; functions are visited only when the flag flips."""
+    idle = not RT.state.layers and not RT.dispatch_hooks
+    if idle == RT.idle and not force:
+        return  # most global changes keep the process busy (or idle): nothing to tell
+    RT.idle = idle
     funcs = RT.functions
     if funcs is not None:
         for f in list(funcs):
@@ -97,7 +101,7 @@ def _refresh_idle() -> None:
 def hooks_changed() -> None:
     """A hook was added: drop every cached transition so that none bypasses it (E37)."""
     _clear_transitions(EMPTY)
-    _refresh_idle()
+    _refresh_idle(force=True)
 
 
 def _clear_transitions(frame: Frame) -> None:

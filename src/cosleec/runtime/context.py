@@ -22,6 +22,7 @@ class Context:
         self.values: dict[str, Any] = {}
         self.stamps: dict[str, float] = {}
         self.version = 0
+        self._aged = [(n, s.max_age) for n, s in self.measures.items() if s.max_age is not None]
 
     def validate(self, updates: Mapping[str, object]) -> dict[str, Any]:
         """The stored form of every update, or ContextError naming the first bad one."""
@@ -49,8 +50,8 @@ class Context:
     def expire(self, now: float) -> set[str]:
         """Forget values older than their measure's max_age: they become unknown."""
         gone = set()
-        for name, spec in self.measures.items():
-            if spec.max_age is not None and name in self.values and now - self.stamps[name] > spec.max_age:
+        for name, max_age in self._aged:  # only measures that can go stale are looked at
+            if name in self.values and now - self.stamps[name] > max_age:
                 del self.values[name]
                 gone.add(name)
         if gone:

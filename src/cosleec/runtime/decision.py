@@ -8,14 +8,13 @@ false``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 from cosleec.runtime.model import Obligation
 from cosleec.runtime.values import Value
 
 
-@dataclass(frozen=True)
-class ConditionValue:
+class ConditionValue(NamedTuple):
     clause: int  # 0: the trigger condition; i: clause i
     text: str
     value: bool | None  # None: unknown
@@ -31,12 +30,29 @@ class Decision:
     layer: str | None
     semantics: str
     values: dict[str, Value | None]
-    conditions: tuple[ConditionValue, ...]
+    conditions: tuple[tuple[int, str, bool | None], ...]  # (clause, condition text, value); 0: trigger
     obligations: tuple[Obligation, ...]
     missing: tuple[str, ...] = ()
-    explanation: str = ""
+    reason: str = ""  # set for decisions that are not a rule's clause choice (otherwise follow-ups)
     context_version: int = 0
     extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def explanation(self) -> str:
+        """Why this decision, in a sentence (computed when first asked for)."""
+        cached = self.__dict__.get("_explanation")
+        if cached is None:
+            cached = self.reason or explain(
+                self.rule,
+                self.clause,
+                tuple(ConditionValue(*c) for c in self.conditions),
+                self.obligations,
+                self.values,
+                self.semantics,
+                self.missing,
+            )
+            object.__setattr__(self, "_explanation", cached)
+        return cached
 
     @property
     def undetermined(self) -> bool:
@@ -53,9 +69,7 @@ class Decision:
             "layer": self.layer,
             "semantics": self.semantics,
             "values": self.values,
-            "conditions": [
-                {"clause": c.clause, "condition": c.text, "value": c.value} for c in self.conditions
-            ],
+            "conditions": [{"clause": c, "condition": t, "value": v} for c, t, v in self.conditions],
             "obligations": [o.to_json() for o in self.obligations],
             "missing": list(self.missing),
             "explanation": self.explanation,

@@ -49,6 +49,19 @@ def _is_clause(i: int) -> Callable[[Decision], bool]:
     return holds
 
 
+def _clause_index(decision: Decision) -> int | None:
+    """The group member of the decision's clause: the Layer Manager has already chosen it."""
+    c = decision.clause
+    return c - 1 if c else None
+
+
+class _Probe:
+    """Stands in for a decision of a given clause while chains are warmed."""
+
+    def __init__(self, clause: int) -> None:
+        self.clause = clause
+
+
 class TaskDispatcher:
     def __init__(self, ruleset: RuleSet) -> None:
         self.ruleset = ruleset
@@ -142,7 +155,9 @@ class TaskDispatcher:
         compose = self.compose
         default_impl: Callable[[Decision], Any] = task.default if task is not None else compose
 
-        @layered(hedges=HedgeGroup(rule.name, layers), method=False, compile_prologue=False)  # type: ignore[untyped-decorator]
+        group = HedgeGroup(rule.name, layers, selector=_clause_index)
+
+        @layered(hedges=group, method=False, compile_prologue=False)  # type: ignore[untyped-decorator]
         def handle(decision: Decision) -> Any:
             return default_impl(decision)
 
@@ -156,6 +171,17 @@ class TaskDispatcher:
             handle.variant(la)(variant)
         handle.__qualname__ = handle.__name__ = f"rule_{rule.name}"
         return handle  # type: ignore[no-any-return]
+
+    def warm(self) -> None:
+        """Build every rule's handler and the COP chain of every clause now, so that the first
+        trigger of a clause pays no construction cost (start-up work, not trigger latency)."""
+        from cosleec.cop.state import RT, dyn_get
+
+        for rule in self.ruleset.rules:
+            lf = self.handler(rule).layered  # type: ignore[attr-defined]
+            for clause in range(len(rule.clauses) + 1):
+                with using_context(_Probe(clause)):
+                    lf.chain_for(RT.state, dyn_get())
 
     def compose(self, decision: Decision) -> None:
         """Capability style: run the handler of every event the decision obliges."""

@@ -86,10 +86,17 @@ class LayerManager:
             for m in r.hedge_reads:
                 self.index.setdefault(m, []).append(r)
         self.status: list[RuleStatus] = [self._compute(r, {}) for r in ruleset.rules]
+        self.active: dict[int, str] = {}  # rule index -> active hedge layer (rules at default absent)
 
     def _compute(self, r: CompiledRule, v: Values) -> RuleStatus:
         if not r.clauses:
             return RuleStatus((), 0)
+        if r.evaluate_all is not None:
+            try:
+                values: tuple[bool | None, ...] = r.evaluate_all(v)
+                return RuleStatus(values, select(values, self.semantics, self.unknown))
+            except KeyError:
+                pass  # some measure is unknown: find out which, clause by clause
         values, missing = evaluate(r.clauses, v)
         return RuleStatus(values, select(values, self.semantics, self.unknown), missing)
 
@@ -110,18 +117,23 @@ class LayerManager:
             status[i] = new
             if new.clause != old.clause:
                 switches.append((r, old.clause, new.clause))
+                if new.clause:
+                    self.active[i] = r.clauses[new.clause - 1].layer
+                else:
+                    self.active.pop(i, None)
         return switches
 
     def recompute_all(self, v: Values) -> None:
         self.status = [self._compute(r, v) for r in self.ruleset.rules]
+        self.active = {
+            r.index: r.clauses[st.clause - 1].layer
+            for r, st in zip(self.ruleset.rules, self.status)
+            if st.clause
+        }
 
     def active_layers(self) -> list[str]:
         """The active hedge layers, in rule order (a rule at its default contributes none)."""
-        out = []
-        for r, st in zip(self.ruleset.rules, self.status):
-            if st.clause:
-                out.append(r.clauses[st.clause - 1].layer)
-        return out
+        return [self.active[i] for i in sorted(self.active)]
 
     def set_semantics(self, semantics: str, v: Values) -> None:
         if semantics not in SEMANTICS:

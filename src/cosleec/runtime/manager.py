@@ -21,7 +21,7 @@ from cosleec.lang import SleecError, Specification, analyse, analyse_file
 from cosleec.runtime.audit import AuditLog
 from cosleec.runtime.clock import Clock, MonotonicClock
 from cosleec.runtime.context import Context
-from cosleec.runtime.decision import ConditionValue, Decision, explain
+from cosleec.runtime.decision import Decision
 from cosleec.runtime.dispatcher import Capability, TaskDispatcher
 from cosleec.runtime.errors import ContextError
 from cosleec.runtime.layers import LayerManager, evaluate, select
@@ -46,15 +46,20 @@ def _layer_name(rule: CompiledRule, clause: int | None) -> str | None:
     return rule.layer_of(clause)
 
 
+def _looks_like_rules(text: str) -> bool:
+    """SLEEC text rather than a file name: it has a rule (a file name has no spaces around `when`)."""
+    import re
+
+    return re.search(r"(?i)(\brule_start\b|\swhen\s)", text) is not None
+
+
 def load_rules(source: Specification | str | Path, infer_defs: bool = False) -> tuple[Specification, Any]:
     """A checked specification and its symbol table, from a Specification, a path or text."""
     if isinstance(source, Specification):
         from cosleec.lang.printer import format_spec
 
         result = analyse(format_spec(source), source.path, infer_defs=True)
-    elif isinstance(source, Path) or (
-        isinstance(source, str) and "\n" not in source and Path(source).exists()
-    ):
+    elif isinstance(source, Path) or not _looks_like_rules(source):
         result = analyse_file(source, infer_defs=infer_defs)
     else:
         result = analyse(str(source), infer_defs=infer_defs)
@@ -120,6 +125,8 @@ class Manager:
         """Check that every clause has an implementation; optionally run deadlines on a thread."""
         if check and self.dispatch_locally:
             self.dispatcher.check()
+        if self.dispatch_locally:
+            self.dispatcher.warm()
         if timer and self._timer is None:
             self._timer = threading.Thread(target=self._run_timer, name="cosleec-deadlines", daemon=True)
             self._timer.start()
@@ -161,13 +168,13 @@ class Manager:
             changed = self.context.apply(stored, now)
             switches = self.layers.update(changed, self.context.values) if changed else []
             result = [(r.name, _layer_name(r, o), _layer_name(r, n)) for r, o, n in switches]
-            if changed:
+            if changed and self._listening:
                 self._emit_later(
                     events,
                     "context",
                     {"values": self.context.external(sorted(changed)), "version": self.context.version},
                 )
-            if switches:
+            if switches and self._listening:
                 self._emit_later(
                     events,
                     "layers",
@@ -220,7 +227,8 @@ class Manager:
                 self._record(d, events)
                 for ob in d.obligations:
                     t = self.tracker.start(d.id, ob, now, seq)
-                    self._emit_later(events, "obligation", t.to_json())
+                    if self._listening:
+                        self._emit_later(events, "obligation", t.to_json())
         self._flush(events)
         self._notify_timer()
         if self.dispatch_locally:
@@ -280,7 +288,7 @@ class Manager:
             self._emit_later(
                 events, "context", {"values": dict.fromkeys(sorted(gone)), "stale": sorted(gone)}
             )
-            if switches:
+            if switches and self._listening:
                 self._emit_later(
                     events,
                     "layers",
@@ -359,10 +367,14 @@ class Manager:
         if clause is None and not missing:
             missing = status.missing
         obligations = self._issue(rule.response_of(clause), rule.name) if clause is not None else ()
-        conds = [ConditionValue(0, rule.trigger_text, fired)]
-        conds += [ConditionValue(c.index, c.text, x) for c, x in zip(rule.clauses, status.values)]
-        reads = sorted(rule.trigger_reads | rule.hedge_reads)
-        values = self.context.external(reads)
+        conds = ((0, rule.trigger_text, fired), *zip(rule.clause_ids, rule.clause_texts, status.values))
+        cv = self.context.values
+        values = {
+            n: (lits[x] if lits is not None and x is not None else x)
+            for n, lits in rule.value_specs
+            for x in (cv.get(n),)
+        }
+        # the explanation is computed from these parts when first read (Decision.explanation)
         return Decision(
             next(self._ids),
             now,
@@ -372,10 +384,10 @@ class Manager:
             rule.layer_of(clause) if clause else None,
             self.semantics,
             values,
-            tuple(conds),
+            conds,
             obligations,
             missing,
-            explain(rule.name, clause, tuple(conds), obligations, values, self.semantics, missing),
+            "",
             self.context.version,
         )
 
@@ -406,10 +418,16 @@ class Manager:
     def _record(self, d: Decision, events: list[RuntimeEvent]) -> None:
         self.decisions.append(d)
         self.stats["decisions"] += 1
-        self._emit_later(events, "decision", d.to_json())
+        if self._listening:
+            self._emit_later(events, "decision", d.to_json())
 
     def _emit_later(self, events: list[RuntimeEvent], kind: str, data: dict[str, Any]) -> None:
         events.append(RuntimeEvent(kind, self.clock.now(), data))
+
+    @property
+    def _listening(self) -> bool:
+        """Does anyone read runtime events? If not, no event payload is built."""
+        return bool(self._observers) or self.audit is not None
 
     # ------------------------------------------------------------------ outside the lock
     def _flush(self, events: Iterable[RuntimeEvent]) -> None:

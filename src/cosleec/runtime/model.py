@@ -83,6 +83,7 @@ class Clause:
     reads: frozenset[str]
     text: str
     response: ResponseSpec | None  # None: nothing is required
+    source: str = "True"  # the compiled condition's Python source
 
 
 @dataclass(frozen=True, slots=True)
@@ -124,13 +125,12 @@ class CompiledRule:
     default: ResponseSpec
     clauses: tuple[Clause, ...]
     ast: A.Rule
-
-    @property
-    def hedge_reads(self) -> frozenset[str]:
-        out: frozenset[str] = frozenset()
-        for c in self.clauses:
-            out |= c.reads
-        return out
+    hedge_reads: frozenset[str] = frozenset()  # every measure a clause condition reads
+    all_reads: tuple[str, ...] = ()  # trigger and clause measures, sorted (for decision records)
+    clause_ids: tuple[int, ...] = ()
+    clause_texts: tuple[str, ...] = ()
+    evaluate_all: Callable[[Values], tuple[bool, ...]] | None = None  # every clause condition at once
+    value_specs: tuple[tuple[str, tuple[str, ...] | None], ...] = ()  # (measure, scale literals)
 
     def response_of(self, clause: int) -> ResponseSpec | None:
         return self.default if clause == 0 else self.clauses[clause - 1].response
@@ -201,9 +201,18 @@ def _zero(v: Values) -> float:
 
 
 def _clause(c: Compiler, d: A.Defeater, layer: str, index: int) -> Clause:
-    fn, reads, _ = c.function(d.condition)
+    fn, reads, src = c.function(d.condition)
     resp = compile_response(c, d.response, layer) if d.response is not None else None
-    return Clause(index, layer, fn, reads, text(d.condition), resp)
+    return Clause(index, layer, fn, reads, text(d.condition), resp, src)
+
+
+def _all_clauses(clauses: tuple[Clause, ...]) -> Callable[[Values], tuple[bool, ...]]:
+    """One function that evaluates every clause condition of a rule in a single call."""
+    body = ", ".join(f"bool({cl.source})" for cl in clauses)
+    fn: Callable[[Values], tuple[bool, ...]] = eval(
+        compile(f"lambda v: ({body},)", "<sleec clauses>", "eval")
+    )
+    return fn
 
 
 def compile_rules(
@@ -219,9 +228,24 @@ def compile_rules(
         clauses = tuple(
             _clause(c, d, f"{r.name}.{k}", k) for k, d in enumerate(r.response.defeaters, start=1)
         )
+        hreads = frozenset().union(*(cl.reads for cl in clauses))
         rules.append(
             CompiledRule(
-                i, r.name, r.trigger.event, cond, treads, text(r.trigger.condition), default, clauses, r
+                i,
+                r.name,
+                r.trigger.event,
+                cond,
+                treads,
+                text(r.trigger.condition),
+                default,
+                clauses,
+                r,
+                hreads,
+                tuple(sorted(treads | hreads)),
+                tuple(cl.index for cl in clauses),
+                tuple(cl.text for cl in clauses),
+                _all_clauses(clauses) if clauses else None,
+                tuple((n, measures[n].literals or None) for n in sorted(treads | hreads)),
             )
         )
     by_trigger: dict[str, list[CompiledRule]] = {}

@@ -16,7 +16,9 @@ Causal order: an occurrence counts only for obligations created before it was ha
 
 from __future__ import annotations
 
+import heapq
 import itertools
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -80,12 +82,25 @@ class Outcome:
 
 
 class Tracker:
+    """Obligations in force, indexed by event and by deadline.
+
+    The cost of an occurrence depends on the obligations waiting for that event, and the
+    cost of advancing time on the windows that actually close: never on everything pending.
+    """
+
     def __init__(self, untimed: str | float = "none", immediate_tolerance: float = 1.0) -> None:
         self.untimed = untimed
         self.tolerance = immediate_tolerance
-        self.active: list[Tracked] = []
-        self.closed: list[Tracked] = []
+        self._active: dict[int, Tracked] = {}
+        self._by_event: dict[str, dict[int, Tracked]] = {}
+        self._heap: list[tuple[float, int]] = []
+        self._missed: dict[str, deque[Tracked]] = {}
+        self.closed: deque[Tracked] = deque(maxlen=100_000)
         self._ids = itertools.count(1)
+
+    @property
+    def active(self) -> list[Tracked]:
+        return list(self._active.values())
 
     def start(self, decision_id: int, ob: Obligation, now: float, seq: int, depth: int = 0) -> Tracked:
         hi = ob.within_s
@@ -109,36 +124,42 @@ class Tracker:
         )
         if t.hi is not None and t.hi < t.lo:
             t.hi = t.lo  # a negative deadline (LEGOS expression): already closed
-        self.active.append(t)
+        self._active[t.id] = t
+        for ev in (ob.event, *ob.alternatives):
+            self._by_event.setdefault(ev, {})[t.id] = t
+        if t.hi is not None:
+            heapq.heappush(self._heap, (t.hi, t.id))
         return t
+
+    def _close(self, t: Tracked) -> None:
+        del self._active[t.id]
+        for ev in (t.obligation.event, *t.obligation.alternatives):
+            bucket = self._by_event.get(ev)
+            if bucket is not None:
+                bucket.pop(t.id, None)
+        self.closed.append(t)
+        if t.status == VIOLATED and not t.prohibition:
+            self._missed.setdefault(t.event, deque(maxlen=64)).append(t)
 
     def occur(self, event: str, now: float, seq: int) -> Outcome:
         out = Outcome()
-        keep: list[Tracked] = []
-        for t in self.active:
+        for t in list(self._by_event.get(event, {}).values()):
+            if t.seq >= seq:
+                continue  # created by this very occurrence or later: it cannot count
             ob = t.obligation
-            if t.seq >= seq or (ob.event != event and event not in ob.alternatives):
-                keep.append(t)
-                continue
             if ob.negated:
                 if ob.event == event and t.lo <= now and (t.hi is None or now <= t.hi):
                     t.status, t.outcome_at, t.by = VIOLATED, now, event
                     out.changed.append(t)
                     if ob.otherwise is not None:
                         out.fallbacks.append((t, now))
-                    self.closed.append(t)
-                    continue
-                keep.append(t)
-            elif now < t.lo:
-                keep.append(t)  # before an interval opens: neither fulfils nor violates
-            else:
+                    self._close(t)
+            elif now >= t.lo:  # before an interval opens it neither fulfils nor violates
                 t.status, t.outcome_at, t.by = FULFILLED, now, event
                 out.changed.append(t)
-                self.closed.append(t)
-        self.active = keep
-        for t in self.closed[-50:]:  # an E after its deadline is recorded as late, nothing more
-            late = t.status == VIOLATED and not t.prohibition and t.hi is not None and now > t.hi
-            if late and t.event == event and t.seq < seq and now not in t.late:
+                self._close(t)
+        for t in self._missed.get(event, ()):  # an E after its deadline is recorded as late
+            if t.hi is not None and now > t.hi and t.seq < seq and now not in t.late:
                 t.late.append(now)
                 out.changed.append(t)
         return out
@@ -146,32 +167,34 @@ class Tracker:
     def due(self, now: float) -> Outcome:
         """Close every window that ended before ``now``."""
         out = Outcome()
-        keep: list[Tracked] = []
-        for t in self.active:
-            if t.hi is not None and now > t.hi:
-                if t.prohibition:
-                    t.status, t.outcome_at = RESPECTED, t.hi
-                else:
-                    t.status, t.outcome_at = VIOLATED, t.hi
-                    if t.obligation.otherwise is not None:
-                        out.fallbacks.append((t, t.hi))
-                out.changed.append(t)
-                self.closed.append(t)
+        heap = self._heap
+        while heap and heap[0][0] < now:
+            hi, tid = heapq.heappop(heap)
+            t = self._active.get(tid)
+            if t is None or t.hi != hi:
+                continue
+            if t.prohibition:
+                t.status, t.outcome_at = RESPECTED, t.hi
             else:
-                keep.append(t)
-        self.active = keep
+                t.status, t.outcome_at = VIOLATED, t.hi
+                if t.obligation.otherwise is not None:
+                    out.fallbacks.append((t, t.hi))
+            out.changed.append(t)
+            self._close(t)
         return out
 
     def forbidding(self, event: str, now: float) -> list[Tracked]:
         return [
             t
-            for t in self.active
+            for t in self._by_event.get(event, {}).values()
             if t.prohibition and t.event == event and t.lo <= now and (t.hi is None or now <= t.hi)
         ]
 
     def next_deadline(self) -> float | None:
-        his = [t.hi for t in self.active if t.hi is not None]
-        return min(his) if his else None
+        heap = self._heap
+        while heap and (heap[0][1] not in self._active):
+            heapq.heappop(heap)
+        return heap[0][0] if heap else None
 
     def outstanding(self) -> list[Tracked]:
-        return [t for t in self.active if not t.prohibition]
+        return [t for t in self._active.values() if not t.prohibition]

@@ -1,0 +1,138 @@
+"""`cosleec decide` and `cosleec demo`: the CLI contract and the scripted scenario."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from cosleec.cli.main import main
+from cosleec.demo.assistive_care.scenario import EXPECTED, STEPS
+from cosleec.demo.runner import rules_path, run
+
+from .test_manager import FIREFIGHTER
+
+
+def test_decide_json_shape(capsys: pytest.CaptureFixture[str]) -> None:
+    assert (
+        main(
+            [
+                "decide",
+                rules_path(),
+                "--event",
+                "CurtainOpenRequest",
+                "--set",
+                "userUndressed=true",
+                "--set",
+                "userDistressed=low",
+                "--json",
+            ]
+        )
+        == 0
+    )
+    doc = json.loads(capsys.readouterr().out)
+    assert doc == {
+        "event": "CurtainOpenRequest",
+        "decisions": [
+            {
+                "rule": "R1",
+                "clause": 1,
+                "layer": "R1.1",
+                "obligations": [
+                    {"event": "Refuse", "negated": False, "within_s": None, "otherwise": None},
+                    {"event": "ExplainWhy", "negated": False, "within_s": None, "otherwise": None},
+                ],
+            }
+        ],
+    }
+
+
+def test_decide_otherwise_and_prohibition_objects(capsys: pytest.CaptureFixture[str]) -> None:
+    assert (
+        main(["decide", rules_path(), "--event", "DressingAbandoned", "--set", "userAssent=true", "--json"])
+        == 0
+    )
+    (d,) = json.loads(capsys.readouterr().out)["decisions"]
+    assert d["obligations"] == [
+        {
+            "event": "RetryAgreed",
+            "negated": False,
+            "within_s": 120.0,
+            "otherwise": {"event": "SupportCalled", "negated": False, "within_s": 60.0, "otherwise": None},
+        }
+    ]
+    assert (
+        main(
+            [
+                "decide",
+                rules_path(),
+                "--event",
+                "UserFallen",
+                "--set",
+                "userConscious=true",
+                "--set",
+                "userConsent=false",
+                "--json",
+            ]
+        )
+        == 0
+    )
+    decisions = json.loads(capsys.readouterr().out)["decisions"]
+    assert [d["rule"] for d in decisions] == ["R4", "R6"]
+    assert decisions[1]["obligations"][0] == {
+        "event": "RecordVideo",
+        "negated": True,
+        "within_s": 600.0,
+        "otherwise": None,
+    }
+
+
+def test_decide_semantics_and_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    rules = tmp_path / "ff.sleec"
+    rules.write_text(FIREFIGHTER)
+    args = [
+        "decide",
+        str(rules),
+        "--event",
+        "CameraStart",
+        "--set",
+        "personNearby=false",
+        "--set",
+        "temperature=40",
+        "--json",
+    ]
+    assert main(args) == 0
+    assert json.loads(capsys.readouterr().out)["decisions"][0]["clause"] == 2
+    assert main([*args, "--semantics", "nested"]) == 0
+    assert json.loads(capsys.readouterr().out)["decisions"][0]["clause"] == 0
+    assert main(["decide", str(rules), "--event", "CameraStart", "--set", "personNearby=false"]) == 2
+    assert "temperature" in capsys.readouterr().err
+    assert main(["decide", str(rules), "--event", "CameraStart", "--set", "personNearby=maybe"]) == 2
+    assert main(["decide", str(rules), "--event", "Nope"]) == 2
+    assert main(["decide", str(rules), "--event", "CameraStart", "--set", "x=1"]) == 2
+
+
+def test_demo_scenario_exercises_every_clause_as_expected(tmp_path: Path) -> None:
+    log = tmp_path / "audit.jsonl"
+    r = run(audit=str(log))
+    got = [(d["rule"], "otherwise" if d["event"] == "otherwise" else d["clause"]) for d in r.decisions()]
+    assert got == EXPECTED
+    rules = r.manager.ruleset.rules
+    covered = {(rule, clause) for rule, clause in got if isinstance(clause, int)}
+    for rule in rules:
+        for clause in range(len(rule.clauses) + 1):
+            assert (rule.name, clause) in covered, f"{rule.name} clause {clause} is not exercised"
+    assert r.manager.stats["violations"] == 2 and r.manager.stats["refused"] == 1
+    assert "refrains from RecordVideo (forbidden)" not in r.robot.log  # the request came from outside
+    assert len(log.read_text().splitlines()) == len(r.events)
+    assert any(s[0] == "advance" for s in STEPS)
+
+
+def test_demo_command_text_and_json(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["demo"]) == 0
+    out = capsys.readouterr().out
+    assert "R1 [R1.1] → Refuse and ExplainWhy" in out and "⛔ RecordVideo refused by R6" in out
+    assert main(["demo", "--json"]) == 0
+    lines = [json.loads(x) for x in capsys.readouterr().out.splitlines()]
+    assert sum(x["kind"] == "decision" for x in lines) == len(EXPECTED)
