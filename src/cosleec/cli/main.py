@@ -10,7 +10,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from cosleec.cli import check, decide, demo, fmt
+from cosleec.cli import check, decide, demo, fmt, ros
 
 USAGE_ERROR = 2
 INTERNAL_ERROR = 70
@@ -31,6 +31,8 @@ def build_parser() -> argparse.ArgumentParser:
     fmt.add_parser(sub)
     decide.add_parser(sub)
     demo.add_parser(sub)
+    ros.add_parser(sub, "ros2")
+    ros.add_parser(sub, "ros1")
     return p
 
 

@@ -1,0 +1,84 @@
+"""What every node shares: topic names, JSON handling, rejection of bad messages, counters."""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+from collections.abc import Callable
+from typing import Any
+
+from cosleec.transport import DEFAULT_NAMESPACE, LATCHED, Transport, dumps, topic
+
+log = logging.getLogger("cosleec.nodes")
+
+
+class Node:
+    """A node publishes and subscribes JSON objects on ``<namespace>/<name>`` topics.
+
+    A message that is not a JSON object, or that the handler rejects with ValueError, is
+    logged, counted and reported on ``rejected``; the node keeps running.
+    """
+
+    name = "node"
+
+    def __init__(self, transport: Transport, namespace: str = DEFAULT_NAMESPACE) -> None:
+        self.transport = transport
+        self.namespace = namespace
+        self.counters: dict[str, int] = {"received": 0, "rejected": 0, "published": 0}
+        self._count_lock = threading.Lock()
+        for t in ("rejected", "status"):
+            self.advertise(t)
+
+    def topic(self, name: str) -> str:
+        return topic(self.namespace, name)
+
+    def advertise(self, name: str) -> None:
+        self.transport.advertise(self.topic(name), latched=name in LATCHED)
+        self._advertised = [*getattr(self, "_advertised", []), name]
+
+    def publish(self, name: str, message: dict[str, Any]) -> None:
+        self.transport.publish(self.topic(name), dumps(message))
+        self._count("published")
+
+    def on(self, name: str, handler: Callable[[dict[str, Any]], None]) -> None:
+        full = self.topic(name)
+
+        def receive(payload: str) -> None:
+            self._count("received")
+            try:
+                message = json.loads(payload)
+                if not isinstance(message, dict):
+                    raise ValueError("expected a JSON object")
+                handler(message)
+            except (ValueError, TypeError, KeyError) as e:
+                self.reject(full, str(e) or type(e).__name__, payload)
+
+        self.transport.subscribe(full, receive)
+
+    def reject(self, where: str, reason: str, payload: Any) -> None:
+        self._count("rejected")
+        log.warning("%s: rejected message on %s: %s", self.name, where, reason)
+        text = (
+            payload
+            if isinstance(payload, str)
+            else dumps(payload)
+            if isinstance(payload, dict)
+            else repr(payload)
+        )
+        self.publish("rejected", {"node": self.name, "topic": where, "reason": reason, "payload": text[:500]})
+
+    def _count(self, key: str, n: int = 1) -> None:
+        with self._count_lock:
+            self.counters[key] = self.counters.get(key, 0) + n
+
+    def status(self, **extra: Any) -> None:
+        with self._count_lock:
+            counters = dict(self.counters)
+        subs = {}
+        count = getattr(self.transport, "subscribers", None)
+        if (
+            count is not None
+        ):  # who listens to what this node publishes: the graph is ready when it is complete
+            subs = {n: count(self.topic(n)) for n in getattr(self, "_advertised", [])}
+        self.publish("status", {"node": self.name, "counters": counters, "subscribers": subs, **extra})

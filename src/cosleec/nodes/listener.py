@@ -1,0 +1,254 @@
+"""The Context Listener: the robot's own topics -> measure values and trigger events.
+
+A declarative YAML mapping says, per measure or event, which topic and message type to
+read, which field (a dotted path), and how to turn it into a value: taken as it is, a
+comparison (``above``, ``below``, ``at_least``, ``at_most``, ``equals``, ``not_equals``)
+giving a boolean, or ``bands`` giving a scale literal. Events fire on the rising edge of
+their condition, so a condition that stays true does not dispatch twice. Nothing in a
+mapping is ever evaluated as code::
+
+    measures:
+      roomDark:       {topic: /light/lux, type: std_msgs/Float64, below: 10}
+      userDistressed: {topic: /emotion/distress, type: std_msgs/Float64,
+                       bands: [[0.3, low], [0.7, medium], [high]]}
+      heartRate:      {topic: /vitals, type: std_msgs/String, json: true, field: hr}
+    events:
+      CurtainOpenRequest: {topic: /voice/command, type: std_msgs/String, equals: open curtains}
+      UserFallen:         {topic: /fall_detector, type: std_msgs/Bool, equals: true}
+
+All measures read from one incoming message are sent as one atomic context update.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from cosleec.nodes.base import Node
+from cosleec.runtime.values import MeasureSpec
+
+COMPARISONS = {
+    "above": lambda x, t: x > t,
+    "below": lambda x, t: x < t,
+    "at_least": lambda x, t: x >= t,
+    "at_most": lambda x, t: x <= t,
+    "equals": lambda x, t: x == t,
+    "not_equals": lambda x, t: x != t,
+}
+KEYS = {"topic", "type", "field", "json", "bands", "edge", *COMPARISONS}
+
+
+class MappingError(ValueError):
+    """A mapping file is wrong; the message names the file and the entry."""
+
+
+@dataclass(frozen=True)
+class Entry:
+    name: str
+    kind: str  # "measure" | "event"
+    topic: str
+    type: str
+    field: tuple[str, ...]
+    json: bool
+    comparison: tuple[str, Any] | None
+    bands: tuple[tuple[float, str], ...] | None  # (upper bound, literal); last bound is inf
+
+    def value(self, message: dict[str, Any]) -> Any:
+        """The measure value (or event condition) for one message; ValueError if it has none."""
+        x: Any = message
+        if self.json:
+            raw = message.get("data")
+            if not isinstance(raw, str):
+                raise ValueError(f"{self.topic}: expected JSON text in `data`")
+            x = json.loads(raw)
+        for part in self.field:
+            if not isinstance(x, dict) or part not in x:
+                raise ValueError(f"{self.topic}: message has no field {'.'.join(self.field)!r}")
+            x = x[part]
+        if self.comparison is not None:
+            op, target = self.comparison
+            if isinstance(target, bool) != isinstance(x, bool) or (
+                isinstance(target, int | float) and not isinstance(x, int | float)
+            ):
+                raise ValueError(
+                    f"{self.topic}: {'.'.join(self.field)} is {x!r}, not comparable with {target!r}"
+                )
+            return bool(COMPARISONS[op](x, target))
+        if self.bands is not None:
+            if isinstance(x, bool) or not isinstance(x, int | float) or math.isnan(x):
+                raise ValueError(f"{self.topic}: {'.'.join(self.field)} is {x!r}, not a number")
+            for bound, literal in self.bands:
+                if x < bound:
+                    return literal
+        return x
+
+
+@dataclass
+class Mapping:
+    entries: list[Entry] = field(default_factory=list)
+    namespace: str | None = None
+    source: str = "<mapping>"
+
+    @classmethod
+    def load(
+        cls,
+        path: str | Path,
+        measures: dict[str, MeasureSpec] | None = None,
+        events: frozenset[str] | None = None,
+    ) -> Mapping:
+        text = Path(path).read_text(encoding="utf-8")
+        return cls.parse(text, str(path), measures, events)
+
+    @classmethod
+    def parse(
+        cls,
+        text: str,
+        source: str = "<mapping>",
+        measures: dict[str, MeasureSpec] | None = None,
+        events: frozenset[str] | None = None,
+    ) -> Mapping:
+        try:
+            doc = yaml.safe_load(text) or {}
+        except yaml.YAMLError as e:
+            raise MappingError(f"{source}: not valid YAML: {e}") from None
+        if not isinstance(doc, dict):
+            raise MappingError(f"{source}: expected a mapping with `measures` and/or `events`")
+        unknown = set(doc) - {"measures", "events", "namespace"}
+        if unknown:
+            raise MappingError(f"{source}: unknown section(s) {sorted(unknown)}")
+        m = cls(namespace=doc.get("namespace"), source=source)
+        for kind in ("measures", "events"):
+            section = doc.get(kind) or {}
+            if not isinstance(section, dict):
+                raise MappingError(f"{source}: `{kind}` must map names to entries")
+            for name, spec in section.items():
+                m.entries.append(_entry(source, kind[:-1], str(name), spec, measures, events))
+        return m
+
+    def topics(self) -> dict[str, str]:
+        """topic -> message type (one type per topic)."""
+        out: dict[str, str] = {}
+        for e in self.entries:
+            if out.setdefault(e.topic, e.type) != e.type:
+                raise MappingError(
+                    f"{self.source}: topic {e.topic} is given two types: {out[e.topic]} and {e.type}"
+                )
+        return out
+
+
+def _entry(
+    source: str,
+    kind: str,
+    name: str,
+    spec: Any,
+    measures: dict[str, MeasureSpec] | None,
+    events: frozenset[str] | None,
+) -> Entry:
+    where = f"{source}: {kind}s.{name}"
+    if not isinstance(spec, dict):
+        raise MappingError(f"{where}: expected an entry with at least `topic` and `type`")
+    extra = set(spec) - KEYS
+    if extra:
+        raise MappingError(f"{where}: unknown key(s) {sorted(extra)}; allowed: {sorted(KEYS)}")
+    for key in ("topic", "type"):
+        if not isinstance(spec.get(key), str) or not spec[key]:
+            raise MappingError(f"{where}: `{key}` is required and must be a string")
+    comps = [k for k in COMPARISONS if k in spec]
+    if len(comps) + ("bands" in spec) > 1:
+        raise MappingError(f"{where}: give at most one of {sorted(COMPARISONS)} or `bands`")
+    comparison = (comps[0], spec[comps[0]]) if comps else None
+    bands = None
+    if "bands" in spec:
+        raw = spec["bands"]
+        if not isinstance(raw, list) or not raw:
+            raise MappingError(
+                f"{where}: `bands` is a list of [upper bound, literal], the last just [literal]"
+            )
+        out: list[tuple[float, str]] = []
+        for i, band in enumerate(raw):
+            last = i == len(raw) - 1
+            if last and isinstance(band, list) and len(band) == 1:
+                out.append((math.inf, str(band[0])))
+            elif isinstance(band, list) and len(band) == 2 and isinstance(band[0], int | float):
+                out.append((float(band[0]), str(band[1])))
+            else:
+                raise MappingError(
+                    f"{where}: band {i + 1} must be [upper bound, literal] (the last: [literal])"
+                )
+        if out[-1][0] != math.inf:
+            out.append((math.inf, out[-1][1]))
+        bands = tuple(out)
+    field_path = tuple(
+        str(spec.get("field", "data") if not spec.get("json") else spec.get("field", "")).split(".")
+    )
+    field_path = tuple(p for p in field_path if p)
+    e = Entry(name, kind, spec["topic"], spec["type"], field_path, bool(spec.get("json")), comparison, bands)
+    if kind == "event":
+        if events is not None and name not in events:
+            raise MappingError(f"{where}: the rules declare no event {name!r}")
+        if comparison is None:
+            raise MappingError(f"{where}: an event needs a condition (e.g. `equals: true`)")
+    elif measures is not None:
+        ms = measures.get(name)
+        if ms is None:
+            raise MappingError(f"{where}: the rules declare no measure {name!r}")
+        if ms.kind == "scale":
+            if bands is not None:
+                bad = [lit for _, lit in bands if lit not in ms.literals]
+                if bad:
+                    raise MappingError(
+                        f"{where}: {bad} not in the scale of {name} ({', '.join(ms.literals)})"
+                    )
+        elif bands is not None:
+            raise MappingError(f"{where}: `bands` give scale literals, but {name} is {ms.kind}")
+        if ms.kind == "numeric" and comparison is not None:
+            raise MappingError(f"{where}: a comparison gives a boolean, but {name} is numeric")
+    return e
+
+
+class ListenerNode(Node):
+    """Subscribes to the mapped robot topics; publishes ``context`` updates and ``events``."""
+
+    name = "listener"
+
+    def __init__(self, transport: Any, mapping: Mapping, *, namespace: str = "/cosleec") -> None:
+        super().__init__(transport, mapping.namespace or namespace)
+        self.mapping = mapping
+        self.edges: dict[str, bool] = {}
+        for t in ("context", "events"):
+            self.advertise(t)
+        by_topic: dict[str, list[Entry]] = {}
+        for e in mapping.entries:
+            by_topic.setdefault(e.topic, []).append(e)
+        for t, type_name in mapping.topics().items():
+            entries = by_topic[t]
+            transport.subscribe_typed(
+                t, type_name, lambda msg, entries=entries, t=t: self._message(t, entries, msg)
+            )
+
+    def _message(self, where: str, entries: list[Entry], message: dict[str, Any]) -> None:
+        self._count("received")
+        values: dict[str, Any] = {}
+        fired: list[str] = []
+        for e in entries:
+            try:
+                v = e.value(message)
+            except (ValueError, TypeError) as err:
+                self.reject(where, str(err), message)
+                continue
+            if e.kind == "measure":
+                values[e.name] = v
+            else:
+                before = self.edges.get(e.name, False)
+                self.edges[e.name] = bool(v)
+                if v and not before:
+                    fired.append(e.name)
+        if values:
+            self.publish("context", {"values": values})
+        for name in fired:
+            self.publish("events", {"event": name})

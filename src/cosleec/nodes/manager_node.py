@@ -1,0 +1,120 @@
+"""The Manager node: rules, context, layers, decisions and obligations for a whole robot.
+
+It consumes ``context``, ``events``, ``request`` (and ``clock`` in simulated time) and
+publishes ``decisions``, ``obligations`` (for the task nodes), ``violations``,
+``request_reply`` and ``status``. Each decision carries the layer chosen under the context
+as of that trigger, so task nodes dispatch exactly that variant: no stale dispatch across
+processes, whatever the timing of the layer topic.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from cosleec.nodes.base import Node
+from cosleec.runtime import ContextError, Manager, RuntimeEvent, VirtualClock
+from cosleec.runtime.clock import Clock, MonotonicClock
+
+
+class ManagerNode(Node):
+    name = "manager"
+
+    def __init__(
+        self,
+        transport: Any,
+        rules: str,
+        *,
+        namespace: str = "/cosleec",
+        semantics: str = "last-wins",
+        sim_time: bool = False,
+        audit: str | None = None,
+        record: str | None = None,
+        **manager_kw: Any,
+    ) -> None:
+        super().__init__(transport, namespace)
+        self.clock: Clock = VirtualClock() if sim_time else MonotonicClock()
+        self.manager = Manager(
+            rules, clock=self.clock, semantics=semantics, audit=audit, dispatch=False, **manager_kw
+        )
+        self.recorder = None
+        if record:
+            from cosleec.recording import McapRecorder
+
+            self.recorder = McapRecorder(record)
+        for t in ("decisions", "obligations", "violations", "request_reply"):
+            self.advertise(t)
+        self.manager.subscribe(self._runtime_event)
+        self.manager.start(check=False, timer=not sim_time)
+        self.on("context", self._context)
+        self.on("events", self._event)
+        self.on("request", self._request)
+        if sim_time:
+            self.on("clock", self._clock)
+        self.status()
+
+    def status(self, **extra: Any) -> None:
+        m = self.manager
+        super().status(
+            context_version=m.context.version,
+            stats=dict(m.stats),
+            active=m.active_layers(),
+            time=self.clock.now(),
+            **extra,
+        )
+
+    # ------------------------------------------------------------------ inputs
+    def _context(self, msg: dict[str, Any]) -> None:
+        values = msg.get("values")
+        if not isinstance(values, dict) or not values:
+            raise ValueError("context message needs a non-empty object `values`")
+        try:
+            self.manager.update(values)
+        except ContextError as e:
+            raise ValueError(str(e)) from e
+        finally:
+            self.status()
+
+    def _event(self, msg: dict[str, Any]) -> None:
+        name = msg.get("event")
+        if not isinstance(name, str):
+            raise ValueError("event message needs a string `event`")
+        try:
+            self.manager.event(name)
+        except ContextError as e:
+            raise ValueError(str(e)) from e
+        finally:
+            self.status()
+
+    def _request(self, msg: dict[str, Any]) -> None:
+        name, rid = msg.get("event"), msg.get("id")
+        if not isinstance(name, str) or rid is None:
+            raise ValueError("request message needs `id` and a string `event`")
+        allowed = self.manager.request(name)
+        self.publish("request_reply", {"id": rid, "event": name, "allowed": allowed})
+
+    def _clock(self, msg: dict[str, Any]) -> None:
+        t = msg.get("t")
+        if not isinstance(t, int | float) or isinstance(t, bool):
+            raise ValueError("clock message needs a number `t`")
+        assert isinstance(self.clock, VirtualClock)
+        self.clock.set(max(float(t), self.clock.now()))
+        self.manager.tick()
+        self.status()
+
+    # ------------------------------------------------------------------ outputs
+    def _runtime_event(self, ev: RuntimeEvent) -> None:
+        d = ev.data
+        if ev.kind == "decision":
+            self.publish("decisions", d)
+            if d["clause"] is not None:
+                self._count("obligations")
+                self.publish("obligations", d)
+        elif ev.kind == "obligation" and (d["status"] == "violated" or d["late"]):
+            self.publish("violations", d)
+        if self.recorder is not None:
+            self.recorder.write(ev.kind, ev.time, d)
+
+    def close(self) -> None:
+        self.manager.close()
+        if self.recorder is not None:
+            self.recorder.close()

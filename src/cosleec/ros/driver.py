@@ -1,0 +1,183 @@
+"""Drive a running CO-SLEEC system through a scenario over the middleware, and watch it.
+
+Used by ``cosleec ros2 demo`` and by the end-to-end tests. Between steps the driver waits
+until the system is quiet -- the Manager has handled every message sent to it (by the
+driver and by the task nodes) and the task nodes have handled every obligation -- because
+separate topics carry no ordering guarantee between them.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+from typing import Any
+
+from cosleec.transport import dumps, topic
+
+
+class Driver:
+    def __init__(
+        self, transport: Any, namespace: str = "/cosleec", tasks: tuple[str, ...] = ("task",)
+    ) -> None:
+        self.t = transport
+        self.ns = namespace
+        self.tasks = tasks
+        self.sent = 0
+        self.now = 0.0
+        self.decisions: list[dict[str, Any]] = []
+        self.obligations: list[dict[str, Any]] = []
+        self.violations: list[dict[str, Any]] = []
+        self.rejected: list[dict[str, Any]] = []
+        self.replies: dict[str, dict[str, Any]] = {}
+        self.layers: dict[str, Any] = {}
+        self.status: dict[str, dict[str, Any]] = {}
+        self._lock = threading.Condition()
+        for name in ("context", "events", "clock", "request"):
+            self.t.advertise(topic(namespace, name))
+        for name, sink in (
+            ("decisions", self.decisions),
+            ("obligations", self.obligations),
+            ("violations", self.violations),
+            ("rejected", self.rejected),
+        ):
+            self.t.subscribe(topic(namespace, name), self._collector(sink))
+        self.t.subscribe(topic(namespace, "status"), self._status)
+        self.t.subscribe(topic(namespace, "layers"), self._layers)
+        self.t.subscribe(topic(namespace, "request_reply"), self._reply)
+
+    def _collector(self, sink: list[dict[str, Any]]) -> Any:
+        def collect(payload: str) -> None:
+            with self._lock:
+                sink.append(json.loads(payload))
+                self._lock.notify_all()
+
+        return collect
+
+    def _status(self, payload: str) -> None:
+        msg = json.loads(payload)
+        with self._lock:
+            self.status[msg["node"]] = msg
+            self._lock.notify_all()
+
+    def _layers(self, payload: str) -> None:
+        with self._lock:
+            self.layers = json.loads(payload)
+            self._lock.notify_all()
+
+    def _reply(self, payload: str) -> None:
+        msg = json.loads(payload)
+        with self._lock:
+            self.replies[str(msg["id"])] = msg
+            self._lock.notify_all()
+
+    # ------------------------------------------------------------------ waiting
+    def wait(self, predicate: Any, timeout: float = 20.0, what: str = "condition") -> None:
+        deadline = time.monotonic() + timeout
+        with self._lock:
+            while not predicate():
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise TimeoutError(f"timed out waiting for {what}; status: {self.status}")
+                self._lock.wait(min(left, 0.2))
+
+    def ready(self, timeout: float = 30.0, layers: bool = True) -> None:
+        """Wait until every node is up and every connection of the graph is made.
+
+        ROS 1 delivers nothing to a subscriber whose connection is not yet set up, and ROS 2
+        nothing before discovery: a message sent earlier would be lost.
+        """
+        n = len(self.tasks)
+
+        def connected() -> bool:
+            m = self.status.get("manager")
+            if (
+                m is None
+                or any(t not in self.status for t in self.tasks)
+                or (layers and "layers" not in self.status)
+            ):
+                return False
+            ms = m.get("subscribers", {})
+            if (
+                ms.get("obligations", 0) < n
+                or ms.get("request_reply", 0) < n + 1
+                or ms.get("decisions", 0) < 1
+            ):
+                return False
+            for t in self.tasks:
+                ts = self.status[t].get("subscribers", {})
+                if ts.get("events", 0) < 1 or ts.get("request", 0) < 1:
+                    return False
+            return True
+
+        self.wait(connected, timeout, "every node to connect")
+        want = {"context": 2 if layers else 1, "events": 1, "clock": 1, "request": 1}
+        end = time.monotonic() + timeout
+        for name, k in want.items():
+            while self.t.subscribers(topic(self.ns, name)) < k:
+                if time.monotonic() > end:
+                    raise TimeoutError(f"nobody subscribes to {name}")
+                time.sleep(0.02)
+
+    def quiet(self, timeout: float = 20.0) -> None:
+        def settled() -> bool:
+            m = self.status.get("manager")
+            if m is None:
+                return False
+            task_msgs = 0
+            handled = 0
+            for name in self.tasks:
+                s = self.status.get(name, {})
+                c = s.get("counters", {})
+                task_msgs += c.get("reported", 0) + c.get("requested", 0)
+                handled += s.get("handled", 0)
+            # every message to the Manager handled, and every obligation it sent handled by a task
+            received: int = m["counters"]["received"]
+            published: int = m["counters"].get("obligations", 0)
+            return received == self.sent + task_msgs and handled == published
+
+        self.wait(settled, timeout, "the system to settle")
+
+    # ------------------------------------------------------------------ steps
+    def _send(self, name: str, message: dict[str, Any]) -> None:
+        self.sent += 1
+        self.t.publish(topic(self.ns, name), dumps(message))
+
+    def set(self, values: dict[str, Any]) -> None:
+        self._send("context", {"values": values})
+        self.quiet()
+
+    def event(self, name: str) -> None:
+        self._send("events", {"event": name})
+        self.quiet()
+
+    def advance(self, seconds: float) -> None:
+        self.now += seconds
+        self._send("clock", {"t": self.now})
+        self.quiet()
+
+    def request(self, event: str) -> bool:
+        rid = f"driver-{self.sent}"
+        self._send("request", {"id": rid, "event": event})
+        self.wait(lambda: rid in self.replies, what=f"reply to {rid}")
+        self.quiet()
+        return bool(self.replies[rid]["allowed"])
+
+    def raw(self, name: str, payload: str) -> None:
+        """Publish anything (tests of bad input): counted as sent."""
+        self.sent += 1
+        self.t.publish(topic(self.ns, name), payload)
+
+    def run(self, steps: list[tuple[str, Any, str]], on_step: Any = None) -> None:
+        for step in steps:
+            kind, arg, _note = step
+            if on_step is not None:
+                on_step(self.now, step)
+            if kind == "set":
+                self.set(arg)
+            elif kind == "event":
+                self.event(arg)
+            elif kind == "advance":
+                self.advance(arg)
+            elif kind == "request":
+                self.request(arg)

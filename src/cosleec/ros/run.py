@@ -1,0 +1,62 @@
+"""Run one CO-SLEEC node on ROS 2 or ROS 1 until SIGINT/SIGTERM, then stop it cleanly."""
+
+from __future__ import annotations
+
+import importlib
+import logging
+import signal
+import sys
+import threading
+from typing import Any
+
+
+def transport(backend: str, node_name: str) -> Any:
+    if backend == "ros2":
+        try:
+            from cosleec.ros.ros2 import Ros2Transport
+        except ImportError as e:
+            raise SystemExit(
+                f"cosleec: ROS 2 (rclpy) is not available here: {e}; use .venv-ros2 (bash scripts/setup-ros)"
+            ) from None
+        return Ros2Transport(node_name)
+    try:
+        from cosleec.ros.ros1 import Ros1Transport
+    except ImportError as e:
+        raise SystemExit(
+            f"cosleec: ROS 1 (rospy) is not available here: {e}; use .venv-ros1 (bash scripts/setup-ros)"
+        ) from None
+    return Ros1Transport(node_name)
+
+
+def load_module(name: str) -> Any:
+    try:
+        return importlib.import_module(name)
+    except ImportError as e:
+        raise SystemExit(f"cosleec: cannot import task module {name!r}: {e}") from None
+
+
+def serve(backend: str, kind: str, make: Any, node_name: str) -> int:
+    """Create the transport and node, then wait for SIGINT/SIGTERM."""
+    logging.basicConfig(level=logging.INFO, format=f"[{node_name}] %(levelname)s %(message)s")
+    stop = threading.Event()
+    t = transport(backend, node_name)
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    node = None
+    try:
+        node = make(t)
+        print(f"cosleec {backend} {kind}: ready", flush=True)
+        beat = getattr(node, "status", None)
+        while not stop.is_set() and t.ok():
+            stop.wait(0.5)
+            if beat is not None and not stop.is_set():
+                beat()  # a heartbeat: late joiners learn the node's state
+    finally:
+        if node is not None and hasattr(node, "close"):
+            node.close()
+        t.close()
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(0)

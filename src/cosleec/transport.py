@@ -1,0 +1,161 @@
+"""How cosleec nodes talk: a small transport interface, and an in-process implementation.
+
+The node logic (``cosleec.nodes``) is written against :class:`Transport` only; ROS 2 and
+ROS 1 adapters live in ``cosleec.ros`` and are the only code that imports rclpy or rospy.
+Payloads are JSON objects carried as text (``std_msgs/String`` on ROS), so every tool can
+show them and a malformed message can be rejected, logged and counted by the receiver.
+
+Topics, under a namespace (default ``/cosleec``):
+
+===================  =====  ==========================================================
+topic                 dir    payload
+===================  =====  ==========================================================
+``context``          in     ``{"values": {measure: value, ...}}`` (atomic update)
+``events``           in     ``{"event": name}`` (a trigger, or a response that happened)
+``request``          in     ``{"id": str, "event": name}`` (may a task do it now?)
+``request_reply``    out    ``{"id": str, "event": name, "allowed": bool}``
+``clock``            in     ``{"t": seconds}`` (simulated time, with ``--sim-time``)
+``decisions``        out    a decision record (rule, clause, layer, values, explanation)
+``obligations``      out    what a decision asks of the task nodes (same record)
+``violations``       out    an obligation that was violated (or a late event)
+``layers``           out    ``{"active": [...], "switches": [...]}`` -- latched
+``status``           out    counters of a node, after each message it handled, and every 0.5 s
+``rejected``         out    ``{"topic", "reason", "payload"}`` for every bad message
+===================  =====  ==========================================================
+"""
+
+from __future__ import annotations
+
+import json
+import queue
+import threading
+from collections.abc import Callable
+from typing import Any, Protocol
+
+DEFAULT_NAMESPACE = "/cosleec"
+TOPICS = (
+    "context",
+    "events",
+    "request",
+    "request_reply",
+    "clock",
+    "decisions",
+    "obligations",
+    "violations",
+    "layers",
+    "status",
+    "rejected",
+)
+LATCHED = frozenset({"layers"})
+
+Handler = Callable[[str], None]
+
+
+def topic(namespace: str, name: str) -> str:
+    return f"{namespace.rstrip('/')}/{name}"
+
+
+class Transport(Protocol):
+    """What a node needs from a middleware: publish and subscribe JSON text on topics, and
+    subscribe to the robot's own typed topics (delivered as a dict of the message fields)."""
+
+    def publish(self, topic: str, payload: str) -> None: ...
+
+    def subscribe(self, topic: str, handler: Handler) -> None: ...
+
+    def subscribe_typed(
+        self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None]
+    ) -> None: ...
+
+    def advertise(self, topic: str, latched: bool = False) -> None: ...
+
+    def close(self) -> None: ...
+
+
+def dumps(message: dict[str, Any]) -> str:
+    return json.dumps(message, default=str, separators=(",", ":"))
+
+
+class LocalBus:
+    """An in-process bus: one delivery thread, messages in publication order (tests, embedding).
+
+    Latched topics replay their last message to late subscribers, like ROS transient-local.
+    """
+
+    def __init__(self) -> None:
+        self._subs: dict[str, list[Handler]] = {}
+        self._latched: dict[str, str] = {}
+        self._latched_topics: set[str] = set()
+        self._q: queue.Queue[tuple[str, str] | None] = queue.Queue()
+        self._lock = threading.Lock()
+        self._idle = threading.Condition(self._lock)
+        self._pending = 0
+        self._thread = threading.Thread(target=self._run, name="cosleec-localbus", daemon=True)
+        self._thread.start()
+
+    def transport(self) -> LocalTransport:
+        return LocalTransport(self)
+
+    def _run(self) -> None:
+        while True:
+            item = self._q.get()
+            if item is None:
+                return
+            t, payload = item
+            for h in list(self._subs.get(t, ())):
+                try:
+                    h(payload)
+                except Exception:  # a subscriber's bug must not stop delivery to others
+                    import logging
+
+                    logging.getLogger("cosleec.transport").exception("handler for %s failed", t)
+            with self._lock:
+                self._pending -= 1
+                if self._pending == 0:
+                    self._idle.notify_all()
+
+    def _publish(self, t: str, payload: str) -> None:
+        with self._lock:
+            if t in self._latched_topics:
+                self._latched[t] = payload
+            self._pending += 1
+        self._q.put((t, payload))
+
+    def _subscribe(self, t: str, h: Handler) -> None:
+        with self._lock:
+            self._subs.setdefault(t, []).append(h)
+            last = self._latched.get(t)
+        if last is not None:  # a late joiner of a latched topic gets the current state
+            h(last)
+
+    def wait_idle(self, timeout: float = 5.0) -> bool:
+        """Block until every published message has been delivered."""
+        with self._idle:
+            return self._idle.wait_for(lambda: self._pending == 0, timeout)
+
+    def close(self) -> None:
+        self._q.put(None)
+        self._thread.join(5)
+
+
+class LocalTransport:
+    def __init__(self, bus: LocalBus) -> None:
+        self.bus = bus
+
+    def publish(self, topic: str, payload: str) -> None:
+        self.bus._publish(topic, payload)
+
+    def subscribe(self, topic: str, handler: Handler) -> None:
+        self.bus._subscribe(topic, handler)
+
+    def subscribe_typed(self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None]) -> None:
+        """On the local bus a typed message is published as the JSON of its fields."""
+        self.bus._subscribe(topic, lambda payload: handler(json.loads(payload)))
+
+    def advertise(self, topic: str, latched: bool = False) -> None:
+        if latched:
+            with self.bus._lock:
+                self.bus._latched_topics.add(topic)
+
+    def close(self) -> None:
+        pass
