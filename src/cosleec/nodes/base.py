@@ -27,6 +27,8 @@ class Node:
         self.namespace = namespace
         self.counters: dict[str, int] = {"received": 0, "rejected": 0, "published": 0}
         self._count_lock = threading.Lock()
+        self._status_lock = threading.RLock()  # snapshots are published in the order they are taken
+        self._status_seq = 0
         for t in ("rejected", "status"):
             self.advertise(t)
 
@@ -67,18 +69,21 @@ class Node:
             else repr(payload)
         )
         self.publish("rejected", {"node": self.name, "topic": where, "reason": reason, "payload": text[:500]})
+        self.status()  # the count just changed: say so
 
     def _count(self, key: str, n: int = 1) -> None:
         with self._count_lock:
             self.counters[key] = self.counters.get(key, 0) + n
 
     def status(self, **extra: Any) -> None:
-        with self._count_lock:
-            counters = dict(self.counters)
-        subs = {}
-        count = getattr(self.transport, "subscribers", None)
-        if (
-            count is not None
-        ):  # who listens to what this node publishes: the graph is ready when it is complete
-            subs = {n: count(self.topic(n)) for n in getattr(self, "_advertised", [])}
-        self.publish("status", {"node": self.name, "counters": counters, "subscribers": subs, **extra})
+        """Publish the node's counters; snapshots go out in the order they are taken."""
+        with self._status_lock:
+            with self._count_lock:
+                counters = dict(self.counters)
+            subs = {}
+            count = getattr(self.transport, "subscribers", None)
+            if count is not None:  # who listens to what this node publishes: is the graph complete?
+                subs = {n: count(self.topic(n)) for n in getattr(self, "_advertised", [])}
+            self._status_seq += 1
+            message = {"node": self.name, "seq": self._status_seq, "counters": counters, "subscribers": subs}
+            self.publish("status", {**message, **extra})

@@ -53,6 +53,10 @@ class ManagerNode(Node):
         self.status()
 
     def status(self, **extra: Any) -> None:
+        with self._status_lock:  # the extra fields are part of the same ordered snapshot
+            self._manager_status(**extra)
+
+    def _manager_status(self, **extra: Any) -> None:
         m = self.manager
         super().status(
             context_version=m.context.version,

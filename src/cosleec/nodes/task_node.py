@@ -133,7 +133,8 @@ class TaskNode(Node):
             self.status()
 
     def status(self, **extra: Any) -> None:
-        super().status(handled=len(self.handled), failures=self.dispatcher.failures, **extra)
+        with self._status_lock:
+            super().status(handled=len(self.handled), failures=self.dispatcher.failures, **extra)
 
     def close(self) -> None:
         self._work.put(None)

@@ -27,25 +27,35 @@ class System:
         extra_task_args: list[str] | None = None,
         task_module: str = TASKS,
         manager_args: list[str] | None = None,
+        env: dict[str, str] | None = None,
+        rules: str | None = None,
+        nodes: list[list[str]] | None = None,
     ) -> None:
         self.backend = backend
         self.namespace = namespace
         self.procs: list[Any] = []
         self.master: Any = None
-        if backend == "ros2":
+        self.own_master = env is None and backend == "ros1"
+        if env is not None:
+            self.env = dict(env)
+        elif backend == "ros2":
             self.env = rosenv.ros2_env()
         else:
             self.env = rosenv.ros1_env(rosenv.free_port())
-        self.rules = rules_path()
-        self.nodes = [
-            ["manager", self.rules, "--sim-time", *(manager_args or [])],
-            ["layers", self.rules],
-            ["task", self.rules, "--module", task_module, *(extra_task_args or [])],
-        ]
+        self.rules = rules or rules_path()
+        self.nodes = (
+            nodes
+            if nodes is not None
+            else [
+                ["manager", self.rules, "--sim-time", *(manager_args or [])],
+                ["layers", self.rules],
+                ["task", self.rules, "--module", task_module, *(extra_task_args or [])],
+            ]
+        )
 
     def __enter__(self) -> System:
         os.environ.update(self.env)  # this process's driver joins the same graph
-        if self.backend == "ros1":
+        if self.own_master:
             self.master = rosenv.start_master(self.env)
         for n in self.nodes:
             self.procs.append(start(node_command(self.backend, n, self.namespace), env=self.env))

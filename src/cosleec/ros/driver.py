@@ -57,7 +57,9 @@ class Driver:
     def _status(self, payload: str) -> None:
         msg = json.loads(payload)
         with self._lock:
-            self.status[msg["node"]] = msg
+            old = self.status.get(msg["node"])
+            if old is None or msg.get("seq", 0) >= old.get("seq", 0):
+                self.status[msg["node"]] = msg
             self._lock.notify_all()
 
     def _layers(self, payload: str) -> None:
@@ -156,11 +158,12 @@ class Driver:
         self._send("clock", {"t": self.now})
         self.quiet()
 
-    def request(self, event: str) -> bool:
+    def request(self, event: str, settle: bool = True) -> bool:
         rid = f"driver-{self.sent}"
         self._send("request", {"id": rid, "event": event})
         self.wait(lambda: rid in self.replies, what=f"reply to {rid}")
-        self.quiet()
+        if settle:
+            self.quiet()
         return bool(self.replies[rid]["allowed"])
 
     def raw(self, name: str, payload: str) -> None:

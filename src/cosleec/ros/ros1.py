@@ -52,6 +52,18 @@ class Ros1Transport:
         cls = message_class(type_name)
         self._subs.append(self._rospy.Subscriber(topic, cls, lambda m: handler(to_dict(m)), queue_size=1000))
 
+    def publish_typed(self, topic: str, type_name: str, fields: dict[str, Any]) -> None:
+        """Publish a typed message (simulators, tests): ``std_msgs/Bool``, ``{"data": True}``."""
+        key = f"{topic}#{type_name}"
+        pub = self._pubs.get(key)
+        if pub is None:
+            pub = self._pubs[key] = self._rospy.Publisher(topic, message_class(type_name), queue_size=100)
+        pub.publish(message_class(type_name)(**fields))
+
+    def typed_subscribers(self, topic: str, type_name: str) -> int:
+        pub = self._pubs.get(f"{topic}#{type_name}")
+        return pub.get_num_connections() if pub is not None else 0
+
     def subscribers(self, topic: str) -> int:
         pub = self._pubs.get(topic)
         return pub.get_num_connections() if pub is not None else 0

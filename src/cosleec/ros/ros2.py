@@ -94,6 +94,20 @@ class Ros2Transport:
         sub = self.node.create_subscription(cls, topic, lambda m: handler(to_dict(m)), self._qos(False))
         self._subs.append(sub)
 
+    def publish_typed(self, topic: str, type_name: str, fields: dict[str, Any]) -> None:
+        """Publish a typed message (simulators, tests): ``std_msgs/Bool``, ``{"data": True}``."""
+        key = f"{topic}#{type_name}"
+        pub = self._pubs.get(key)
+        if pub is None:
+            pub = self._pubs[key] = self.node.create_publisher(
+                message_class(type_name), topic, self._qos(False)
+            )
+        pub.publish(message_class(type_name)(**fields))
+
+    def typed_subscribers(self, topic: str, type_name: str) -> int:
+        pub = self._pubs.get(f"{topic}#{type_name}")
+        return pub.get_subscription_count() if pub is not None else 0
+
     def subscribers(self, topic: str) -> int:
         pub = self._pubs.get(topic)
         return pub.get_subscription_count() if pub is not None else 0

@@ -67,7 +67,7 @@ class Tracked:
             "status": self.status,
             "at": self.outcome_at,
             "by": self.by,
-            "late": self.late,
+            "late": list(self.late),  # a copy: a record must not change after it was emitted
             "refused": self.refused,
             "depth": self.depth,
         }

@@ -1,0 +1,1 @@
+from tests.ros.misbehaving import install_crashing as install  # noqa: F401
