@@ -123,7 +123,10 @@ def test_no_stale_dispatch_when_updates_race_triggers_across_processes(
         "rule_start R when E then Same within 5 seconds unless a > b then ABigger within 5 seconds\n"
         "  unless a < b then BBigger within 5 seconds rule_end\n"
     )
-    nodes = [["manager", str(rules), "--sim-time"], ["task", str(rules), "--module", "tests.ros.race_tasks"]]
+    nodes = [
+        ["manager", str(rules), "--sim-time", "--status-each"],
+        ["task", str(rules), "--module", "tests.ros.race_tasks", "--status-each"],
+    ]
     with System(backend, namespace, env=env_with_tests(graph), rules=str(rules), nodes=nodes) as system:
         driver = Driver(transport, namespace)
         driver.ready(layers=False)
@@ -225,7 +228,7 @@ events:
 """)
     rules = rules_path()
     nodes = [
-        ["manager", rules, "--sim-time"],
+        ["manager", rules, "--sim-time", "--status-each"],
         ["listener", str(mapping), "--rules", rules],
         ["task", rules, "--module", "cosleec.demo.assistive_care.tasks"],
     ]

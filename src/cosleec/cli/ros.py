@@ -25,6 +25,9 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     m.add_argument("--sim-time", action="store_true", help="take time from the clock topic")
     m.add_argument("--audit", metavar="FILE", help="append-only JSON Lines audit trail")
     m.add_argument("--record", metavar="FILE.mcap", help="record the decision stream (Foxglove opens it)")
+    m.add_argument(
+        "--status-each", action="store_true", help="publish status after every message (harnesses)"
+    )
     common(m)
     la = nodes.add_parser("layers", help="the COP Layer Manager: publishes active layers (latched)")
     la.add_argument("rules")
@@ -39,6 +42,9 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     t.add_argument("--module", required=True, help="a module with install(node) binding tasks/capabilities")
     t.add_argument("--name", default="task")
     t.add_argument("--only", help="comma-separated rule names this node serves")
+    t.add_argument(
+        "--status-each", action="store_true", help="publish status after every obligation (harnesses)"
+    )
     common(t)
     lp = nodes.add_parser("launch", help="start the nodes of a launch file; stop them on SIGINT/SIGTERM")
     lp.add_argument("file")
@@ -76,6 +82,7 @@ def run(args: argparse.Namespace) -> int:
                 sim_time=args.sim_time,
                 audit=args.audit,
                 record=args.record,
+                status_each=args.status_each,
             )
         if node == "layers":
             from cosleec.nodes import LayersNode
@@ -100,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
             return ListenerNode(t, mapping, namespace=args.namespace)
         from cosleec.nodes import TaskNode
 
-        tn = TaskNode(t, args.rules, namespace=args.namespace, name=args.name)
+        tn = TaskNode(t, args.rules, namespace=args.namespace, name=args.name, status_each=args.status_each)
         load_module(args.module).install(tn)
         only = args.only.split(",") if args.only else None
         return tn.start(only)

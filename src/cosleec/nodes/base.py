@@ -69,7 +69,8 @@ class Node:
             else repr(payload)
         )
         self.publish("rejected", {"node": self.name, "topic": where, "reason": reason, "payload": text[:500]})
-        self.status()  # the count just changed: say so
+        if getattr(self, "status_each", True):
+            self.status()  # the count just changed: say so
 
     def _count(self, key: str, n: int = 1) -> None:
         with self._count_lock:

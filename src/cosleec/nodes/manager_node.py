@@ -29,9 +29,13 @@ class ManagerNode(Node):
         sim_time: bool = False,
         audit: str | None = None,
         record: str | None = None,
+        status_each: bool = False,
         **manager_kw: Any,
     ) -> None:
         super().__init__(transport, namespace)
+        # status after every message lets a harness know when the system is quiet; in
+        # deployment the heartbeat (every 0.5 s) is enough and keeps the hot path short
+        self.status_each = status_each
         self.clock: Clock = VirtualClock() if sim_time else MonotonicClock()
         self.manager = Manager(
             rules, clock=self.clock, semantics=semantics, audit=audit, dispatch=False, **manager_kw
@@ -76,7 +80,7 @@ class ManagerNode(Node):
         except ContextError as e:
             raise ValueError(str(e)) from e
         finally:
-            self.status()
+            self._after_message()
 
     def _event(self, msg: dict[str, Any]) -> None:
         name = msg.get("event")
@@ -87,7 +91,7 @@ class ManagerNode(Node):
         except ContextError as e:
             raise ValueError(str(e)) from e
         finally:
-            self.status()
+            self._after_message()
 
     def _request(self, msg: dict[str, Any]) -> None:
         name, rid = msg.get("event"), msg.get("id")
@@ -103,16 +107,20 @@ class ManagerNode(Node):
         assert isinstance(self.clock, VirtualClock)
         self.clock.set(max(float(t), self.clock.now()))
         self.manager.tick()
-        self.status()
+        self._after_message()
+
+    def _after_message(self) -> None:
+        if self.status_each:
+            self.status()
 
     # ------------------------------------------------------------------ outputs
     def _runtime_event(self, ev: RuntimeEvent) -> None:
         d = ev.data
         if ev.kind == "decision":
-            self.publish("decisions", d)
-            if d["clause"] is not None:
+            if d["clause"] is not None:  # the task nodes first: they are on the critical path
                 self._count("obligations")
                 self.publish("obligations", d)
+            self.publish("decisions", d)
         elif ev.kind == "obligation" and (d["status"] == "violated" or d["late"]):
             self.publish("violations", d)
         if self.recorder is not None:

@@ -53,9 +53,11 @@ class TaskNode(Node):
         namespace: str = "/cosleec",
         name: str = "task",
         request_timeout: float = 2.0,
+        status_each: bool = False,
     ) -> None:
         super().__init__(transport, namespace)
         self.name = name
+        self.status_each = status_each  # status after every handled obligation (harnesses)
         spec, symbols = load_rules(rules)
         self.spec = spec
         self.ruleset = compile_rules(spec, symbols)
@@ -130,7 +132,8 @@ class TaskNode(Node):
             else:
                 self.dispatcher.dispatch(rule, d)
             self.handled.append(d)
-            self.status()
+            if self.status_each:
+                self.status()
 
     def status(self, **extra: Any) -> None:
         with self._status_lock:

@@ -47,9 +47,9 @@ class System:
             nodes
             if nodes is not None
             else [
-                ["manager", self.rules, "--sim-time", *(manager_args or [])],
+                ["manager", self.rules, "--sim-time", "--status-each", *(manager_args or [])],
                 ["layers", self.rules],
-                ["task", self.rules, "--module", task_module, *(extra_task_args or [])],
+                ["task", self.rules, "--module", task_module, "--status-each", *(extra_task_args or [])],
             ]
         )
 

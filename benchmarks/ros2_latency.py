@@ -1,0 +1,184 @@
+"""End-to-end latency of CO-SLEEC over ROS 2, against raw rclpy, in separate processes.
+
+Raw: a ping-pong through an rclpy echo process (benchmark -> echo -> benchmark).
+End to end: the benchmark sends a context message that switches a layer, then the trigger;
+the Manager (own process) decides under the new layer and sends the obligation; the task
+node (own process) dispatches the layered implementation, which reports the response event;
+the benchmark stops the clock when that report arrives. Both are round trips measured in the
+same run, on the same machine; the ratio of their p99 is the figure (target <= 2).
+Runs inside a private network namespace (ros-setup.md §1): it re-executes itself there.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+RULES = """def_start event Ping event Pong measure toggle : boolean def_end
+rule_start R when Ping then Pong within 5 seconds unless toggle then Pong within 5 seconds rule_end
+"""
+
+
+def isolated() -> bool:
+    return [n for _, n in socket.if_nameindex()] == ["lo"]
+
+
+def reexec_isolated() -> None:
+    env = dict(
+        os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_DOMAIN_ID=str(random.randint(1, 100))
+    )
+    cmd = [
+        "unshare",
+        "--net",
+        "--",
+        "bash",
+        "-c",
+        'ip link set lo up && exec "$@"',
+        "x",
+        sys.executable,
+        *sys.argv,
+    ]
+    os.execvpe("unshare", cmd, env)
+
+
+def pct(xs: list[float], p: float) -> float:
+    s = sorted(xs)
+    return s[min(len(s) - 1, round(p / 100 * (len(s) - 1)))]
+
+
+def main() -> int:
+    sys.path.insert(0, str(HERE))
+    from _common import args, report
+
+    a = args(__doc__ or "")
+    if not isolated():
+        reexec_isolated()
+    import rclpy
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from std_msgs.msg import String
+
+    from cosleec.ros import env as rosenv
+    from cosleec.ros.launch import node_command, start, stop
+
+    n = 200 if a.quick else 1000
+    env = rosenv.ros2_env()
+    env["PYTHONPATH"] = os.pathsep.join([str(HERE), env.get("PYTHONPATH", "")])
+    os.environ.update(env)
+    tmp = Path(tempfile.mkdtemp(prefix="cosleec-bench-"))
+    rules = tmp / "bench.sleec"
+    rules.write_text(RULES)
+    ns = "/bench_cosleec"
+    procs = [
+        subprocess.Popen([sys.executable, str(HERE / "_ros2_pong.py")], env=env, stdout=subprocess.DEVNULL),
+        start(node_command("ros2", ["manager", str(rules)], ns), env=env, stdout=subprocess.DEVNULL),
+        start(
+            node_command("ros2", ["task", str(rules), "--module", "_ros2_bench_tasks"], ns),
+            env=env,
+            stdout=subprocess.DEVNULL,
+        ),
+    ]
+    rclpy.init()
+    node = rclpy.create_node("bench_driver")
+    qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+    got = threading.Event()
+    arrivals: list[float] = []
+
+    def arrived(_m: object) -> None:
+        arrivals.append(time.perf_counter())
+        got.set()
+
+    ping = node.create_publisher(String, "/bench/ping", qos)
+    node.create_subscription(String, "/bench/pong", arrived, qos)
+    ctx = node.create_publisher(String, f"{ns}/context", qos)
+    ev = node.create_publisher(String, f"{ns}/events", qos)
+    reports: list[float] = []
+    rep = threading.Event()
+
+    def reported(m: String) -> None:
+        if json.loads(m.data).get("event") == "Pong":
+            reports.append(time.perf_counter())
+            rep.set()
+
+    node.create_subscription(String, f"{ns}/events", reported, qos)
+    executor = rclpy.executors.SingleThreadedExecutor()
+    executor.add_node(node)
+    spinner = threading.Thread(target=executor.spin, daemon=True)
+    spinner.start()
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and (
+            ping.get_subscription_count() < 1
+            or ctx.get_subscription_count() < 1
+            or ev.get_subscription_count() < 1
+            or node.count_publishers(f"{ns}/events") < 2
+        ):
+            time.sleep(0.05)
+
+        def raw_once() -> float:
+            got.clear()
+            t0 = time.perf_counter()
+            ping.publish(String(data='{"seq": 1, "payload": "x"}'))
+            if not got.wait(5):
+                raise TimeoutError("no pong")
+            return arrivals[-1] - t0
+
+        toggle = [False]
+
+        def e2e_once() -> float:
+            rep.clear()
+            toggle[0] = not toggle[0]
+            t0 = time.perf_counter()
+            ctx.publish(String(data=json.dumps({"values": {"toggle": toggle[0]}})))  # switches R's layer
+            ev.publish(String(data='{"event":"Ping"}'))
+            if not rep.wait(5):
+                raise TimeoutError("no report from the task node")
+            return reports[-1] - t0
+
+        for _ in range(50):  # warm up both paths (discovery, first dispatch)
+            raw_once()
+            e2e_once()
+        raw, e2e = [], []
+        for _ in range(n):  # interleaved, so that machine noise hits both alike
+            raw.append(raw_once() * 1e6)
+            e2e.append(e2e_once() * 1e6)
+    finally:
+        executor.shutdown()
+        spinner.join(5)
+        node.destroy_node()
+        rclpy.shutdown()
+        for p in procs:
+            stop(p)
+    result = {
+        "benchmark": "ros2_latency",
+        "samples": n,
+        "raw_p50_us": round(statistics.median(raw), 1),
+        "raw_p99_us": round(pct(raw, 99), 1),
+        "e2e_p50_us": round(statistics.median(e2e), 1),
+        "e2e_p99_us": round(pct(e2e, 99), 1),
+        "ratio_p50": round(statistics.median(e2e) / statistics.median(raw), 2),
+        "ratio_p99": round(pct(e2e, 99) / pct(raw, 99), 2),
+        "target_ratio_p99": 2.0,
+        "sleec_at_runtime_mean_ms": 76,
+        "quick": a.quick,
+    }
+    rows = [
+        ("raw rclpy ping-pong", f"p50 {result['raw_p50_us']} us", f"p99 {result['raw_p99_us']} us"),
+        ("CO-SLEEC end to end", f"p50 {result['e2e_p50_us']} us", f"p99 {result['e2e_p99_us']} us"),
+        ("ratio (e2e / raw)", f"p50 {result['ratio_p50']}x", f"p99 {result['ratio_p99']}x (target <= 2)"),
+    ]
+    report("ros2_latency", rows, result, a.json)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
