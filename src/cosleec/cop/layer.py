@@ -43,6 +43,7 @@ class Layer:
         from cosleec.cop import state
 
         self._enter.append(hook)
+        state.HOOKED.count += 1
         state.hooks_changed()
         return hook
 
@@ -50,6 +51,7 @@ class Layer:
         from cosleec.cop import state
 
         self._exit.append(hook)
+        state.HOOKED.count += 1
         state.hooks_changed()
         return hook
 

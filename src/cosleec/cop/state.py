@@ -62,6 +62,15 @@ class GlobalState:
         self.counts = counts
 
 
+class _Hooked:
+    """How many layers have enter/exit hooks (none: scopes skip computing what changed)."""
+
+    count = 0
+
+
+HOOKED = _Hooked()
+
+
 class _Runtime:
     """Mutable module state, read without locks (each field is replaced atomically)."""
 
@@ -171,18 +180,18 @@ class _Scope:
             raise ActivationError("this activation is already in effect; use a new activate(...) for nesting")
         g = RT.state
         before = _dyn.get()
-        old = composition(g, before)
         frame = before
         for layer in self._layers:
             frame = _transition(frame, self._mode, layer, g)
-        new = composition(g, frame)
         self._before = before
         self._token = _dyn.set(frame)
         self._active = True
-        self._entered = tuple(la for la in new if la not in old)
-        _fire(self._entered, "enter")
-        self._exited = tuple(la for la in old if la not in new)
-        _fire(self._exited, "exit")
+        if HOOKED.count:  # what changed matters only to enter/exit hooks
+            old, new = composition(g, before), composition(g, frame)
+            self._entered = tuple([la for la in new if la not in old])
+            self._exited = tuple([la for la in old if la not in new])
+            _fire(self._entered, "enter")
+            _fire(self._exited, "exit")
         return self
 
     def __exit__(
@@ -211,12 +220,7 @@ def _transition(frame: Frame, mode: str, layer: Layer, g: GlobalState) -> Frame:
         current = composition(g, frame)
         rivals = _rivals(layer, current)
         if rivals:
-            assert layer.group is not None
-            if layer.group.exclusion == "strict":
-                raise ExclusionError(
-                    f"cannot activate {layer.name!r}: {rivals[0].name!r} of exclusive group "
-                    f"{layer.group.name!r} is active"
-                )
+            _check_exclusion(layer, rivals, "")
             added = tuple(x for x in added if x[0] not in rivals)
             masked = masked | frozenset(rivals)
         if layer in current and layer not in masked:
@@ -240,6 +244,16 @@ def _conflicts(frame: Frame, layer: Layer, g: GlobalState) -> bool:
         return False
     members = set(layer.group.members)
     return sum(1 for la in composition(g, frame) if la in members) > 1
+
+
+def _check_exclusion(layer: Layer, rivals: list[Layer], how: str) -> None:
+    """Strict groups reject a second member (SD6, SD11); weak ones let the caller replace."""
+    group = layer.group
+    assert group is not None
+    if group.exclusion == "strict":
+        raise ExclusionError(
+            f"cannot activate {layer.name!r}{how}: {rivals[0].name!r} of exclusive group {group.name!r} is active"
+        )
 
 
 def _rivals(layer: Layer, current: Iterable[Layer]) -> list[Layer]:
@@ -308,12 +322,7 @@ def _apply(requests: list[tuple[str, Layer]]) -> None:
                         hook(layer, "global")
                     rivals = _rivals(layer, layers)
                     if rivals:
-                        assert layer.group is not None
-                        if layer.group.exclusion == "strict":
-                            raise ExclusionError(
-                                f"cannot activate {layer.name!r} globally: {rivals[0].name!r} of exclusive "
-                                f"group {layer.group.name!r} is active"
-                            )
+                        _check_exclusion(layer, rivals, " globally")
                         for r in rivals:
                             layers.pop(r, None)
                             counts.pop(r, None)

@@ -14,46 +14,8 @@ from dataclasses import dataclass, field
 from cosleec.lang import ast as A
 from cosleec.lang import visit
 from cosleec.lang.diagnostics import DiagnosticSink
+from cosleec.lang.lexer import KEYWORDS
 
-KEYWORDS = frozenset(
-    [
-        "def_start",
-        "def_end",
-        "rule_start",
-        "rule_end",
-        "concern_start",
-        "concern_end",
-        "purpose_start",
-        "purpose_end",
-        "relation_start",
-        "relation_end",
-        "event",
-        "measure",
-        "constant",
-        "boolean",
-        "numeric",
-        "scale",
-        "when",
-        "then",
-        "and",
-        "or",
-        "not",
-        "within",
-        "otherwise",
-        "unless",
-        "else",
-        "eventually",
-        "exists",
-        "while",
-        "meanwhile",
-        "true",
-        "false",
-        "seconds",
-        "minutes",
-        "hours",
-        "days",
-    ]
-)
 # Names SLEEC-TK rejects because they clash with its CSP encoding (§3).
 TK_RESERVED = frozenset({"STOP", "P", "Q", "c", "d"})
 

@@ -42,6 +42,47 @@ CONTEXTUAL_KEYWORDS = frozenset(
     }
 )
 
+# Reserved everywhere (sleec-language.md §3); the checker rejects them as names.
+KEYWORDS = frozenset(
+    [
+        "def_start",
+        "def_end",
+        "rule_start",
+        "rule_end",
+        "concern_start",
+        "concern_end",
+        "purpose_start",
+        "purpose_end",
+        "relation_start",
+        "relation_end",
+        "event",
+        "measure",
+        "constant",
+        "boolean",
+        "numeric",
+        "scale",
+        "when",
+        "then",
+        "and",
+        "or",
+        "not",
+        "within",
+        "otherwise",
+        "unless",
+        "else",
+        "eventually",
+        "exists",
+        "while",
+        "meanwhile",
+        "true",
+        "false",
+        "seconds",
+        "minutes",
+        "hours",
+        "days",
+    ]
+)
+
 BAD_CHAR = "$BADCHAR"
 
 _IDENT = re.compile(r"\^?[A-Za-z_][A-Za-z0-9_]*\Z")

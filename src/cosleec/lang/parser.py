@@ -20,7 +20,7 @@ from lark import Lark
 from cosleec.lang import ast as A
 from cosleec.lang.diagnostics import DiagnosticSink
 from cosleec.lang.lalr import END, CompiledLALR, SyntaxProblem
-from cosleec.lang.lexer import BAD_CHAR, SleecLexer
+from cosleec.lang.lexer import BAD_CHAR, KEYWORDS, SleecLexer
 from cosleec.lang.transformer import Block, ToAst
 
 
@@ -73,24 +73,25 @@ def parse_blocks(text: str, sink: DiagnosticSink) -> list[Block] | None:
             hint="save it as plain text (UTF-8)",
         )
         return None
-    g = _grammar("sleec", ToAst())
-    problems: list[SyntaxProblem] = []
-    blocks = g.lalr.parse(g.lexer.tokens(text), problems)
-    for p in problems:
-        _report(p, g, text, sink)
-    return None if problems else blocks
+    blocks: list[Block] | None = _parse("sleec", ToAst, text, sink)
+    return blocks
 
 
 def parse_paper_rules(text: str, sink: DiagnosticSink) -> list[A.Rule] | None:
     """Parse the paper notation into rules; syntax errors go to ``sink``."""
     from cosleec.lang.paper import PaperToAst
 
-    g = _grammar("paper", PaperToAst())
+    rules: list[A.Rule] | None = _parse("paper", PaperToAst, text, sink)
+    return rules
+
+
+def _parse(grammar: str, transformer: type[ToAst], text: str, sink: DiagnosticSink) -> Any:
+    g = _grammar(grammar, transformer())
     problems: list[SyntaxProblem] = []
-    rules = g.lalr.parse(g.lexer.tokens(text), problems)
+    result = g.lalr.parse(g.lexer.tokens(text), problems)
     for p in problems:
         _report(p, g, text, sink)
-    return None if problems else rules
+    return None if problems else result
 
 
 _ORDER: tuple[A.BlockKind, ...] = ("def", "rule", "concern", "purpose", "relation")
@@ -138,44 +139,6 @@ def assemble(blocks: list[Block], path: str, sink: DiagnosticSink) -> A.Specific
 
 # ------------------------------------------------------------------ syntax messages
 
-_ALL_KEYWORDS = [
-    "def_start",
-    "def_end",
-    "rule_start",
-    "rule_end",
-    "concern_start",
-    "concern_end",
-    "purpose_start",
-    "purpose_end",
-    "relation_start",
-    "relation_end",
-    "event",
-    "measure",
-    "constant",
-    "boolean",
-    "numeric",
-    "scale",
-    "when",
-    "then",
-    "and",
-    "or",
-    "not",
-    "within",
-    "otherwise",
-    "unless",
-    "else",
-    "eventually",
-    "exists",
-    "while",
-    "meanwhile",
-    "true",
-    "false",
-    "seconds",
-    "minutes",
-    "hours",
-    "days",
-]
-
 
 def _report(p: SyntaxProblem, g: _Grammar, text: str, sink: DiagnosticSink) -> None:
     tok = p.token
@@ -198,7 +161,7 @@ def _report(p: SyntaxProblem, g: _Grammar, text: str, sink: DiagnosticSink) -> N
         close = difflib.get_close_matches(value, [k for k in kws if k.isidentifier()], n=1, cutoff=0.6)
         if close:
             hint = f"did you mean `{close[0]}`?"
-    elif ttype != END and value in _ALL_KEYWORDS and "NAME" in p.expected:
+    elif ttype != END and value in KEYWORDS and "NAME" in p.expected:
         hint = f"`{value}` is a reserved keyword and cannot be used as a name"
     sink.error("syntax", f"unexpected {shown}; expected {exp}", span, hint=hint)
 
