@@ -337,3 +337,41 @@ def test_h49_async_partials_await_proceed() -> None:
         @fetch.before(la)
         def _sync(x):  # type: ignore[no-untyped-def]
             pass
+
+
+def test_asyncio_stress_each_task_sees_only_its_own_layers() -> None:
+    layers = [Layer(f"A{i}") for i in range(20)]
+
+    @layered
+    async def who() -> tuple[str, ...]:
+        await asyncio.sleep(0)
+        return ()
+
+    for la in layers:
+
+        def mk(la: Layer) -> None:
+            @who.variant(la)
+            async def _(*, proceed):  # type: ignore[no-untyped-def]
+                return (la.name, *(await proceed()))
+
+        mk(la)
+
+    async def worker(i: int) -> list[bool]:
+        mine = (layers[i % 20], layers[(i * 7 + 3) % 20])
+        oks = []
+        for _ in range(50):
+            with activate(mine[0]):
+                await asyncio.sleep(0)  # other tasks run in between
+                with activate(mine[1]):
+                    got = await who()
+                    want = tuple(dict.fromkeys(la.name for la in (mine[1], mine[0])))
+                    oks.append(got == want and [la.name for la in active_layers()] == list(want))
+                await asyncio.sleep(0)
+            oks.append(await who() == ())
+        return oks
+
+    async def main() -> list[list[bool]]:
+        return await asyncio.gather(*(worker(i) for i in range(200)))
+
+    results = asyncio.run(main())
+    assert all(all(r) for r in results) and sum(len(r) for r in results) == 200 * 100
