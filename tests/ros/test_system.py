@@ -276,7 +276,12 @@ def test_launcher_starts_and_stops_every_node(backend: str, graph: dict[str, str
     )
     try:
         children = wait_children(proc.pid, 3)
-        time.sleep(1.0)
+        assert proc.stdout is not None
+        ready = 0
+        while ready < 3:  # every node says when it is up
+            line = proc.stdout.readline()
+            assert line, "the launcher ended early"
+            ready += ": ready" in line
         proc.send_signal(signal.SIGTERM)
         assert proc.wait(30) == 0
         for pid in children:
@@ -329,3 +334,21 @@ def test_decision_stream_recorded_to_mcap(
 
 def test_threads_do_not_leak(backend: str) -> None:
     assert threading.active_count() < 50
+
+
+@pytest.mark.parametrize("delay", [0.0, 0.3, 1.5])
+def test_a_node_stopped_while_starting_exits_cleanly(
+    backend: str, graph: dict[str, str], delay: float
+) -> None:
+    from cosleec.demo.runner import rules_path
+    from cosleec.ros.launch import node_command, start
+
+    proc = start(
+        node_command(backend, ["manager", rules_path()], f"/cosleec_early_{os.getpid()}"),
+        env=graph,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+    time.sleep(delay)
+    code = stop(proc, grace=20)
+    assert code in (0, -signal.SIGTERM), proc.stderr.read() if proc.stderr else ""

@@ -80,14 +80,14 @@ def load(path: str) -> dict[str, Any]:
 
 def launch(path: str) -> int:
     cfg = load(path)
-    procs = [start(node_command(cfg["backend"], n, cfg["namespace"])) for n in cfg["nodes"]]
     stopping = threading.Event()
 
     def on_signal(*_: Any) -> None:
         stopping.set()
 
-    for sig in (signal.SIGINT, signal.SIGTERM):
+    for sig in (signal.SIGINT, signal.SIGTERM):  # before any child exists: no window to be killed in
         signal.signal(sig, on_signal)
+    procs = [start(node_command(cfg["backend"], n, cfg["namespace"])) for n in cfg["nodes"]]
     failed = False
     while not stopping.is_set():
         for p, n in zip(procs, cfg["nodes"]):

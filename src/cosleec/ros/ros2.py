@@ -36,7 +36,11 @@ class Ros2Transport:
         self._rclpy = rclpy
         self._String = String
         if not rclpy.ok():
-            rclpy.init()
+            from rclpy.signals import SignalHandlerOptions
+
+            # the node's own loop owns SIGINT/SIGTERM: a signal during start-up must not
+            # invalidate the context under our feet
+            rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
         self.node = rclpy.create_node(node_name)
         self._pubs: dict[str, Any] = {}
         self._subs: list[Any] = []

@@ -36,15 +36,24 @@ def load_module(name: str) -> Any:
 
 
 def serve(backend: str, kind: str, make: Any, node_name: str) -> int:
-    """Create the transport and node, then wait for SIGINT/SIGTERM."""
+    """Create the transport and node, then wait for SIGINT/SIGTERM; stop cleanly either way.
+
+    The signal handlers come first, so that a stop requested while the node is still
+    starting ends it cleanly (exit 0) instead of killing it half-initialised.
+    """
     logging.basicConfig(level=logging.INFO, format=f"[{node_name}] %(levelname)s %(message)s")
     stop = threading.Event()
-    t = transport(backend, node_name)
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
+    t = transport(backend, node_name)
     node = None
     try:
-        node = make(t)
+        try:
+            node = make(t)
+        except Exception:
+            if stop.is_set():
+                return 0  # stopped while starting
+            raise
         print(f"cosleec {backend} {kind}: ready", flush=True)
         beat = getattr(node, "status", None)
         while not stop.is_set() and t.ok():
