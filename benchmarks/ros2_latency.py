@@ -110,18 +110,34 @@ def main() -> int:
             rep.set()
 
     node.create_subscription(String, f"{ns}/events", reported, qos)
+    status: dict[str, dict[str, int]] = {}
+
+    def on_status(m: String) -> None:
+        s = json.loads(m.data)
+        status[s["node"]] = s.get("subscribers", {})
+
+    node.create_subscription(String, f"{ns}/status", on_status, qos)
     executor = rclpy.executors.SingleThreadedExecutor()
     executor.add_node(node)
     spinner = threading.Thread(target=executor.spin, daemon=True)
     spinner.start()
     try:
         deadline = time.monotonic() + 60
-        while time.monotonic() < deadline and (
-            ping.get_subscription_count() < 1
-            or ctx.get_subscription_count() < 1
-            or ev.get_subscription_count() < 1
-            or node.count_publishers(f"{ns}/events") < 2
-        ):
+
+        def connected() -> bool:  # every link of both paths, as the nodes themselves report it
+            m, t = status.get("manager", {}), status.get("task", {})
+            return (
+                ping.get_subscription_count() >= 1
+                and ctx.get_subscription_count() >= 1
+                and ev.get_subscription_count() >= 1
+                and node.count_publishers("/bench/pong") >= 1
+                and m.get("obligations", 0) >= 1
+                and t.get("events", 0) >= 2
+            )
+
+        while not connected():
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"the benchmark graph did not connect: {status}")
             time.sleep(0.05)
 
         def raw_once() -> float:

@@ -10,15 +10,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Literal, TypeAlias
+from typing import Literal, NamedTuple, TypeAlias
 
 
-@dataclass(frozen=True, slots=True)
-class Span:
+class Span(NamedTuple):
     """Where a node came from: 1-based line and column, end exclusive.
 
     The file is not stored per node (one parser serves every file); the Specification and
-    each Diagnostic carry the path.
+    each Diagnostic carry the path. An immutable named tuple: every node has one, and a
+    tuple is built at C speed (``tuple.__new__``), a frozen dataclass is not.
     """
 
     line: int

@@ -64,6 +64,7 @@ class CompiledLALR:
                         triples[key] = (len(arg.expansion), str(arg.origin.name), cb)
                     row[str(term)] = (False, triples[key])
             self.states[state] = row
+        self.units: dict[tuple[int, int, str], int] = {}  # memo of unit-reduction chains
 
     def expected(self, state: int) -> frozenset[str]:
         return frozenset(t for t in self.states[state] if t.isupper() or t.startswith("$"))
@@ -77,6 +78,7 @@ class CompiledLALR:
         one mistake does not produce a cascade.
         """
         states = self.states
+        units = self.units
         sstack: list[int] = [self.start_state]
         vstack: list[Any] = []
         quiet = 0
@@ -111,9 +113,22 @@ class CompiledLALR:
                         quiet -= 1
                     break
                 size, origin, cb = act[1]
-                if cb is None:  # unit pass-through: the value stays, the state changes
-                    sstack.pop()
-                    sstack.append(states[sstack[-1]][origin][1])
+                if cb is None:
+                    # Unit pass-through reductions keep the value and the state below, so a
+                    # whole chain of them (primary -> term -> ... -> condition) ends in a state
+                    # that depends only on (state below, top state, lookahead): memoized.
+                    below = sstack[-2]
+                    key = (below, sstack[-1], t)
+                    top = units.get(key)
+                    if top is None:
+                        top = states[below][origin][1]
+                        while True:
+                            nxt = states[top].get(t)
+                            if nxt is None or nxt[0] or nxt[1][2] is not None:
+                                break
+                            top = states[below][nxt[1][1]][1]
+                        units[key] = top
+                    sstack[-1] = top
                     continue
                 if size:
                     s = vstack[-size:]

@@ -14,14 +14,19 @@ from lark import Token, Transformer
 
 from cosleec.lang import ast as A
 
+_new = tuple.__new__
+
 
 def tok_span(tok: Any) -> A.Span:
     """A token is ``(type, value, start_pos, line, column)`` (see lexer.py); no token spans lines."""
-    return A.Span(tok[3], tok[4], tok[3], tok[4] + len(tok[1]))
+    line, col = tok[3], tok[4]
+    span: A.Span = _new(A.Span, (line, col, line, col + len(tok[1])))
+    return span
 
 
 def join(a: A.Span, b: A.Span) -> A.Span:
-    return A.Span(a.line, a.col, b.end_line, b.end_col)
+    span: A.Span = _new(A.Span, (a[0], a[1], b[2], b[3]))
+    return span
 
 
 def ident(tok: Any) -> str:
@@ -48,15 +53,24 @@ class Block:
 class ToAst(Transformer[Token, Any]):
     """Builds :mod:`cosleec.lang.ast` nodes; ``start`` returns the list of blocks."""
 
+    # -- lists (left-recursive list rules of the grammar)
+    def list_first(self, c: list[Any]) -> list[Any]:
+        return [c[0]]
+
+    def list_more(self, c: list[Any]) -> list[Any]:
+        lst: list[Any] = c[0]
+        lst.append(c[-1])
+        return lst
+
     # -- blocks
     def start(self, c: list[Any]) -> Any:
-        return c
+        return c[0] or []
 
     def def_block(self, c: list[Any]) -> Block:
-        return Block("def", tok_span(c[0]), c[1:])
+        return Block("def", tok_span(c[0]), c[1] or [])
 
     def rule_block(self, c: list[Any]) -> Block:
-        return Block("rule", tok_span(c[0]), c[1:])
+        return Block("rule", tok_span(c[0]), c[1] or [])
 
     def concern_block(self, c: list[Any]) -> Block:
         return Block("concern", tok_span(c[0]), c[1:])
@@ -113,12 +127,12 @@ class ToAst(Transformer[Token, Any]):
         return A.Trigger(ident(c[0]), c[1], span=tok_span(c[0]))
 
     def response_body(self, c: list[Any]) -> A.Response:
-        items = tuple(x for x in c if type(x) is A.ResponseItem)
-        defeaters = tuple(x for x in c if type(x) is A.Defeater)
-        return A.Response(items, defeaters, span=items[0].span)
+        items = c[0]
+        return A.Response(tuple(items), tuple(c[1]) if c[1] else (), span=items[0].span)
 
     def inner_body(self, c: list[Any]) -> A.Response:
-        return A.Response(tuple(c), (), span=c[0].span)
+        items = c[0]
+        return A.Response(tuple(items), (), span=items[0].span)
 
     def item(self, c: list[Any]) -> A.ResponseItem:
         occ: A.Occurrence = c[0]
@@ -131,7 +145,7 @@ class ToAst(Transformer[Token, Any]):
 
     def braced(self, c: list[Any]) -> A.Response:
         r: A.Response = c[0]
-        return replace(r, braced=True)
+        return A.Response(r.items, r.defeaters, braced=True, span=r.span)
 
     def otherwise(self, c: list[Any]) -> A.Response:
         r: A.Response = c[0]
@@ -204,9 +218,17 @@ class ToAst(Transformer[Token, Any]):
         return A.Name(ident(c[0]), braced=True, span=tok_span(c[0]))
 
     def paren(self, c: list[Any]) -> A.Expr:
+        """Remember parentheses (they matter only to dialect checks and warnings)."""
         e = c[0]
-        if type(e) in (A.BinOp, A.Compare, A.Not, A.Name):
-            return replace(e, parenthesized=True)  # type: ignore[no-any-return]
+        t = type(e)
+        if t is A.Name:
+            return A.Name(e.name, braced=e.braced, arrow=e.arrow, parenthesized=True, span=e.span)
+        if t is A.BinOp:
+            return A.BinOp(e.op, e.left, e.right, parenthesized=True, span=e.span)
+        if t is A.Compare:
+            return A.Compare(e.op, e.left, e.right, parenthesized=True, span=e.span)
+        if t is A.Not:
+            return A.Not(e.operand, parenthesized=True, span=e.span)
         return e  # type: ignore[no-any-return]
 
     # -- LEGOS concerns and purposes

@@ -96,12 +96,18 @@ def all_durations(spec: A.Specification) -> Iterator[A.Duration]:
 
 
 def subexpressions(e: A.Expr) -> Iterator[A.Expr]:
-    yield e
-    if isinstance(e, A.Not):
-        yield from subexpressions(e.operand)
-    elif isinstance(e, A.BinOp | A.Compare):
-        yield from subexpressions(e.left)
-        yield from subexpressions(e.right)
+    """Every node of an expression, pre-order, left first (an explicit stack: no recursion)."""
+    stack: list[A.Expr] = [e]
+    pop, push = stack.pop, stack.append
+    while stack:
+        x = pop()
+        yield x
+        t = type(x)
+        if t is A.Not:
+            push(x.operand)  # type: ignore[union-attr]
+        elif t is A.BinOp or t is A.Compare:
+            push(x.right)  # type: ignore[union-attr]
+            push(x.left)  # type: ignore[union-attr]
 
 
 def names(e: A.Expr) -> Iterator[A.Name]:
