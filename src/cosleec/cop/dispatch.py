@@ -230,6 +230,8 @@ class LayeredFunction:
         self, comp: tuple[Layer, ...], ctx: Any, hooks: tuple[Any, ...]
     ) -> tuple[tuple[Layer | None, ...], DispatchRecord | None]:
         """At most one member per hedge group (SD5, SD6, SD14), predicates read at most once."""
+        if not hooks:  # nobody records this dispatch: no bookkeeping beyond the choice itself
+            return self._select_fast(comp, ctx), None
         selected: list[Layer | None] = []
         preds: dict[str, dict[str, bool | None]] = {}
         chosen: dict[str, str | None] = {}
@@ -287,6 +289,33 @@ class LayeredFunction:
                 forced_names,
             )
         return tuple(selected), record
+
+    def _select_fast(self, comp: tuple[Layer, ...], ctx: Any) -> tuple[Layer | None, ...]:
+        out: list[Layer | None] = []
+        have_ctx = ctx is not None
+        scratch: dict[str, bool | None] = {}
+        for grp in self.groups:
+            forced = None
+            for la in comp:
+                if la.group is grp:
+                    forced = la
+                    break
+            if forced is not None:
+                out.append(forced)
+                continue
+            if not have_ctx:
+                ctx, have_ctx = self.snapshot(), True
+            try:
+                out.append(self._pick(grp, ctx, scratch, False))
+            except HedgeEvaluationError:
+                if grp.on_error == "raise":
+                    raise
+                out.append(
+                    None
+                    if grp.on_error == "default"
+                    else next(m for m in grp.members if m.name == grp.on_error)
+                )
+        return tuple(out)
 
     @staticmethod
     def _pick(grp: LayerGroup, ctx: Any, values: dict[str, bool | None], record_all: bool) -> Layer | None:

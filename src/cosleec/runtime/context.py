@@ -27,11 +27,15 @@ class Context:
     def validate(self, updates: Mapping[str, object]) -> dict[str, Any]:
         """The stored form of every update, or ContextError naming the first bad one."""
         out: dict[str, Any] = {}
+        measures = self.measures
         for name, value in updates.items():
-            spec = self.measures.get(name)
+            spec = measures.get(name)
             if spec is None:
                 raise ContextError(f"unknown measure {name!r}")
-            out[name] = spec.coerce(value)
+            if spec.kind == "boolean" and (value is True or value is False):
+                out[name] = value  # the common case, without a call
+            else:
+                out[name] = spec.coerce(value)
         return out
 
     def apply(self, stored: Mapping[str, Any], now: float) -> set[str]:
