@@ -585,7 +585,15 @@ def _generated_dispatch(lf: LayeredFunction) -> Callable[..., Any] | None:
 
 
 def _compile_prologue(fn: Callable[..., Any], lf: LayeredFunction) -> Callable[..., Any] | None:
-    """A copy of ``fn`` whose first statement sends every non-trivial call to the dispatcher."""
+    """A copy of ``fn`` with the dispatch compiled in (cop-runtime.md §7).
+
+    The copy's first statement checks "nothing active": then the base body runs in place,
+    with no extra call. Otherwise, when the last configuration's chain starts with a
+    forwarding-only ``around`` partial (the memo of :meth:`LayeredFunction.head`), that
+    partial is called right here, ``proceed`` bound at C level; anything else goes to the
+    dispatcher. The body runs inside ``try/finally`` that applies global changes deferred
+    during it (SD9) -- free in CPython 3.11 unless something was deferred.
+    """
     code = getattr(fn, "__code__", None)
     if code is None or code.co_freevars or inspect.isgeneratorfunction(fn) or inspect.isasyncgenfunction(fn):
         return None
@@ -600,26 +608,55 @@ def _compile_prologue(fn: Callable[..., Any], lf: LayeredFunction) -> Callable[.
     fdef = tree.body[0]
     if fdef.name != fn.__name__:
         return None
-    names = {"_cop_get", "_cop_E", "_cop_F", "_cop_D"}
-    if any(isinstance(n, ast.Name) and n.id in names for n in ast.walk(fdef)):
+    if any(isinstance(n, ast.Name) and n.id.startswith("_cop_") for n in ast.walk(fdef)):
         return None
+    sig = inspect.signature(fn)
     fdef.decorator_list = []
-    call = f"_cop_D({_call_args(inspect.signature(fn))})"
-    if lf.is_async:
-        call = "await " + call
-    prologue = ast.parse(f"if _cop_get() is not _cop_E or not _cop_F.idle:\n    return {call}\n").body[0]
-    ast.increment_lineno(prologue, fdef.lineno - 1)
+    aw = "await " if lf.is_async else ""
+    args = _call_args(sig)
+    params = list(sig.parameters.values())
+    simple = 0 < len(params) <= 3 and all(
+        p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) for p in params
+    )
+    inline = ""
+    if simple:
+        bound = "_cop_n"
+        for p in params:
+            bound = f"_cop_MT({bound}, {p.name})"
+        not_none = " and ".join(f"{p.name} is not None" for p in params)
+        inline = f"""
+        _cop_m = _cop_F.memo
+        if _cop_m[0] is _cop_RT.state and _cop_m[1] is _cop_d:
+            _cop_a, _cop_n, _cop_f = _cop_m[2]
+            if _cop_a is not None and _cop_f and {not_none}:
+                return {aw}_cop_a({args}, proceed={bound})"""
+    # the whole function -- fast check, inline head, dispatcher call, body -- is one dispatch:
+    # global changes requested anywhere inside it are applied when it ends (SD9)
+    src_new = f"""
+_cop_d = _cop_get()
+try:
+    if _cop_d is not _cop_E or not _cop_F.idle:{inline}
+        return {aw}_cop_D({args})
+    pass
+finally:
+    if _cop_RT.queued:
+        _cop_flush()
+"""
+    first, guard = ast.parse(textwrap.dedent(src_new)).body
+    for node in (first, guard):
+        ast.increment_lineno(node, fdef.lineno - 1)
     body = fdef.body
-    at = 1 if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) else 0
-    body.insert(at, prologue)
+    doc = (
+        body[:1] if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) else []
+    )
+    assert isinstance(guard, ast.Try)
+    guard.body = [guard.body[0], *(body[len(doc) :] or [ast.Pass()])]
+    fdef.body = [*doc, first, guard]
+    names = ("_cop_get", "_cop_E", "_cop_F", "_cop_D", "_cop_RT", "_cop_MT", "_cop_flush")
     factory = ast.FunctionDef(
         name="__cop_factory__",
         args=ast.arguments(
-            posonlyargs=[],
-            args=[ast.arg(n) for n in ("_cop_get", "_cop_E", "_cop_F", "_cop_D")],
-            kwonlyargs=[],
-            kw_defaults=[],
-            defaults=[],
+            posonlyargs=[], args=[ast.arg(n) for n in names], kwonlyargs=[], kw_defaults=[], defaults=[]
         ),
         body=[fdef, ast.Return(ast.Name(fdef.name, ast.Load()))],
         decorator_list=[],
@@ -631,7 +668,9 @@ def _compile_prologue(fn: Callable[..., Any], lf: LayeredFunction) -> Callable[.
     try:
         filename = inspect.getsourcefile(fn) or code.co_filename
         exec(compile(module, filename, "exec"), fn.__globals__, ns)
-        new = ns["__cop_factory__"](dyn_get, EMPTY, lf, lf.dispatch)
+        new = ns["__cop_factory__"](
+            dyn_get, EMPTY, lf, lf.dispatch, RT, types.MethodType, state.flush_if_outermost
+        )
     except Exception:
         return None
     new.__defaults__ = fn.__defaults__
@@ -640,6 +679,7 @@ def _compile_prologue(fn: Callable[..., Any], lf: LayeredFunction) -> Callable[.
     new.__qualname__ = fn.__qualname__
     new.__module__ = fn.__module__
     new.__dict__.update(fn.__dict__)
+    state.DISPATCH_CODES.add(new.__code__)  # its frames count as a running dispatch (SD9)
     return new  # type: ignore[no-any-return]
 
 
