@@ -375,3 +375,19 @@ def test_asyncio_stress_each_task_sees_only_its_own_layers() -> None:
 
     results = asyncio.run(main())
     assert all(all(r) for r in results) and sum(len(r) for r in results) == 200 * 100
+
+
+@layered
+def _setup_step() -> tuple[str, list[str]]:
+    activate_globally(G)  # requested while this function runs its base (nothing active)
+    return probe(), names()
+
+
+def test_sd9_holds_when_the_outer_function_runs_its_base_directly() -> None:
+    from cosleec.cop.state import DISPATCH_CODES
+
+    assert _setup_step.__code__ in DISPATCH_CODES  # the compiled prologue applies here
+    inside, seen = _setup_step()
+    assert (inside, seen) == ("base", [])  # not visible to nested dispatches of the same call
+    assert probe() == "G>base"  # applied when it ended
+    deactivate_globally(G)
