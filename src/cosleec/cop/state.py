@@ -381,7 +381,30 @@ def flush_if_outermost() -> None:
     _queue.set(None)
     with _lock:
         RT.queued -= len(q)
-    _apply(q)
+    changes = [(op, x) for op, x in q if op != "call"]
+    if changes:
+        _apply(changes)
+    for op, fn in q:  # safe-point callbacks run after the changes queued before them
+        if op == "call":
+            fn()  # type: ignore[operator]
+
+
+def at_safe_point(fn: Callable[[], object]) -> None:
+    """Run ``fn`` at the next safe point: now if no dispatch runs in this thread/task, else
+    when the outermost one ends -- never in the middle of a step (SD15, checklist F42).
+
+    For optional policies such as re-evaluating obligations when a hedge predicate changes.
+    """
+    if _critical.get() or _in_dispatch():
+        q = _queue.get()
+        if q is None:
+            q = []
+            _queue.set(q)
+        q.append(("call", fn))  # type: ignore[arg-type]
+        with _lock:
+            RT.queued += 1
+        return
+    fn()
 
 
 class critical:

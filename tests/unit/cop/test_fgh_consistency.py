@@ -391,3 +391,29 @@ def test_sd9_holds_when_the_outer_function_runs_its_base_directly() -> None:
     assert (inside, seen) == ("base", [])  # not visible to nested dispatches of the same call
     assert probe() == "G>base"  # applied when it ended
     deactivate_globally(G)
+
+
+def test_f42_reevaluation_hook_runs_at_the_next_safe_point_never_during_a_step() -> None:
+    from cosleec.cop import at_safe_point
+
+    flag = {"on": True}
+    log: list[str] = []
+    hedge = Layer("H42", when=lambda ctx: ctx["on"])
+
+    @layered(hedges=HedgeGroup("r42", [hedge]))
+    def rule() -> str:
+        log.append("step starts")
+        flag["on"] = False  # the predicate changes while the step runs...
+        at_safe_point(lambda: log.append("re-evaluate"))  # ...and asks for re-evaluation
+        log.append("step ends")
+        return "Default"
+
+    @rule.variant(hedge)
+    def _(*, proceed):  # type: ignore[no-untyped-def]
+        return "Hedge:" + proceed()
+
+    with using_context(flag):
+        assert rule() == "Hedge:Default"  # the decision of this step stands
+    assert log == ["step starts", "step ends", "re-evaluate"]
+    at_safe_point(lambda: log.append("now"))  # outside any step: at once
+    assert log[-1] == "now"
