@@ -32,13 +32,53 @@ class SyntaxProblem:
     expected: frozenset[str]
 
 
+def direct_callback(rule: Any, transformer: Any) -> Any:
+    """A callback for ``rule`` that does what Lark's tree builder does for it -- drop filtered
+    tokens, insert ``None`` for absent ``[optional]`` parts, return a single child of a
+    ``?rule`` unchanged, then call the transformer's method -- as one generated expression
+    instead of a chain of generic wrappers. Computed from the same rule metadata Lark uses
+    (``parse_tree_builder.maybe_create_child_filter``); None means "keep Lark's own callback"
+    (rules needing tree expansion or without a transformer method).
+    """
+    name = str(rule.alias or rule.origin.name)
+    method = getattr(transformer, name, None)
+    opts = rule.options
+    expansion = rule.expansion
+    if method is None or getattr(opts, "template_source", None):
+        return None
+    empty = opts.empty_indices
+    if empty:
+        bits = "".join(str(int(b)) for b in empty)
+        nones = [len(ones) for ones in bits.split("0")]
+    else:
+        nones = [0] * (len(expansion) + 1)
+    parts: list[str] = []
+    for i, sym in enumerate(expansion):
+        parts += ["None"] * nones[i]
+        if opts.keep_all_tokens or not (sym.is_term and sym.filter_out):
+            if not sym.is_term and sym.name.startswith("_"):
+                return None  # an inlined helper whose children would be spliced in
+            parts.append(f"s[{i}]")
+    parts += ["None"] * nones[len(expansion)]
+    if opts.expand1 and not rule.alias and len(parts) == 1:
+        src = f"lambda s: {parts[0]}"  # a `?rule` with one child returns it unchanged
+    else:
+        src = f"lambda s: m([{', '.join(parts)}])"
+    return eval(compile(src, f"<cosleec callback {name}>", "eval"), {"m": method})
+
+
 class CompiledLALR:
     """Lark's LALR table for one start symbol, re-keyed for speed."""
 
-    def __init__(self, lark: Lark, start: str = "start") -> None:
+    def __init__(self, lark: Lark, start: str = "start", transformer: Any = None) -> None:
         inner = lark.parser.parser.parser  # ParsingFrontend -> LALR_Parser -> _Parser
         table = inner.parse_table
-        callbacks = inner.callbacks
+        callbacks = dict(inner.callbacks)
+        if transformer is not None:  # same behaviour, without Lark's generic per-call wrappers
+            for rule in lark.rules:
+                fast = direct_callback(rule, transformer)
+                if fast is not None:
+                    callbacks[rule] = fast
         self.start_state: int = table.start_states[start]
         self.end_state: int = table.end_states[start]
         triples: dict[Any, tuple[int, str, Any]] = {}

@@ -50,7 +50,7 @@ def _grammar(name: str, transformer: Any) -> _Grammar:
             for term in lark.terminals:
                 if hasattr(term.pattern, "value") and type(term.pattern).__name__ == "PatternStr":
                     display[term.name] = f"`{term.pattern.value}`"
-            g = _Grammar(CompiledLALR(lark), SleecLexer(lark.lexer_conf), display)
+            g = _Grammar(CompiledLALR(lark, transformer=transformer), SleecLexer(lark.lexer_conf), display)
             _grammars[name] = g
     return g
 
