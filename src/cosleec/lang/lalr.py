@@ -82,12 +82,12 @@ class CompiledLALR:
         self.start_state: int = table.start_states[start]
         self.end_state: int = table.end_states[start]
         triples: dict[Any, tuple[int, str, Any]] = {}
-        self.states: dict[int, dict[str, tuple[bool, Any]]] = {}
+        self.states: dict[int, dict[str, Any]] = {}
         for state, actions in table.states.items():
             row: dict[str, tuple[bool, Any]] = {}
             for term, (action, arg) in actions.items():
                 if action is Shift:
-                    row[str(term)] = (True, arg)
+                    row[str(term)] = arg  # a shift (or goto): the target state, a bare int
                 else:
                     key = id(arg)
                     if key not in triples:
@@ -102,7 +102,7 @@ class CompiledLALR:
                         )
                         cb = None if unit else callbacks[arg]
                         triples[key] = (len(arg.expansion), str(arg.origin.name), cb)
-                    row[str(term)] = (False, triples[key])
+                    row[str(term)] = triples[key]  # a reduction: (size, origin, callback)
             self.states[state] = row
         self.units: dict[tuple[int, int, str], int] = {}  # memo of unit-reduction chains
 
@@ -146,13 +146,13 @@ class CompiledLALR:
                     del sstack[depth:]
                     del vstack[depth - 1 :]
                     continue
-                if act[0]:
-                    sstack.append(act[1])
+                if type(act) is int:  # shift
+                    sstack.append(act)
                     vstack.append(tok)
                     if quiet:
                         quiet -= 1
                     break
-                size, origin, cb = act[1]
+                size, origin, cb = act
                 if cb is None:
                     # Unit pass-through reductions keep the value and the state below, so a
                     # whole chain of them (primary -> term -> ... -> condition) ends in a state
@@ -161,12 +161,12 @@ class CompiledLALR:
                     key = (below, sstack[-1], t)
                     top = units.get(key)
                     if top is None:
-                        top = states[below][origin][1]
+                        top = states[below][origin]
                         while True:
                             nxt = states[top].get(t)
-                            if nxt is None or nxt[0] or nxt[1][2] is not None:
+                            if nxt is None or type(nxt) is int or nxt[2] is not None:
                                 break
-                            top = states[below][nxt[1][1]][1]
+                            top = states[below][nxt[1]]
                         units[key] = top
                     sstack[-1] = top
                     continue
@@ -177,7 +177,7 @@ class CompiledLALR:
                 else:
                     s = []
                 vstack.append(cb(s))
-                sstack.append(states[sstack[-1]][origin][1])
+                sstack.append(states[sstack[-1]][origin])
         end = (END, "", 0, last[3], last[4] + len(last[1])) if last is not None else (END, "", 0, 1, 1)
         while True:
             act = states[sstack[-1]].get(END)
@@ -185,9 +185,9 @@ class CompiledLALR:
                 if quiet == 0 or not problems:
                     problems.append(SyntaxProblem(end, self.expected(sstack[-1])))
                 return None
-            if act[0]:  # pragma: no cover - Lark never shifts $END
+            if type(act) is int:  # pragma: no cover - Lark never shifts $END
                 return None
-            size, origin, cb = act[1]
+            size, origin, cb = act
             if size:
                 s = vstack[-size:]
                 del sstack[-size:]
@@ -195,7 +195,7 @@ class CompiledLALR:
             else:
                 s = []
             value = s[0] if cb is None else cb(s)
-            sstack.append(states[sstack[-1]][origin][1])
+            sstack.append(states[sstack[-1]][origin])
             vstack.append(value)
             if sstack[-1] == self.end_state:
                 return None if problems else value
