@@ -84,7 +84,7 @@ class CompiledLALR:
         triples: dict[Any, tuple[int, str, Any]] = {}
         self.states: dict[int, dict[str, Any]] = {}
         for state, actions in table.states.items():
-            row: dict[str, tuple[bool, Any]] = {}
+            row: dict[str, Any] = {}
             for term, (action, arg) in actions.items():
                 if action is Shift:
                     row[str(term)] = arg  # a shift (or goto): the target state, a bare int
