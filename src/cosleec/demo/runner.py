@@ -56,25 +56,24 @@ def run(
             on_event(ev)
 
     manager.subscribe(observe)
-    for step in steps if steps is not None else scenario.STEPS:
-        kind, arg, _note = step
-        if on_step is not None:
-            on_step(clock.now(), step)
-        if kind == "set":
-            manager.update(arg)
-        elif kind == "event":
-            manager.event(arg)
-        elif kind == "advance":
-            clock.advance(arg)
-            manager.tick()
-        elif kind == "request":
-            manager.request(arg)
-        elif kind == "fail":
-            robot.failing.add(arg)
-        elif kind == "recover":
-            robot.failing.discard(arg)
-        else:
-            raise ValueError(f"unknown scenario step {kind!r}")
+
+    def advance(seconds: float) -> None:
+        clock.advance(seconds)
+        manager.tick()
+
+    scenario.play(
+        steps if steps is not None else scenario.STEPS,
+        {
+            "set": manager.update,
+            "event": manager.event,
+            "advance": advance,
+            "request": manager.request,
+            "fail": robot.failing.add,
+            "recover": robot.failing.discard,
+        },
+        clock.now,
+        on_step,
+    )
     manager.close()
     return result
 

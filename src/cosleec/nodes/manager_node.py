@@ -75,19 +75,18 @@ class ManagerNode(Node):
         values = msg.get("values")
         if not isinstance(values, dict) or not values:
             raise ValueError("context message needs a non-empty object `values`")
-        try:
-            self.manager.update(values)
-        except ContextError as e:
-            raise ValueError(str(e)) from e
-        finally:
-            self._after_message()
+        self._feed(self.manager.update, values)
 
     def _event(self, msg: dict[str, Any]) -> None:
         name = msg.get("event")
         if not isinstance(name, str):
             raise ValueError("event message needs a string `event`")
+        self._feed(self.manager.event, name)
+
+    def _feed(self, step: Any, arg: Any) -> None:
+        """Hand one input to the runtime; what it rejects becomes a rejected message."""
         try:
-            self.manager.event(name)
+            step(arg)
         except ContextError as e:
             raise ValueError(str(e)) from e
         finally:

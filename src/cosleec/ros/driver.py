@@ -172,15 +172,7 @@ class Driver:
         self.t.publish(topic(self.ns, name), payload)
 
     def run(self, steps: list[tuple[str, Any, str]], on_step: Any = None) -> None:
-        for step in steps:
-            kind, arg, _note = step
-            if on_step is not None:
-                on_step(self.now, step)
-            if kind == "set":
-                self.set(arg)
-            elif kind == "event":
-                self.event(arg)
-            elif kind == "advance":
-                self.advance(arg)
-            elif kind == "request":
-                self.request(arg)
+        from cosleec.demo.assistive_care.scenario import play
+
+        actions = {"set": self.set, "event": self.event, "advance": self.advance, "request": self.request}
+        play(steps, actions, lambda: self.now, on_step)  # type: ignore[arg-type]

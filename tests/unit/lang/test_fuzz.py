@@ -15,51 +15,14 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cosleec.lang import SleecError, analyse, parse
+from cosleec.lang.lexer import CONTEXTUAL_KEYWORDS, KEYWORDS
 from tests.conftest import corpus_files
 
 N = int(os.environ.get("COSLEEC_FUZZ", "2000"))
 
+# every keyword the lexer knows, plus names, numbers, punctuation and junk
 TOKENS = [
-    "def_start",
-    "def_end",
-    "rule_start",
-    "rule_end",
-    "concern_start",
-    "concern_end",
-    "purpose_start",
-    "purpose_end",
-    "relation_start",
-    "relation_end",
-    "event",
-    "measure",
-    "constant",
-    "boolean",
-    "numeric",
-    "scale",
-    "when",
-    "then",
-    "and",
-    "or",
-    "not",
-    "within",
-    "otherwise",
-    "unless",
-    "else",
-    "eventually",
-    "exists",
-    "while",
-    "meanwhile",
-    "true",
-    "false",
-    "seconds",
-    "minutes",
-    "hours",
-    "days",
-    "witness",
-    "imply",
-    "until",
-    "for",
-    "conflict",
+    *sorted(KEYWORDS | CONTEXTUAL_KEYWORDS),
     "R1",
     "E",
     "F",
