@@ -352,3 +352,22 @@ def test_a_node_stopped_while_starting_exits_cleanly(
     time.sleep(delay)
     code = stop(proc, grace=20)
     assert code in (0, -signal.SIGTERM), proc.stderr.read() if proc.stderr else ""
+
+
+def test_ros2_refuses_to_start_without_localhost_discovery(backend: str, graph: dict[str, str]) -> None:
+    if backend != "ros2":
+        pytest.skip("a ROS 2 (DDS discovery) safeguard")
+    from cosleec.demo.runner import rules_path
+
+    env = {
+        k: v for k, v in graph.items() if k not in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "COSLEEC_ALLOW_NETWORK")
+    }
+    done = subprocess.run(
+        [sys.executable, "-m", "cosleec.cli.main", "ros2", "manager", rules_path()],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode != 0
+    assert "ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST" in done.stdout + done.stderr
