@@ -43,7 +43,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         rc: int = args.run(args)
         return rc
     except SystemExit as e:
-        return int(e.code) if isinstance(e.code, int) else USAGE_ERROR
+        if isinstance(e.code, str):  # a refusal with its reason (e.g. unsafe network settings)
+            print(e.code, file=sys.stderr)
+            return 1
+        return int(e.code) if isinstance(e.code, int) else 0
     except KeyboardInterrupt:
         return 130
     except BrokenPipeError:
