@@ -21,6 +21,9 @@ class Node:
     """
 
     name = "node"
+    #: publish status after every rejection, so a harness sees counts change at once;
+    #: nodes whose status is a heartbeat in deployment turn this off
+    status_each = True
 
     def __init__(self, transport: Transport, namespace: str = DEFAULT_NAMESPACE) -> None:
         self.transport = transport
@@ -29,6 +32,7 @@ class Node:
         self._count_lock = threading.Lock()
         self._status_lock = threading.RLock()  # snapshots are published in the order they are taken
         self._status_seq = 0
+        self._advertised: list[str] = []  # what status reports subscriber counts for
         for t in ("rejected", "status"):
             self.advertise(t)
 
@@ -37,7 +41,7 @@ class Node:
 
     def advertise(self, name: str) -> None:
         self.transport.advertise(self.topic(name), latched=name in LATCHED)
-        self._advertised = [*getattr(self, "_advertised", []), name]
+        self._advertised.append(name)
 
     def publish(self, name: str, message: dict[str, Any]) -> None:
         self.transport.publish(self.topic(name), dumps(message))
@@ -69,7 +73,7 @@ class Node:
             else repr(payload)
         )
         self.publish("rejected", {"node": self.name, "topic": where, "reason": reason, "payload": text[:500]})
-        if getattr(self, "status_each", True):
+        if self.status_each:
             self.status()  # the count just changed: say so
 
     def _count(self, key: str, n: int = 1) -> None:
@@ -84,7 +88,7 @@ class Node:
             subs = {}
             count = getattr(self.transport, "subscribers", None)
             if count is not None:  # who listens to what this node publishes: is the graph complete?
-                subs = {n: count(self.topic(n)) for n in getattr(self, "_advertised", [])}
+                subs = {n: count(self.topic(n)) for n in self._advertised}
             self._status_seq += 1
             message = {"node": self.name, "seq": self._status_seq, "counters": counters, "subscribers": subs}
             self.publish("status", {**message, **extra})

@@ -57,18 +57,15 @@ class ManagerNode(Node):
         self.status()
 
     def status(self, **extra: Any) -> None:
-        with self._status_lock:  # the extra fields are part of the same ordered snapshot
-            self._manager_status(**extra)
-
-    def _manager_status(self, **extra: Any) -> None:
         m = self.manager
-        super().status(
-            context_version=m.context.version,
-            stats=dict(m.stats),
-            active=m.active_layers(),
-            time=self.clock.now(),
-            **extra,
-        )
+        with self._status_lock:  # the extra fields are part of the same ordered snapshot
+            super().status(
+                context_version=m.context.version,
+                stats=dict(m.stats),
+                active=m.active_layers(),
+                time=self.clock.now(),
+                **extra,
+            )
 
     # ------------------------------------------------------------------ inputs
     def _context(self, msg: dict[str, Any]) -> None:

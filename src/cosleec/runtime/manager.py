@@ -10,6 +10,8 @@ failing task never blocks the Manager.
 from __future__ import annotations
 
 import itertools
+import logging
+import re
 import threading
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping
@@ -48,8 +50,6 @@ def _layer_name(rule: CompiledRule, clause: int | None) -> str | None:
 
 def _looks_like_rules(text: str) -> bool:
     """SLEEC text rather than a file name: it has a rule (a file name has no spaces around `when`)."""
-    import re
-
     return re.search(r"(?i)(\brule_start\b|\swhen\s)", text) is not None
 
 
@@ -167,22 +167,13 @@ class Manager:
             self._advance(now, events)
             changed = self.context.apply(stored, now)
             switches = self.layers.update(changed, self.context.values) if changed else []
-            result = [(r.name, _layer_name(r, o), _layer_name(r, n)) for r, o, n in switches]
             if changed and self._listening:
                 self._emit_later(
                     events,
                     "context",
                     {"values": self.context.external(sorted(changed)), "version": self.context.version},
                 )
-            if switches and self._listening:
-                self._emit_later(
-                    events,
-                    "layers",
-                    {
-                        "switches": [{"rule": r, "from": a, "to": b} for r, a, b in result],
-                        "active": self.layers.active_layers(),
-                    },
-                )
+            result = self._switched(switches, events)
         self._flush(events)
         return result
 
@@ -288,18 +279,7 @@ class Manager:
             self._emit_later(
                 events, "context", {"values": dict.fromkeys(sorted(gone)), "stale": sorted(gone)}
             )
-            if switches and self._listening:
-                self._emit_later(
-                    events,
-                    "layers",
-                    {
-                        "switches": [
-                            {"rule": r.name, "from": _layer_name(r, o), "to": _layer_name(r, n)}
-                            for r, o, n in switches
-                        ],
-                        "active": self.layers.active_layers(),
-                    },
-                )
+            self._switched(switches, events)
         followups: list[tuple[CompiledRule, Decision]] = []
         for _ in range(1000):  # a chain of otherwise fallbacks can expire within one advance
             out = self.tracker.due(now)
@@ -307,6 +287,22 @@ class Manager:
                 break
             followups += self._settle(out, now, next(self._seq), events)
         return followups
+
+    def _switched(
+        self, switches: list[tuple[CompiledRule, int | None, int | None]], events: list[RuntimeEvent]
+    ) -> list[tuple[str, str | None, str | None]]:
+        """The layer switches as ``(rule, old layer, new layer)``, announced to observers."""
+        result = [(r.name, _layer_name(r, o), _layer_name(r, n)) for r, o, n in switches]
+        if result and self._listening:
+            self._emit_later(
+                events,
+                "layers",
+                {
+                    "switches": [{"rule": r, "from": a, "to": b} for r, a, b in result],
+                    "active": self.layers.active_layers(),
+                },
+            )
+        return result
 
     def _settle(
         self, out: Outcome, now: float, seq: int, events: list[RuntimeEvent]
@@ -368,11 +364,10 @@ class Manager:
             missing = status.missing
         obligations = self._issue(rule.response_of(clause), rule.name) if clause is not None else ()
         conds = ((0, rule.trigger_text, fired), *zip(rule.clause_ids, rule.clause_texts, status.values))
-        cv = self.context.values
         values = {
             n: (lits[x] if lits is not None and x is not None else x)
             for n, lits in rule.value_specs
-            for x in (cv.get(n),)
+            for x in (v.get(n),)
         }
         # the explanation is computed from these parts when first read (Decision.explanation)
         return Decision(
@@ -438,8 +433,6 @@ class Manager:
                 try:
                     fn(ev)
                 except Exception:  # an observer must never break the runtime
-                    import logging
-
                     logging.getLogger("cosleec.runtime").exception("observer failed")
 
     def _notify_timer(self) -> None:
