@@ -13,6 +13,14 @@ from cosleec.transport import DEFAULT_NAMESPACE, LATCHED, Transport, dumps, topi
 log = logging.getLogger("cosleec.nodes")
 
 
+def context_values(msg: dict[str, Any]) -> dict[str, Any]:
+    """The ``values`` of a ``context`` message (Manager and Layer Manager read the same stream)."""
+    values = msg.get("values")
+    if not isinstance(values, dict) or not values:
+        raise ValueError("context message needs a non-empty object `values`")
+    return values
+
+
 class Node:
     """A node publishes and subscribes JSON objects on ``<namespace>/<name>`` topics.
 

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from cosleec.nodes.base import Node
+from cosleec.nodes.base import Node, context_values
 from cosleec.runtime import ContextError
 from cosleec.runtime.context import Context
-from cosleec.runtime.layers import LayerManager
+from cosleec.runtime.layers import LayerManager, switch_records, switches_json
 from cosleec.runtime.manager import load_rules
 from cosleec.runtime.model import compile_rules
 
@@ -33,22 +33,14 @@ class LayersNode(Node):
         self._publish([])
 
     def _context(self, msg: dict[str, Any]) -> None:
-        values = msg.get("values")
-        if not isinstance(values, dict) or not values:
-            raise ValueError("context message needs a non-empty object `values`")
         try:
-            stored = self.context.validate(values)
+            stored = self.context.validate(context_values(msg))
         except ContextError as e:
             raise ValueError(str(e)) from e
         changed = self.context.apply(stored, 0.0)
         switches = self.layers.update(changed, self.context.values)
         if switches:
-            self._publish(
-                [
-                    {"rule": r.name, "from": r.layer_of(o) if o else None, "to": r.layer_of(n) if n else None}
-                    for r, o, n in switches
-                ]
-            )
+            self._publish(switches_json(switch_records(switches)))
 
     def _publish(self, switches: list[dict[str, Any]]) -> None:
         self.version += 1

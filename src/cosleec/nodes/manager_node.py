@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from cosleec.nodes.base import Node
+from cosleec.nodes.base import Node, context_values
 from cosleec.runtime import ContextError, Manager, RuntimeEvent, VirtualClock
 from cosleec.runtime.clock import Clock, MonotonicClock
 
@@ -69,10 +69,7 @@ class ManagerNode(Node):
 
     # ------------------------------------------------------------------ inputs
     def _context(self, msg: dict[str, Any]) -> None:
-        values = msg.get("values")
-        if not isinstance(values, dict) or not values:
-            raise ValueError("context message needs a non-empty object `values`")
-        self._feed(self.manager.update, values)
+        self._feed(self.manager.update, context_values(msg))
 
     def _event(self, msg: dict[str, Any]) -> None:
         name = msg.get("event")

@@ -49,6 +49,23 @@ def evaluate(conds: tuple[Any, ...], v: Values) -> tuple[tuple[bool | None, ...]
     return tuple(out), tuple(missing)
 
 
+def layer_name(rule: CompiledRule, clause: int | None) -> str | None:
+    """The rule's active layer: None for the default (base), "?" when undetermined."""
+    return "?" if clause is None else rule.layer_of(clause)
+
+
+def switch_records(
+    switches: list[tuple[CompiledRule, int | None, int | None]],
+) -> list[tuple[str, str | None, str | None]]:
+    """Layer switches ``(rule, old clause, new clause)`` as ``(rule, old layer, new layer)`` names."""
+    return [(r.name, layer_name(r, o), layer_name(r, n)) for r, o, n in switches]
+
+
+def switches_json(records: list[tuple[str, str | None, str | None]]) -> list[dict[str, str | None]]:
+    """The ``switches`` field of a ``layers`` message, the same from the Manager and the Layer Manager node."""
+    return [{"rule": r, "from": a, "to": b} for r, a, b in records]
+
+
 def select(values: tuple[bool | None, ...], semantics: str, unknown: str = "undetermined") -> int | None:
     """The active clause (0 = default) for these condition values, or None if undetermined."""
     if unknown != "undetermined":

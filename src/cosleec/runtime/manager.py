@@ -26,7 +26,7 @@ from cosleec.runtime.context import Context
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.dispatcher import Capability, TaskDispatcher
 from cosleec.runtime.errors import ContextError
-from cosleec.runtime.layers import LayerManager, evaluate, select
+from cosleec.runtime.layers import LayerManager, evaluate, select, switch_records, switches_json
 from cosleec.runtime.model import CompiledRule, Obligation, ResponseSpec, RuleSet, compile_rules
 from cosleec.runtime.obligations import Outcome, Tracked, Tracker
 from cosleec.runtime.tasks import Task
@@ -39,13 +39,6 @@ class RuntimeEvent:
     kind: str  # context | layers | decision | obligation | refused | rejected | task-failed
     time: float
     data: dict[str, Any] = field(default_factory=dict)
-
-
-def _layer_name(rule: CompiledRule, clause: int | None) -> str | None:
-    """The rule's active layer: None for the default (base), "?" when undetermined."""
-    if clause is None:
-        return "?"
-    return rule.layer_of(clause)
 
 
 def _looks_like_rules(text: str) -> bool:
@@ -292,13 +285,13 @@ class Manager:
         self, switches: list[tuple[CompiledRule, int | None, int | None]], events: list[RuntimeEvent]
     ) -> list[tuple[str, str | None, str | None]]:
         """The layer switches as ``(rule, old layer, new layer)``, announced to observers."""
-        result = [(r.name, _layer_name(r, o), _layer_name(r, n)) for r, o, n in switches]
+        result = switch_records(switches)
         if result and self._listening:
             self._emit_later(
                 events,
                 "layers",
                 {
-                    "switches": [{"rule": r, "from": a, "to": b} for r, a, b in result],
+                    "switches": switches_json(result),
                     "active": self.layers.active_layers(),
                 },
             )
