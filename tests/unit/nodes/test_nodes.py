@@ -142,6 +142,21 @@ def test_layers_node_is_latched_for_late_joiners(bus: LocalBus) -> None:
     assert late and "R1.1" in late[-1]["active"]
 
 
+def test_layers_node_reports_the_same_switches_as_the_manager(bus: LocalBus) -> None:
+    """Both name switches alike, "?" for a rule still undetermined (its measures unknown)."""
+    from cosleec.runtime import Manager
+
+    t = bus.transport()
+    LayersNode(t, RULES)
+    out = collect(bus, "/cosleec/layers")
+    update = {"userUndressed": True, "userDistressed": "low"}
+    t.publish("/cosleec/context", json.dumps({"values": update}))
+    bus.wait_idle()
+    want = [{"rule": r, "from": a, "to": b} for r, a, b in Manager(RULES).update(update)]
+    assert {"rule": "R1", "from": "?", "to": "R1.1"} in want
+    assert out[-1]["switches"] == want
+
+
 def test_task_node_dispatches_the_layer_of_each_decision(bus: LocalBus) -> None:
     from cosleec.demo.assistive_care import tasks
 
