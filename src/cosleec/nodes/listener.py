@@ -40,7 +40,7 @@ COMPARISONS = {
     "equals": lambda x, t: x == t,
     "not_equals": lambda x, t: x != t,
 }
-KEYS = {"topic", "type", "field", "json", "bands", "edge", *COMPARISONS}
+KEYS = {"topic", "type", "field", "json", "bands", *COMPARISONS}
 
 
 class MappingError(ValueError):
@@ -183,10 +183,9 @@ def _entry(
         if out[-1][0] != math.inf:
             out.append((math.inf, out[-1][1]))
         bands = tuple(out)
-    field_path = tuple(
-        str(spec.get("field", "data") if not spec.get("json") else spec.get("field", "")).split(".")
-    )
-    field_path = tuple(p for p in field_path if p)
+    # a plain message's value is its `data`; a JSON payload is read from its root
+    default_field = "" if spec.get("json") else "data"
+    field_path = tuple(p for p in str(spec.get("field", default_field)).split(".") if p)
     e = Entry(name, kind, spec["topic"], spec["type"], field_path, bool(spec.get("json")), comparison, bands)
     if kind == "event":
         if events is not None and name not in events:
