@@ -18,6 +18,7 @@ from rich.text import Text
 from cosleec.demo.assistive_care import scenario, tasks
 from cosleec.runtime import Manager, RuntimeEvent, VirtualClock
 from cosleec.runtime.audit import AuditLog
+from cosleec.scenario import Step, play
 
 
 def rules_path() -> str:
@@ -35,11 +36,11 @@ class Run:
 
 
 def run(
-    steps: list[scenario.Step] | None = None,
+    steps: list[Step] | None = None,
     *,
     semantics: str = "last-wins",
     audit: str | None = None,
-    on_step: Callable[[float, scenario.Step], None] | None = None,
+    on_step: Callable[[float, Step], None] | None = None,
     on_event: Callable[[RuntimeEvent], None] | None = None,
 ) -> Run:
     clock = VirtualClock()
@@ -61,7 +62,7 @@ def run(
         clock.advance(seconds)
         manager.tick()
 
-    scenario.play(
+    play(
         steps if steps is not None else scenario.STEPS,
         {
             "set": manager.update,
@@ -92,7 +93,7 @@ class Display:
         self.out = console
         self.time = 0.0
 
-    def step(self, t: float, step: scenario.Step) -> None:
+    def step(self, t: float, step: Step) -> None:
         self.time = t
         kind, arg, note = step
         icon = {"set": "▶", "event": "⚡", "advance": "⏱", "request": "?"}.get(kind, "·")

@@ -13,6 +13,7 @@ import threading
 import time
 from typing import Any
 
+from cosleec.scenario import Step, play
 from cosleec.transport import dumps, topic
 
 
@@ -142,8 +143,7 @@ class Driver:
 
     # ------------------------------------------------------------------ steps
     def _send(self, name: str, message: dict[str, Any]) -> None:
-        self.sent += 1
-        self.t.publish(topic(self.ns, name), dumps(message))
+        self.raw(name, dumps(message))
 
     def set(self, values: dict[str, Any]) -> None:
         self._send("context", {"values": values})
@@ -171,8 +171,6 @@ class Driver:
         self.sent += 1
         self.t.publish(topic(self.ns, name), payload)
 
-    def run(self, steps: list[tuple[str, Any, str]], on_step: Any = None) -> None:
-        from cosleec.demo.assistive_care.scenario import play
-
+    def run(self, steps: list[Step], on_step: Any = None) -> None:
         actions = {"set": self.set, "event": self.event, "advance": self.advance, "request": self.request}
         play(steps, actions, lambda: self.now, on_step)  # type: ignore[arg-type]

@@ -8,29 +8,7 @@ must take, in order, so the scenario doubles as an end-to-end test.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any
-
-Step = tuple[str, Any, str]
-
-
-def play(
-    steps: list[Step],
-    actions: dict[str, Callable[[Any], object]],
-    now: Callable[[], float],
-    on_step: Callable[[float, Step], None] | None = None,
-) -> None:
-    """Run ``steps`` through ``actions`` (kind -> what to do with the argument): the same
-    scenario drives the embedded runtime and a system over ROS."""
-    for step in steps:
-        kind, arg, _note = step
-        if on_step is not None:
-            on_step(now(), step)
-        action = actions.get(kind)
-        if action is None:
-            raise ValueError(f"unknown scenario step {kind!r}")
-        action(arg)
-
+from cosleec.scenario import Step
 
 STEPS: list[Step] = [
     (
