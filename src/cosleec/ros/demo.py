@@ -109,11 +109,7 @@ def main(backend: str, namespace: str = "/cosleec", as_json: bool = False) -> in
 
             driver.run(scenario.STEPS, on_step)
             flush()
-            got = [
-                (d["rule"], "otherwise" if d["event"] == "otherwise" else d["clause"])
-                for d in driver.decisions
-            ]
-            ok = got == scenario.EXPECTED
+            ok = scenario.outcomes(driver.decisions) == scenario.EXPECTED
             if not as_json:
                 console.print()
                 console.print(

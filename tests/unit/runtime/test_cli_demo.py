@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from cosleec.cli.main import main
-from cosleec.demo.assistive_care.scenario import EXPECTED, STEPS
+from cosleec.demo.assistive_care.scenario import EXPECTED, STEPS, outcomes
 from cosleec.demo.runner import rules_path, run
 
 from .test_manager import FIREFIGHTER
@@ -116,7 +116,7 @@ def test_decide_semantics_and_errors(tmp_path: Path, capsys: pytest.CaptureFixtu
 def test_demo_scenario_exercises_every_clause_as_expected(tmp_path: Path) -> None:
     log = tmp_path / "audit.jsonl"
     r = run(audit=str(log))
-    got = [(d["rule"], "otherwise" if d["event"] == "otherwise" else d["clause"]) for d in r.decisions()]
+    got = outcomes(r.decisions())
     assert got == EXPECTED
     rules = r.manager.ruleset.rules
     covered = {(rule, clause) for rule, clause in got if isinstance(clause, int)}

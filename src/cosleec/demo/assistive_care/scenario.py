@@ -8,6 +8,9 @@ must take, in order, so the scenario doubles as an end-to-end test.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
+from typing import Any
+
 from cosleec.scenario import Step
 
 STEPS: list[Step] = [
@@ -106,3 +109,8 @@ EXPECTED: list[tuple[str, int | str | None]] = [
     ("R10", 1),
     ("R10", 2),
 ]
+
+
+def outcomes(decisions: Iterable[Mapping[str, Any]]) -> list[tuple[str, int | str | None]]:
+    """Decisions (as JSON) in the shape of ``EXPECTED``, wherever they were made."""
+    return [(d["rule"], "otherwise" if d["event"] == "otherwise" else d["clause"]) for d in decisions]
