@@ -110,9 +110,5 @@ class DiagnosticSink:
     def extend(self, diags: Iterable[Diagnostic]) -> None:
         self.items.extend(diags)
 
-    @property
-    def has_errors(self) -> bool:
-        return any(d.is_error for d in self.items)
-
     def sorted(self) -> list[Diagnostic]:
         return sorted(self.items, key=lambda d: (d.span.line, d.span.col))
