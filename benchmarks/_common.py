@@ -13,8 +13,10 @@ from pathlib import Path
 from rich.console import Console
 from rich.table import Table
 
+from cosleec.testing.corpus import corpus_dir
+
 ROOT = Path(__file__).resolve().parent.parent
-CORPUS = Path(os.environ.get("COSLEEC_CORPUS", ROOT.parent / "shared" / "sleec-corpus"))
+CORPUS = corpus_dir()
 
 
 def args(description: str) -> argparse.Namespace:

@@ -6,4 +6,4 @@ from typing import Any
 def install(node: Any) -> None:
     @node.capability("Pong")
     def pong(ob: Any, decision: Any) -> None:
-        node.report("Pong")
+        node.event("Pong")

@@ -23,6 +23,8 @@ import threading
 import time
 from pathlib import Path
 
+from cosleec.testing.stats import percentile
+
 HERE = Path(__file__).resolve().parent
 RULES = """def_start event Ping event Pong measure toggle : boolean def_end
 rule_start R when Ping then Pong within 5 seconds unless toggle then Pong within 5 seconds rule_end
@@ -49,11 +51,6 @@ def reexec_isolated() -> None:
         *sys.argv,
     ]
     os.execvpe("unshare", cmd, env)
-
-
-def pct(xs: list[float], p: float) -> float:
-    s = sorted(xs)
-    return s[min(len(s) - 1, round(p / 100 * (len(s) - 1)))]
 
 
 def main() -> int:
@@ -178,11 +175,11 @@ def main() -> int:
         "benchmark": "ros2_latency",
         "samples": n,
         "raw_p50_us": round(statistics.median(raw), 1),
-        "raw_p99_us": round(pct(raw, 99), 1),
+        "raw_p99_us": round(percentile(raw, 99), 1),
         "e2e_p50_us": round(statistics.median(e2e), 1),
-        "e2e_p99_us": round(pct(e2e, 99), 1),
+        "e2e_p99_us": round(percentile(e2e, 99), 1),
         "ratio_p50": round(statistics.median(e2e) / statistics.median(raw), 2),
-        "ratio_p99": round(pct(e2e, 99) / pct(raw, 99), 2),
+        "ratio_p99": round(percentile(e2e, 99) / percentile(raw, 99), 2),
         "target_ratio_p99": 2.0,
         "sleec_at_runtime_mean_ms": 76,
         "quick": a.quick,

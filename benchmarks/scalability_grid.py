@@ -20,6 +20,7 @@ import time
 
 from _common import args, report
 from cosleec.runtime import Manager, VirtualClock
+from cosleec.testing.stats import percentile
 
 
 def grid_rules(n_rules: int, n_clauses: int) -> str:
@@ -32,15 +33,10 @@ def grid_rules(n_rules: int, n_clauses: int) -> str:
     return f"def_start {' '.join(events)} {' '.join(measures)} def_end rule_start {' '.join(rules)} rule_end"
 
 
-def percentile(xs: list[float], p: float) -> float:
-    s = sorted(xs)
-    return s[min(len(s) - 1, round(p / 100 * (len(s) - 1)))]
-
-
 def run_point(
     n_rules: int, n_clauses: int, cases: int, rng: random.Random
 ) -> tuple[list[float], list[float]]:
-    m = Manager(grid_rules(n_rules, n_clauses), clock=VirtualClock(), history=64)
+    m = Manager.from_text(grid_rules(n_rules, n_clauses), clock=VirtualClock(), history=64)
     hits: list[float] = []
 
     def implementation(ob, decision) -> None:  # type: ignore[no-untyped-def]
@@ -107,7 +103,7 @@ def update_cost(n_rules: int, repeats: int) -> float:
     shared = max(1, n_rules // 10)
     measures = [f"measure s{k} : boolean" for k in range(shared)]
     rules = [f"R{i} when E then A unless s{i % shared} then B" for i in range(n_rules)]
-    m = Manager(
+    m = Manager.from_text(
         f"def_start event E event A event B {' '.join(measures)} def_end rule_start {' '.join(rules)} rule_end",
         clock=VirtualClock(),
         dispatch=False,

@@ -1,22 +1,43 @@
-"""Shared test fixtures: where the SLEEC corpus lives (tests skip cleanly without it)."""
+"""The one conftest: COP isolation for every test, the corpus location, Hypothesis settings.
+
+- COP: the public ``cosleec.testing.cop`` plugin gives each test a clean global COP
+  configuration and restores it afterwards.
+- Corpus: ``../shared/sleec-corpus`` (or ``$COSLEEC_CORPUS``); under CI (``$CI`` set) a
+  missing corpus fails the run instead of skipping the corpus tests.
+- Hypothesis keeps its example database outside the work tree.
+"""
 
 from __future__ import annotations
 
-import os
+import tempfile
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
+from hypothesis.database import DirectoryBasedExampleDatabase
+
+from cosleec.testing.corpus import corpus_dir
+from cosleec.testing.corpus import corpus_files as _corpus_files
+
+pytest_plugins = ["cosleec.testing.cop"]
 
 ROOT = Path(__file__).resolve().parent.parent
-CORPUS = Path(os.environ.get("COSLEEC_CORPUS", ROOT.parent / "shared" / "sleec-corpus"))
+CORPUS = corpus_dir()
+
+settings.register_profile(
+    "cosleec", database=DirectoryBasedExampleDatabase(Path(tempfile.gettempdir()) / "cosleec-hypothesis")
+)
+settings.load_profile("cosleec")
 
 
 def corpus_files() -> list[Path]:
-    return sorted(CORPUS.glob("*.sleec")) if CORPUS.is_dir() else []
+    """The corpus files; [] when absent locally, an error when absent under CI."""
+    return _corpus_files()
 
 
 @pytest.fixture
 def corpus() -> list[Path]:
+    """The corpus files, or a skip when the corpus is absent (never under CI: there it fails)."""
     files = corpus_files()
     if not files:
         pytest.skip(f"SLEEC corpus not found at {CORPUS}")

@@ -7,8 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from cosleec.lang import analyse, analyse_file
-from cosleec.lang.printer import format_spec
+from cosleec.lang import analyse, analyse_file, format_spec
 from tests.conftest import CORPUS
 
 from .expected import REJECTED
@@ -73,30 +72,3 @@ def test_every_parsed_corpus_file_round_trips_in_both_dialects(corpus: list[Path
             assert again.spec == result.spec, (path.name, dialect)
             count += 1
     assert count >= 2 * 190
-
-
-def test_direct_callbacks_build_the_same_trees_as_larks_own(corpus: list[Path]) -> None:
-    """The parser's generated callbacks (lalr.direct_callback) against Lark's tree builder."""
-    from importlib import resources
-
-    from lark import Lark
-
-    from cosleec.lang.lalr import CompiledLALR
-    from cosleec.lang.lexer import SleecLexer
-    from cosleec.lang.transformer import ToAst
-
-    text = resources.files("cosleec.lang").joinpath("grammar/sleec.lark").read_text("utf-8")
-    lark = Lark(text, parser="lalr", lexer=SleecLexer, maybe_placeholders=True, transformer=ToAst())
-    lexer = SleecLexer(lark.lexer_conf)
-    fast, slow = CompiledLALR(lark, transformer=ToAst()), CompiledLALR(lark)
-    compared = 0
-    for path in corpus:
-        source = path.read_text(encoding="utf-8", errors="replace")
-        p1: list[object] = []
-        p2: list[object] = []
-        a, b = fast.parse(lexer.tokens(source), p1), slow.parse(lexer.tokens(source), p2)
-        assert p1 == p2, path.name
-        if a is not None:
-            assert [(x.kind, x.items) for x in a] == [(x.kind, x.items) for x in b], path.name
-            compared += 1
-    assert compared >= 190

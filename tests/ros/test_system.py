@@ -311,7 +311,7 @@ def wait_children(pid: int, n: int, timeout: float = 30.0) -> list[int]:
 def test_decision_stream_recorded_to_mcap(
     backend: str, graph: dict[str, str], transport: Any, namespace: str, tmp_path: Path
 ) -> None:
-    from cosleec.recording import read
+    from cosleec.nodes import read_recording as read
 
     record = tmp_path / "decisions.mcap"
     if backend == "ros1":

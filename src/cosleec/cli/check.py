@@ -8,11 +8,11 @@ import json
 from rich.text import Text
 
 from cosleec.cli.common import console, expand
-from cosleec.lang import analyse_file
-from cosleec.lang.checker import Options
+from cosleec.lang import HedgeSemantics, Options, analyse_file
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register ``cosleec check`` and its options."""
     p = sub.add_parser("check", help="parse and check SLEEC rule files")
     p.add_argument(
         "files", nargs="+", metavar="FILE", help="rule files (a directory means its *.sleec files)"
@@ -32,12 +32,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "--strict-precedence", action="store_true", help="mixed and/or without parentheses is an error"
     )
     p.add_argument("--lint", action="store_true", help="also warn about naming conventions and style")
+    p.add_argument(
+        "--semantics",
+        choices=list(HedgeSemantics),
+        default=HedgeSemantics.LAST_WINS,
+        help="clause semantics the unreachable-clause warnings assume (as the runtime's --semantics)",
+    )
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    """Check every file and print its diagnostics, as text or one JSON document.
+
+    Returns 0 when no file has an error (warnings do not count), 1 otherwise.
+    """
     files = expand(args.files)
-    opts = Options(strict_precedence=args.strict_precedence, lint=args.lint)
+    opts = Options(strict_precedence=args.strict_precedence, lint=args.lint, semantics=HedgeSemantics(args.semantics))
     results = [
         analyse_file(f, dialect=args.dialect, strict=args.strict, infer_defs=args.infer_defs, options=opts)
         for f in files

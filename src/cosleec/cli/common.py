@@ -20,4 +20,5 @@ def expand(paths: list[str]) -> list[Path]:
 
 
 def console(stderr: bool = False) -> Console:
+    """A rich console on stdout (or stderr) without highlighting or hard wraps, so output pipes cleanly."""
     return Console(stderr=stderr, highlight=False, soft_wrap=True, file=sys.stderr if stderr else sys.stdout)

@@ -6,11 +6,11 @@ import argparse
 import json
 import sys
 
-from cosleec.lang import SleecError
-from cosleec.runtime import ContextError, Manager, VirtualClock
+from cosleec.runtime import ContextError, HedgeSemantics, Manager, RuleSet, VirtualClock
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register ``cosleec decide`` and its options."""
     p = sub.add_parser("decide", help="evaluate the rules triggered by an event against given values")
     p.add_argument("rules", metavar="RULES")
     p.add_argument("--event", required=True, metavar="EVENT")
@@ -22,24 +22,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         dest="values",
         help="a measure value: true/false, a number, or a scale literal",
     )
-    p.add_argument("--semantics", choices=["last-wins", "nested"], default="last-wins")
+    p.add_argument("--semantics", choices=list(HedgeSemantics), default=HedgeSemantics.LAST_WINS)
     p.add_argument("--json", action="store_true")
     p.add_argument("--infer-defs", action="store_true")
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    try:
-        m = Manager(
-            args.rules,
-            semantics=args.semantics,
-            clock=VirtualClock(),
-            infer_defs=args.infer_defs,
-            dispatch=False,
-        )
-    except SleecError as e:
-        print(e.render(), file=sys.stderr)
-        return 1
+    """Decide ``--event`` against the ``--set`` values and print each explanation (or JSON).
+
+    Nothing is dispatched: no task runs. Returns 0 with the decisions; 2 for a malformed
+    or unknown ``--set``, an unknown event, or a decision left undetermined for lack of a
+    value. Errors in the rule file raise SleecError, which :func:`cosleec.cli.main.main`
+    reports with exit 1.
+    """
+    rules = RuleSet.from_file(args.rules, infer_defs=args.infer_defs)  # SleecError: the CLI shows it, exit 1
+    m = Manager(rules, semantics=args.semantics, clock=VirtualClock(), dispatch=False)
     values = {}
     for item in args.values:
         name, sep, text = item.partition("=")

@@ -4,16 +4,19 @@ from __future__ import annotations
 
 import argparse
 
+from cosleec import demo
+from cosleec.lang import HedgeSemantics
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register ``cosleec demo`` and its options."""
     p = sub.add_parser("demo", help="run the assistive-care example in one process")
     p.add_argument("--json", action="store_true", help="print runtime events as JSON lines")
-    p.add_argument("--semantics", choices=["last-wins", "nested"], default="last-wins")
+    p.add_argument("--semantics", choices=list(HedgeSemantics), default=HedgeSemantics.LAST_WINS)
     p.add_argument("--audit", metavar="FILE", help="also write the audit trail (JSON Lines)")
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from cosleec.demo.runner import main
-
-    return main(as_json=args.json, semantics=args.semantics, audit=args.audit)
+    """Run the embedded demo (:func:`cosleec.demo.main`)."""
+    return demo.main(as_json=args.json, semantics=args.semantics, audit=args.audit)

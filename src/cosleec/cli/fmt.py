@@ -5,11 +5,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from cosleec.lang import analyse_file
-from cosleec.lang.printer import format_spec
+from cosleec.lang import analyse_file, format_spec
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register ``cosleec fmt`` and its options."""
     p = sub.add_parser("fmt", help="print a rule file in canonical form (converts between dialects)")
     p.add_argument("file", metavar="FILE")
     p.add_argument(
@@ -25,6 +25,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
 
 
 def run(args: argparse.Namespace) -> int:
+    """Print the file in canonical form; on errors print the diagnostics to stderr and return 1."""
     result = analyse_file(args.file, infer_defs=args.infer_defs)
     if result.spec is None or not result.ok:
         print(result.render(), file=sys.stderr)

@@ -1,7 +1,9 @@
 """``cosleec`` entry point: sub-commands, exit codes, and no tracebacks for users.
 
-Exit codes are a contract: 0 success, 1 the input has errors (or a decision could not be
-made), 2 usage errors. An unexpected internal failure prints one line and exits 70.
+Exit codes are a contract: 0 success, 1 the input has errors (rules, mapping, launch
+file) or a refusal such as unsafe network settings, 2 usage errors (including
+``cosleec decide`` values it cannot use, or a decision it could not make for lack of a
+value), 130 interrupted. An unexpected internal failure prints one line and exits 70.
 """
 
 from __future__ import annotations
@@ -11,6 +13,8 @@ import sys
 from collections.abc import Sequence
 
 from cosleec.cli import check, decide, demo, fmt, ros
+from cosleec.errors import UserError
+from cosleec.lang import SleecError
 
 USAGE_ERROR = 2
 INTERNAL_ERROR = 70
@@ -24,6 +28,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``cosleec`` parser with every sub-command; its usage errors exit 2."""
     p = _Parser(prog="cosleec", description="Operationalise SLEEC rules with context-oriented programming.")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
@@ -37,6 +42,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``cosleec`` on ``argv`` (default: the process's arguments) and return the exit code.
+
+    It returns instead of exiting, so tests and programs can call it, and never shows a
+    traceback: a :class:`~cosleec.errors.UserError` prints its message, place and hint.
+    """
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -47,6 +57,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(e.code, file=sys.stderr)
             return 1
         return int(e.code) if isinstance(e.code, int) else 0
+    except UserError as e:  # a mistake the user can fix: the message, where, and the hint
+        print(e.render() if isinstance(e, SleecError) else f"cosleec: {e.render()}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         return 130
     except BrokenPipeError:

@@ -7,8 +7,16 @@ import os
 import sys
 from typing import Any
 
+from cosleec import ros
+from cosleec.nodes import LayersNode, ListenerNode, ManagerNode, Mapping, TaskNode
+from cosleec.runtime import HedgeSemantics, RuleSet
+
 
 def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: ignore[type-arg]
+    """Register ``cosleec <backend>`` (``ros2`` or ``ros1``) and its sub-commands.
+
+    One per node kind (manager, layers, listener, task), plus ``launch`` and ``demo``.
+    """
     p = sub.add_parser(
         backend, help=f"run CO-SLEEC nodes on {'ROS 2 (rclpy)' if backend == 'ros2' else 'ROS 1 (rospy)'}"
     )
@@ -21,7 +29,7 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
 
     m = nodes.add_parser("manager", help="rules, context, decisions, obligations")
     m.add_argument("rules")
-    m.add_argument("--semantics", choices=["last-wins", "nested"], default="last-wins")
+    m.add_argument("--semantics", choices=list(HedgeSemantics), default=HedgeSemantics.LAST_WINS)
     m.add_argument("--sim-time", action="store_true", help="take time from the clock topic")
     m.add_argument("--audit", metavar="FILE", help="append-only JSON Lines audit trail")
     m.add_argument("--record", metavar="FILE.mcap", help="record the decision stream (Foxglove opens it)")
@@ -31,7 +39,7 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     common(m)
     la = nodes.add_parser("layers", help="the COP Layer Manager: publishes active layers (latched)")
     la.add_argument("rules")
-    la.add_argument("--semantics", choices=["last-wins", "nested"], default="last-wins")
+    la.add_argument("--semantics", choices=list(HedgeSemantics), default=HedgeSemantics.LAST_WINS)
     common(la)
     li = nodes.add_parser("listener", help="the Context Listener: robot topics -> measures and events")
     li.add_argument("mapping")
@@ -57,26 +65,33 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run the chosen node until SIGINT/SIGTERM, or launch a file, or play the demo.
+
+    Rules and mapping are loaded and checked before the middleware starts, so a mistake
+    in them is reported at once, with exit 1.
+    """
     backend, node = args.backend, args.node
     if node == "launch":
-        from cosleec.ros.launch import launch
-
-        return launch(args.file)
+        return ros.launch(args.file)
     if node == "demo":
-        from cosleec.ros.demo import main
-
-        return main(backend, args.namespace, args.json)
-    from cosleec.ros.run import load_module, serve
+        return ros.run_demo(backend, args.namespace, args.json)
 
     name = f"cosleec_{node}" if node != "task" else f"cosleec_{args.name}"
+    # rules and mapping are read before the middleware starts: a mistake is reported at once
+    path = args.rules if node != "listener" else args.rules or None
+    rules = RuleSet.from_file(path) if path else None
+    mapping = (
+        Mapping.load(args.mapping, dict(rules.measures) if rules else None, rules.events if rules else None)
+        if node == "listener"
+        else None
+    )
 
     def make(t: Any) -> Any:
         if node == "manager":
-            from cosleec.nodes import ManagerNode
-
+            assert rules is not None
             return ManagerNode(
                 t,
-                args.rules,
+                rules,
                 namespace=args.namespace,
                 semantics=args.semantics,
                 sim_time=args.sim_time,
@@ -85,33 +100,17 @@ def run(args: argparse.Namespace) -> int:
                 status_each=args.status_each,
             )
         if node == "layers":
-            from cosleec.nodes import LayersNode
-
-            return LayersNode(t, args.rules, namespace=args.namespace, semantics=args.semantics)
+            assert rules is not None
+            return LayersNode(t, rules, namespace=args.namespace, semantics=args.semantics)
         if node == "listener":
-            from cosleec.nodes import ListenerNode, Mapping, MappingError
-
-            measures = events = None
-            if args.rules:
-                from cosleec.runtime.manager import load_rules
-                from cosleec.runtime.model import compile_rules
-
-                spec, symbols = load_rules(args.rules)
-                rs = compile_rules(spec, symbols)
-                measures, events = rs.measures, rs.events
-            try:
-                mapping = Mapping.load(args.mapping, measures, events)
-            except (MappingError, OSError) as e:
-                print(f"cosleec listener: {e}", file=sys.stderr)
-                raise SystemExit(1) from None
+            assert mapping is not None
             return ListenerNode(t, mapping, namespace=args.namespace)
-        from cosleec.nodes import TaskNode
-
-        tn = TaskNode(t, args.rules, namespace=args.namespace, name=args.name, status_each=args.status_each)
-        load_module(args.module).install(tn)
+        assert rules is not None
+        tn = TaskNode(t, rules, namespace=args.namespace, name=args.name, status_each=args.status_each)
+        ros.load_module(args.module).install(tn)
         only = args.only.split(",") if args.only else None
         return tn.start(only)
 
     if backend == "ros2" and not os.environ.get("ROS_DOMAIN_ID"):
         print("cosleec: note: ROS_DOMAIN_ID is not set (domain 0)", file=sys.stderr)
-    return serve(backend, node, make, name)
+    return ros.serve(backend, node, make, name)

@@ -1,6 +1,7 @@
 """A generic context-oriented programming runtime (imports nothing of SLEEC).
 
-Vocabulary and guarantees: ``../shared/reference/cop-runtime.md``. In short::
+Layers, their activation (scoped, global, by event), hedge groups selected by predicate,
+and one dispatcher. In short::
 
     from cosleec.cop import Layer, layered, activate
 
@@ -16,17 +17,15 @@ Vocabulary and guarantees: ``../shared/reference/cop-runtime.md``. In short::
 
     with activate(loud):
         greet("ada")   # 'HELLO ADA'
+
+Modules: ``layer`` (layers, groups, policies), ``state`` (the global configuration,
+deferral), ``extent`` (scoped activation, capture and replay), ``dispatch`` (layered
+functions and the reference dispatcher), ``fastpath`` (the generated dispatcher),
+``decorate`` (``@layered``), ``introspect``, ``events``, ``generators``, ``errors``.
 """
 
-from cosleec.cop.dispatch import (
-    DispatchRecord,
-    LayeredFunction,
-    current_context,
-    layered,
-    on_dispatch,
-    partial,
-    using_context,
-)
+from cosleec.cop.decorate import layered, on_dispatch, partial
+from cosleec.cop.dispatch import DispatchRecord, LayeredFunction, current_context, using_context
 from cosleec.cop.errors import (
     ActivationError,
     COPError,
@@ -35,32 +34,22 @@ from cosleec.cop.errors import (
     HedgeEvaluationError,
 )
 from cosleec.cop.events import Transitions
+from cosleec.cop.extent import Snapshot, activate, bind, deactivate, run_with, snapshot
 from cosleec.cop.generators import layered_generator
 from cosleec.cop.introspect import Explanation, current_layers, explain
-from cosleec.cop.layer import (
-    POLICIES,
-    HedgeGroup,
-    Layer,
-    LayerGroup,
-    policy_first,
-    policy_last,
-    policy_nested,
-)
+from cosleec.cop.layer import POLICIES, HedgeGroup, Layer, LayerGroup, policy_first, policy_last
 from cosleec.cop.state import (
-    Snapshot,
-    activate,
+    GlobalState,
     activate_globally,
     active_layers,
     add_activation_hook,
     at_safe_point,
-    bind,
     critical,
-    deactivate,
     deactivate_globally,
     global_count,
+    global_state,
     is_active,
-    run_with,
-    snapshot,
+    restore_globally,
     swap_globally,
 )
 
@@ -72,6 +61,7 @@ __all__ = [
     "DispatchRecord",
     "ExclusionError",
     "Explanation",
+    "GlobalState",
     "HedgeEvaluationError",
     "HedgeGroup",
     "Layer",
@@ -92,6 +82,7 @@ __all__ = [
     "deactivate_globally",
     "explain",
     "global_count",
+    "global_state",
     "is_active",
     "layered",
     "layered_generator",
@@ -99,7 +90,7 @@ __all__ = [
     "partial",
     "policy_first",
     "policy_last",
-    "policy_nested",
+    "restore_globally",
     "run_with",
     "snapshot",
     "swap_globally",

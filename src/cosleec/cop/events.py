@@ -10,8 +10,10 @@ from cosleec.cop.layer import Layer
 from cosleec.cop.state import swap_globally
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Transition:
+    """One row of a :class:`Transitions` table: on ``event``, if ``when`` holds, swap these layers."""
+
     event: str
     activate: tuple[Layer, ...]
     deactivate: tuple[Layer, ...]
@@ -19,7 +21,10 @@ class Transition:
 
 
 class Transitions:
-    """``on(event, when=..., activate=[...], deactivate=[...])``, applied by ``fire(event)``.
+    """A declarative transition table for event-delimited layers (SD10): use it when modes
+    switch on events rather than around a block of code.
+
+    ``on(event, when=..., activate=[...], deactivate=[...])``, applied by ``fire(event)``.
 
     Each fired event is one atomic swap of the global composition: a concurrent reader sees
     the configuration before or after, never in between (F41).
@@ -36,7 +41,9 @@ class Transitions:
         activate: Iterable[Layer] = (),
         deactivate: Iterable[Layer] = (),
     ) -> Transition:
-        t = Transition(event, tuple(activate), tuple(deactivate), when)
+        """Add a row: when ``event`` fires and ``when(context)`` holds (or no guard), activate
+        ``activate`` and deactivate ``deactivate`` globally, in one swap with the other rows."""
+        t = Transition(event=event, activate=tuple(activate), deactivate=tuple(deactivate), when=when)
         self._table.setdefault(event, []).append(t)
         return t
 

@@ -8,6 +8,7 @@ resumption of the generator, sync or async, in the generator's own ``contextvars
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import contextvars
 import functools
 import inspect
@@ -36,6 +37,12 @@ class _ContextGenerator:
 
     def close(self) -> None:
         self._ctx.run(self._gen.close)
+
+    def __del__(self) -> None:
+        # an unfinished generator is closed here, in its own context, rather than by the
+        # garbage collector in whatever context happens to be current
+        with contextlib.suppress(RuntimeError, ValueError):  # its context is busy elsewhere
+            self.close()
 
 
 class _ContextAsyncGenerator:
@@ -66,7 +73,11 @@ class _ContextAsyncGenerator:
 
 
 def layered_generator(fn: Callable[..., Any]) -> Callable[..., Iterator[Any] | AsyncIterator[Any]]:
-    """Decorate a (sync or async) generator function so its activations never leak."""
+    """Decorate a (sync or async) generator function so its activations never leak.
+
+    Use it on every generator that enters ``with activate(...)`` and yields inside the
+    block; combine it with ``@layered`` (``@layered`` outermost) to make it layered too.
+    """
     if not (inspect.isgeneratorfunction(fn) or inspect.isasyncgenfunction(fn)):
         raise TypeError(f"{fn!r} is not a generator function")
     is_async = inspect.isasyncgenfunction(fn)

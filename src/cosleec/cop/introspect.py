@@ -1,25 +1,28 @@
-"""Introspection (SD16): the composition, the chain a call would run, and why."""
+"""Introspection (the COP semantics SD16): the composition, the chain a call would run, and why.
+
+Imports ``layer.py``, ``state.py`` and ``dispatch.py``; runs nothing of the user's but predicates.
+"""
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 from typing import Any
 
-from cosleec.cop.dispatch import LayeredFunction
-from cosleec.cop.layer import Layer, LayerGroup
-from cosleec.cop.state import RT, _dyn, composition
-
-_groups: weakref.WeakSet[LayerGroup] = weakref.WeakSet()
+from cosleec.cop.dispatch import LayeredFunction, all_layered
+from cosleec.cop.layer import Layer
+from cosleec.cop.state import RT, active_layers, dyn_get
 
 
 def current_layers(context: Any = None) -> tuple[Layer, ...]:
-    """The explicit composition; with ``context``, plus the predicate layers that hold on it."""
-    comp = composition(RT.state, _dyn.get())
+    """The explicit composition; with ``context``, plus the predicate layers that hold on it.
+
+    Use it to show an operator what is active; ``active_layers()`` is the cheaper explicit-only form.
+    """
+    comp = active_layers()
     if context is None:
         return comp
     extra: list[Layer] = []
-    for f in list(RT.functions):
+    for f in all_layered():
         for g in f.groups:
             for m in g.members:
                 if m in comp or m in extra or m.predicate is None:
@@ -33,9 +36,9 @@ def current_layers(context: Any = None) -> tuple[Layer, ...]:
     return (*comp, *extra)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Explanation:
-    """The chain a call would run, outermost first, and each hedge group's selection."""
+    """The chain a call would run, outermost first, and each hedge group's selection (``explain``)."""
 
     function: str
     composition: tuple[str, ...]
@@ -49,18 +52,24 @@ class Explanation:
 
 
 def explain(fn: Any, *args: Any, context: Any = None) -> Explanation:
-    """What calling ``fn(*args)`` would run now, without running anything."""
+    """What calling ``fn(*args)`` would run here and now, without running it.
+
+    Use it to answer "why did this variant run?": the chain, the selected hedge members
+    and the predicate values, evaluated on ``context`` (default: the function's own).
+    """
     lf = getattr(fn, "layered", fn)
     if not isinstance(lf, LayeredFunction):
         raise TypeError(f"{fn!r} is not a layered function")
-    comp = composition(RT.state, _dyn.get())
-    selected: tuple[Layer | None, ...] = ()
-    preds: dict[str, dict[str, bool | None]] = {}
-    chosen: dict[str, str | None] = {}
-    if lf.groups:
-        ctx = context if context is not None else lf.snapshot()
-        selected, record = lf.select(comp, ctx, (True,))
-        assert record is not None
-        preds, chosen = record.predicates, record.selected
-    chain = tuple(la.name for la in lf.layers_in_chain(comp, selected))
-    return Explanation(lf.name, tuple(la.name for la in comp), chain, chosen, preds)
+    view = lf.view(RT.state, dyn_get())
+    # the function's own context is read only if a hedge group needs it
+    sel = lf.select(view, record=True) if context is None else lf.select(view, context=context, record=True)
+    if sel.failure is not None:
+        raise sel.failure
+    assert sel.record is not None
+    return Explanation(
+        function=lf.name,
+        composition=tuple(la.name for la in view.composition),
+        chain=tuple(la.name for la in lf.layers_in_chain(view.explicit, sel.selected)),
+        selected=sel.record.selected,
+        predicates=sel.record.predicates,
+    )

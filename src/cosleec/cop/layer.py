@@ -1,33 +1,46 @@
-"""Layers and groups of layers.
+"""Layers, groups of layers and the selection policies of hedge groups.
 
 A :class:`Layer` is a named, first-class object with no behaviour of its own: partials
 registered on layered functions give it behaviour. A layer with a ``when`` predicate is a
 *predicate layer*: a hedge group selects it at dispatch time from the context snapshot.
 
 A :class:`LayerGroup` makes its members mutually exclusive. With a selection policy it is
-a *hedge group* (SLEEC: all ``unless`` clauses of one rule): at each dispatch the policy
-picks at most one member from the predicates' values -- ``last`` (SLEEC: the last clause
-whose condition holds) or ``nested`` (the CO-SLEEC paper's formula), or any callable.
+a *hedge group*: at each dispatch the policy picks at most one member from the values of
+the members' predicates -- ``last`` (the last one that holds), ``first``, or any callable
+``Sequence[bool] -> int | None``.
+
+This module is the bottom of ``cosleec.cop``: it imports only :mod:`cosleec.cop.errors`.
+Enter/exit hooks are kept here, on the layer they observe, and so is the exclusion check:
+``state.py`` and ``extent.py`` call :func:`displaced` and :func:`fire_hooks`.
 """
 
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable, Sequence
-from typing import Any, Literal
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any, ClassVar, Literal
 
-from cosleec.cop.errors import DefinitionError
+from cosleec.cop.errors import DefinitionError, ExclusionError
 
 Predicate = Callable[[Any], object]
 Policy = Callable[[Sequence[bool]], "int | None"]
+LayerHook = Callable[["Layer"], None]
 
 _ids = itertools.count()
 
 
 class Layer:
-    """A named layer. Identity matters, not the name: two layers may share a name."""
+    """A named layer: use one per behaviour variation you want to switch on and off.
 
-    __slots__ = ("__weakref__", "_enter", "_exit", "group", "id", "name", "predicate", "priority")
+    Identity matters, not the name: two layers may share a name. ``when`` makes it a
+    predicate layer (a hedge group member); ``priority`` moves it outward in every chain
+    (the COP semantics SD7).
+    """
+
+    __slots__ = ("__weakref__", "enter_hooks", "exit_hooks", "group", "id", "name", "predicate", "priority")
+
+    hooked: ClassVar[int] = 0
+    """How many enter/exit hooks exist on any layer (zero: scopes skip working out what changed)."""
 
     def __init__(self, name: str, *, when: Predicate | None = None, priority: int = 0) -> None:
         self.name = name
@@ -35,24 +48,22 @@ class Layer:
         self.priority = priority
         self.group: LayerGroup | None = None
         self.id = next(_ids)
-        self._enter: list[Callable[[Layer], None]] = []
-        self._exit: list[Callable[[Layer], None]] = []
+        self.enter_hooks: list[LayerHook] = []
+        self.exit_hooks: list[LayerHook] = []
 
-    def on_enter(self, hook: Callable[[Layer], None]) -> Callable[[Layer], None]:
-        """Call ``hook(layer)`` on every effective activation (SD/E38)."""
-        from cosleec.cop import state
+    def on_enter(self, hook: LayerHook) -> LayerHook:
+        """Call ``hook(layer)`` on every effective activation, global or scoped (checklist E38).
 
-        self._enter.append(hook)
-        state.HOOKED.count += 1
-        state.hooks_changed()
+        Use it to acquire what the layer's behaviour needs; usable as a decorator.
+        """
+        self.enter_hooks.append(hook)
+        Layer.hooked += 1
         return hook
 
-    def on_exit(self, hook: Callable[[Layer], None]) -> Callable[[Layer], None]:
-        from cosleec.cop import state
-
-        self._exit.append(hook)
-        state.HOOKED.count += 1
-        state.hooks_changed()
+    def on_exit(self, hook: LayerHook) -> LayerHook:
+        """Call ``hook(layer)`` on every effective deactivation; the counterpart of :meth:`on_enter`."""
+        self.exit_hooks.append(hook)
+        Layer.hooked += 1
         return hook
 
     def __repr__(self) -> str:
@@ -63,32 +74,26 @@ class Layer:
 
 
 def policy_last(values: Sequence[bool]) -> int | None:
-    """SLEEC: the last member, in declared order, whose predicate holds."""
+    """The last member, in declared order, whose predicate holds: later members refine earlier ones.
+
+    The default policy of :func:`HedgeGroup`.
+    """
     for i in range(len(values) - 1, -1, -1):
         if values[i]:
             return i
     return None
 
 
-def policy_nested(values: Sequence[bool]) -> int | None:
-    """The CO-SLEEC paper's formula: member i iff predicates 1..i hold and i+1 does not."""
-    k = 0
-    for v in values:
-        if not v:
-            break
-        k += 1
-    return k - 1 if k else None
-
-
 def policy_first(values: Sequence[bool]) -> int | None:
-    """The first member whose predicate holds (generic COP; never used for SLEEC)."""
+    """The first member whose predicate holds: for generic groups where earlier members win."""
     for i, v in enumerate(values):
         if v:
             return i
     return None
 
 
-POLICIES: dict[str, Policy] = {"last": policy_last, "nested": policy_nested, "first": policy_first}
+POLICIES: dict[str, Policy] = {"last": policy_last, "first": policy_first}
+"""The policies a group accepts by name; any other callable policy is passed as itself."""
 
 OnError = Literal["raise", "default"] | str
 
@@ -96,12 +101,13 @@ OnError = Literal["raise", "default"] | str
 class LayerGroup:
     """Mutually exclusive layers; with a ``policy``, a hedge group selecting by predicate.
 
+    Use a plain group for modes that must not combine (at most one member active), and a
+    hedge group (:func:`HedgeGroup`) for predicate layers of which a dispatch selects at
+    most one.
+
     ``exclusion="strict"`` (default): explicitly activating a second member while one is
     active raises :class:`ExclusionError` and changes nothing. ``"weak"``: the new member
     replaces the old one.
-
-    ``selector`` (optional) maps the context snapshot directly to a member index, instead of
-    evaluating predicates under a policy.
 
     ``on_error`` says what a dispatch does when a member's predicate raises: ``"raise"``
     (default: abort with :class:`HedgeEvaluationError`), ``"default"`` (select no member),
@@ -116,53 +122,72 @@ class LayerGroup:
         policy: str | Policy | None = None,
         exclusion: Literal["strict", "weak"] = "strict",
         on_error: OnError = "raise",
-        selector: Callable[[Any], int | None] | None = None,
     ) -> None:
         if exclusion not in ("strict", "weak"):
             raise DefinitionError(f"exclusion must be 'strict' or 'weak', not {exclusion!r}")
         self.name = name
         self.members: tuple[Layer, ...] = tuple(layers)
-        # A selector maps the context straight to a member index (None: no member): for
-        # groups whose choice is already known, e.g. decided by a layer manager upstream.
-        self.selector = selector
-        if selector is not None and policy is None:
-            policy = "last"
         self.exclusion = exclusion
-        self._policy: Policy | None = None
-        self.policy_name = ""
+        self.policy: Policy | None = None
         self.set_policy(policy)
         names = {m.name for m in self.members}
         if on_error not in ("raise", "default") and on_error not in names:
             raise DefinitionError(f"on_error={on_error!r} names no member of group {name!r}")
         self.on_error = on_error
+        # the layered function this hedge group is attached to (a weak reference, set by
+        # @layered): one group serves one function (SD12)
+        self.owner: Callable[[], object] | None = None
         for m in self.members:
             if m.group is not None and m.group is not self:
                 raise DefinitionError(f"{m!r} already belongs to group {m.group.name!r}")
             m.group = self
-        if self._policy is not None and selector is None:
+        if self.policy is not None:
             missing = [m.name for m in self.members if m.predicate is None]
             if missing:
                 raise DefinitionError(f"hedge group {name!r}: members without a predicate: {missing}")
 
-    @property
-    def policy(self) -> Policy | None:
-        return self._policy
-
     def set_policy(self, policy: str | Policy | None) -> None:
-        """Switch the selection policy; no re-registration needed (H47)."""
+        """Switch the selection policy; the next dispatch uses it, no re-registration (H47)."""
         if isinstance(policy, str):
             if policy not in POLICIES:
                 raise DefinitionError(f"unknown policy {policy!r}; expected one of {sorted(POLICIES)}")
-            self._policy, self.policy_name = POLICIES[policy], policy
-        elif policy is None:
-            self._policy, self.policy_name = None, ""
-        else:
-            self._policy, self.policy_name = policy, getattr(policy, "__name__", "custom")
+            policy = POLICIES[policy]
+        self.policy = policy
 
     def __repr__(self) -> str:
         return f"LayerGroup({self.name!r}, {[m.name for m in self.members]})"
 
 
 def HedgeGroup(name: str, layers: Sequence[Layer], *, policy: str | Policy = "last", **kw: Any) -> LayerGroup:
-    """A :class:`LayerGroup` of predicate layers with a selection policy (default ``last``)."""
+    """A :class:`LayerGroup` of predicate layers with a selection policy (default ``last``).
+
+    Use one per function whose variants are chosen by conditions on the context, the
+    members in the order the policy reads them.
+    """
     return LayerGroup(name, layers, policy=policy, **kw)
+
+
+def displaced(layer: Layer, current: Iterable[Layer], how: str = "") -> list[Layer]:
+    """The members of ``layer``'s group in ``current`` that activating ``layer`` displaces.
+
+    A strict group refuses instead: :class:`ExclusionError`, nothing changed (SD6, SD11).
+    """
+    group = layer.group
+    if group is None:
+        return []
+    rivals = [la for la in current if la is not layer and la.group is group]
+    if rivals and group.exclusion == "strict":
+        raise ExclusionError(
+            f"cannot activate {layer.name!r}{how}: {rivals[0].name!r} of exclusive group {group.name!r} is active"
+        )
+    return rivals
+
+
+def fire_hooks(*, exited: Iterable[Layer], entered: Iterable[Layer]) -> None:
+    """Run the exit hooks of ``exited``, then the enter hooks of ``entered`` (checklist E38)."""
+    for la in exited:
+        for hook in la.exit_hooks:
+            hook(la)
+    for la in entered:
+        for hook in la.enter_hooks:
+            hook(la)

@@ -1,12 +1,17 @@
-"""Where the composition lives and how it changes (cop-runtime.md SD1, SD4, SD6-SD9, SD13, SD17).
+"""Where the composition lives, and its global changes (the COP semantics SD1, SD6-SD9).
 
 - The *dynamic* composition is an immutable :class:`Frame` in a ``ContextVar``: correct
-  across threads, asyncio tasks and (with ``layered_generator``) generators.
-- The *global* composition is one immutable :class:`GlobalState`, replaced copy-on-write
-  under a lock; readers take no lock.
+  across threads, asyncio tasks and (with ``layered_generator``) generators. ``extent.py``
+  changes it for a ``with`` block or a ``run_with`` call.
+- The *global* configuration is one immutable :class:`GlobalState` -- active layers,
+  activation counts and the installed hooks -- replaced copy-on-write under a lock;
+  readers take no lock.
 - A dispatch reads both once (prompt-loyal). Global changes requested while the current
-  thread/task runs a dispatch chain, or inside ``critical()``, are queued and applied in
-  request order when the outermost dispatch ends.
+  thread/task runs a dispatch, or inside ``critical()``, are queued and applied in request
+  order when the outermost dispatch ends.
+
+This module knows layers (``layer.py``), not layered functions: the dispatchers tell it
+which code objects mean "a dispatch is running" through :func:`register_dispatch_code`.
 """
 
 from __future__ import annotations
@@ -14,16 +19,21 @@ from __future__ import annotations
 import itertools
 import sys
 import threading
-from collections.abc import Callable, Iterable
-from contextvars import ContextVar, Token
-from types import TracebackType
-from typing import Any, TypeVar
+from collections.abc import Callable, Iterable, Mapping
+from contextvars import ContextVar
+from dataclasses import dataclass, field, replace
+from types import CodeType, MappingProxyType
+from typing import Any
 
-from cosleec.cop.errors import ActivationError, ExclusionError
-from cosleec.cop.layer import Layer
+from cosleec.cop.errors import ActivationError
+from cosleec.cop.layer import Layer, displaced, fire_hooks
 
-_stamps = itertools.count(1)
+next_stamp = itertools.count(1).__next__
+"""A fresh activation stamp: later activations get larger stamps (the recency order of SD7)."""
 _lock = threading.RLock()
+
+DispatchHook = Callable[[Any], None]
+ActivationHook = Callable[[Layer, str], None]
 
 
 class Frame:
@@ -51,73 +61,48 @@ class Frame:
 EMPTY = Frame((), frozenset())
 
 
+@dataclass(frozen=True, kw_only=True, slots=True, eq=False)
 class GlobalState:
-    """The immutable global composition: active layers with activation stamps and counts."""
+    """The global configuration: active layers with activation stamps and counts, and hooks.
 
-    __slots__ = ("counts", "layers", "version")
+    One immutable value, replaced as a whole by every change: a dispatch that read it sees
+    one consistent configuration. Keep one from :func:`global_state` to return to it later
+    with :func:`restore_globally`.
+    """
 
-    def __init__(self, version: int, layers: tuple[tuple[Layer, int], ...], counts: dict[Layer, int]) -> None:
-        self.version = version
-        self.layers = layers
-        self.counts = counts
-
-
-class _Hooked:
-    """How many layers have enter/exit hooks (none: scopes skip computing what changed)."""
-
-    count = 0
-
-
-HOOKED = _Hooked()
+    version: int = 0
+    layers: tuple[tuple[Layer, int], ...] = ()
+    counts: Mapping[Layer, int] = field(default_factory=lambda: MappingProxyType({}))
+    dispatch_hooks: tuple[DispatchHook, ...] = ()
+    activation_hooks: tuple[ActivationHook, ...] = ()
 
 
 class _Runtime:
     """Mutable module state, read without locks (each field is replaced atomically)."""
 
-    __slots__ = ("activation_hooks", "dispatch_hooks", "functions", "idle", "queued", "state")
+    __slots__ = ("queued", "state")
 
     def __init__(self) -> None:
-        self.state = GlobalState(0, (), {})
-        self.idle = True  # no global layer, no dispatch hook: layered functions may run their base directly
+        self.state = GlobalState()
         self.queued = 0  # global requests waiting for a dispatch to end, in any thread
-        self.dispatch_hooks: tuple[Callable[[Any], None], ...] = ()
-        self.activation_hooks: tuple[Callable[[Layer, str], None], ...] = ()
-        self.functions: Any = None  # weakref.WeakSet of layered functions (set by dispatch.py)
 
 
 RT = _Runtime()
-_dyn: ContextVar[Frame] = ContextVar("cosleec.cop.dynamic", default=EMPTY)
-_queue: ContextVar[list[tuple[str, Layer]] | None] = ContextVar("cosleec.cop.queue", default=None)
+dynamic: ContextVar[Frame] = ContextVar("cosleec.cop.dynamic", default=EMPTY)
+"""The dynamic composition of this thread/task (set by ``extent.py`` for a ``with`` block or ``run_with``)."""
+_queue: ContextVar[list[tuple[str, Any]] | None] = ContextVar("cosleec.cop.queue", default=None)
 _critical: ContextVar[int] = ContextVar("cosleec.cop.critical", default=0)
-dyn_get = _dyn.get
+dyn_get = dynamic.get
+"""The current dynamic frame (one ``ContextVar.get``): what a dispatch reads with ``RT.state``."""
 
-# code objects of the frames that mean "a dispatch chain is running" (filled by dispatch.py)
-DISPATCH_CODES: set[Any] = set()
-
-
-def _refresh_idle(force: bool = False) -> None:
-    """Recompute the fast-path flags; functions are visited only when the flag flips."""
-    idle = not RT.state.layers and not RT.dispatch_hooks
-    if idle == RT.idle and not force:
-        return  # most global changes keep the process busy (or idle): nothing to tell
-    RT.idle = idle
-    funcs = RT.functions
-    if funcs is not None:
-        for f in list(funcs):
-            f.refresh()
+# code objects of the frames that mean "a dispatch is running" (SD9)
+_dispatch_codes: set[CodeType] = set()
 
 
-def hooks_changed() -> None:
-    """A hook was added: drop every cached transition so that none bypasses it (E37)."""
-    _clear_transitions(EMPTY)
-    _refresh_idle(force=True)
-
-
-def _clear_transitions(frame: Frame) -> None:
-    children = list(frame.transitions.values())
-    frame.transitions.clear()
-    for c in children:
-        _clear_transitions(c)
+def register_dispatch_code(code: CodeType) -> None:
+    """Frames running ``code`` count as a running dispatch: global requests made below them
+    wait until the outermost one ends (SD9). Called by the dispatchers for their own code."""
+    _dispatch_codes.add(code)
 
 
 # ---------------------------------------------------------------- effective composition
@@ -144,228 +129,154 @@ def composition(g: GlobalState, d: Frame) -> tuple[Layer, ...]:
 
 def active_layers() -> tuple[Layer, ...]:
     """The explicit composition seen here and now, outermost first."""
-    return composition(RT.state, _dyn.get())
+    return composition(RT.state, dynamic.get())
 
 
 def is_active(layer: Layer) -> bool:
+    """Is ``layer`` explicitly active here and now (globally or in an enclosing scope)?"""
     return layer in active_layers()
-
-
-# ---------------------------------------------------------------- scoped activation
-
-
-class _Scope:
-    """``with activate(...)`` / ``with deactivate(...)``: one dynamic extent.
-
-    The object cannot be entered again while it is active (B17); after a normal exit it
-    can be reused.
-    """
-
-    __slots__ = ("_active", "_before", "_entered", "_exited", "_layers", "_mode", "_token")
-
-    def __init__(self, mode: str, layers: tuple[Layer, ...]) -> None:
-        for la in layers:
-            if not isinstance(la, Layer):
-                raise TypeError(f"expected Layer objects, got {la!r}")
-        self._mode = mode
-        self._layers = layers
-        self._active = False
-        self._token: Token[Frame] | None = None
-        self._before: Frame = EMPTY
-        self._entered: tuple[Layer, ...] = ()
-        self._exited: tuple[Layer, ...] = ()
-
-    def __enter__(self) -> _Scope:
-        if self._active:
-            raise ActivationError("this activation is already in effect; use a new activate(...) for nesting")
-        g = RT.state
-        before = _dyn.get()
-        frame = before
-        for layer in self._layers:
-            frame = _transition(frame, self._mode, layer, g)
-        self._before = before
-        self._token = _dyn.set(frame)
-        self._active = True
-        if HOOKED.count:  # what changed matters only to enter/exit hooks
-            old, new = composition(g, before), composition(g, frame)
-            self._entered = tuple([la for la in new if la not in old])
-            self._exited = tuple([la for la in old if la not in new])
-            _fire(self._entered, "enter")
-            _fire(self._exited, "exit")
-        return self
-
-    def __exit__(
-        self, et: type[BaseException] | None, ev: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        token, self._token = self._token, None
-        self._active = False
-        if token is not None:
-            try:
-                _dyn.reset(token)
-            except ValueError:  # exited in another Context (an undecorated generator): restore
-                _dyn.set(self._before)
-        _fire(self._exited, "enter")
-        _fire(self._entered, "exit")
-
-
-def _transition(frame: Frame, mode: str, layer: Layer, g: GlobalState) -> Frame:
-    key = (mode, layer)
-    nxt = frame.transitions.get(key)
-    if nxt is not None and not RT.activation_hooks and not _conflicts(nxt, layer, g):
-        return nxt  # a cached transition is used only when no hook must see the activation (E37)
-    if mode == "activate":
-        for hook in RT.activation_hooks:
-            hook(layer, "scoped")  # a hook vetoes by raising: nothing has changed yet
-        added, masked = frame.added, frame.masked
-        current = composition(g, frame)
-        rivals = _rivals(layer, current)
-        if rivals:
-            _check_exclusion(layer, rivals, "")
-            added = tuple(x for x in added if x[0] not in rivals)
-            masked = masked | frozenset(rivals)
-        if layer in current and layer not in masked:
-            return frame  # re-activation is a no-op and keeps the position (SD4)
-        if not any(x[0] is layer for x in added):
-            added = (*added, (layer, next(_stamps)))
-        nxt = Frame(added, masked - {layer}, frame.absolute)
-    else:
-        added = tuple(x for x in frame.added if x[0] is not layer)
-        absolute = frame.absolute
-        if absolute is not None:
-            absolute = tuple(x for x in absolute if x is not layer)
-        nxt = Frame(added, frame.masked | {layer}, absolute)
-    frame.transitions[key] = nxt
-    return nxt
-
-
-def _conflicts(frame: Frame, layer: Layer, g: GlobalState) -> bool:
-    """A cached transition is stale if a global change made it violate exclusion."""
-    if layer.group is None:
-        return False
-    members = set(layer.group.members)
-    return sum(1 for la in composition(g, frame) if la in members) > 1
-
-
-def _check_exclusion(layer: Layer, rivals: list[Layer], how: str) -> None:
-    """Strict groups reject a second member (SD6, SD11); weak ones let the caller replace."""
-    group = layer.group
-    assert group is not None
-    if group.exclusion == "strict":
-        raise ExclusionError(
-            f"cannot activate {layer.name!r}{how}: {rivals[0].name!r} of exclusive group {group.name!r} is active"
-        )
-
-
-def _rivals(layer: Layer, current: Iterable[Layer]) -> list[Layer]:
-    group = layer.group
-    if group is None:
-        return []
-    return [la for la in current if la is not layer and la.group is group]
-
-
-def activate(*layers: Layer) -> _Scope:
-    """Context manager: the layers are active for the code run inside the block (dynamic extent)."""
-    return _Scope("activate", layers)
-
-
-def deactivate(*layers: Layer) -> _Scope:
-    """Context manager: the layers are inactive inside the block, global ones included (SD13)."""
-    return _Scope("deactivate", layers)
-
-
-def _fire(layers: Iterable[Layer], which: str) -> None:
-    for la in layers:
-        for hook in la._enter if which == "enter" else la._exit:
-            hook(la)
 
 
 # ---------------------------------------------------------------- global activation
 
 
 def activate_globally(layer: Layer) -> None:
-    """Activate ``layer`` process-wide; counted: n activations need n deactivations (SD8)."""
+    """Activate ``layer`` process-wide; counted: n activations need n deactivations (SD8).
+
+    Use it for modes that hold everywhere (maintenance, a user profile) until switched off.
+    """
     _request("activate", layer)
 
 
 def deactivate_globally(layer: Layer) -> None:
+    """Undo one :func:`activate_globally`; the layer goes when its count reaches zero (SD8)."""
     _request("deactivate", layer)
+
+
+def _defer(requests: list[tuple[str, Any]]) -> bool:
+    """Queue requests if a dispatch or ``critical()`` is running here (SD9); True if queued."""
+    if not (_critical.get() or _in_dispatch(3)):
+        return False
+    q = _queue.get()
+    if q is None:
+        q = []
+        _queue.set(q)
+    q.extend(requests)
+    with _lock:
+        RT.queued += len(requests)
+    return True
 
 
 def _request(op: str, layer: Layer) -> None:
     if not isinstance(layer, Layer):
         raise TypeError(f"expected a Layer, got {layer!r}")
-    if _critical.get() or _in_dispatch():
-        q = _queue.get()
-        if q is None:
-            q = []
-            _queue.set(q)
-        q.append((op, layer))
-        with _lock:
-            RT.queued += 1
-        return
-    _apply([(op, layer)])
+    if not _defer([(op, layer)]):
+        _apply([(op, layer)])
 
 
-def _apply(requests: list[tuple[str, Layer]]) -> None:
+def _apply(requests: list[tuple[str, Any]]) -> None:
     """Apply global requests atomically: one new state, or none if any request fails."""
-    entered: list[Layer] = []
-    exited: list[Layer] = []
     with _lock:
         g = RT.state
-        layers = dict(g.layers)
-        counts = dict(g.counts)
-        for op, layer in requests:
-            n = counts.get(layer, 0)
-            if op == "activate":
-                if n == 0:
-                    for hook in RT.activation_hooks:
-                        hook(layer, "global")
-                    rivals = _rivals(layer, layers)
-                    if rivals:
-                        _check_exclusion(layer, rivals, " globally")
-                        for r in rivals:
-                            layers.pop(r, None)
-                            counts.pop(r, None)
-                            exited.append(r)
-                    layers[layer] = next(_stamps)
-                    entered.append(layer)
-                counts[layer] = n + 1
+        old = dict(g.layers)
+        layers, counts = dict(old), dict(g.counts)
+        hooks = (g.dispatch_hooks, g.activation_hooks)
+        for op, x in requests:
+            if op == "restore":
+                layers, counts = dict(x.layers), dict(x.counts)
+                hooks = (x.dispatch_hooks, x.activation_hooks)
+            elif op == "activate":
+                _count_up(x, layers, counts, hooks[1])
             else:
-                if n == 0:
-                    raise ActivationError(f"{layer.name!r} is not globally active")
-                if n == 1:
-                    del counts[layer]
-                    del layers[layer]
-                    exited.append(layer)
-                else:
-                    counts[layer] = n - 1
-        RT.state = GlobalState(g.version + 1, tuple(layers.items()), counts)
-        _refresh_idle()
-    _fire(exited, "exit")
-    _fire(entered, "enter")
+                _count_down(x, layers, counts)
+        RT.state = GlobalState(
+            version=g.version + 1,
+            layers=tuple(layers.items()),
+            counts=MappingProxyType(counts),
+            dispatch_hooks=hooks[0],
+            activation_hooks=hooks[1],
+        )
+    fire_hooks(exited=[la for la in old if la not in layers], entered=[la for la in layers if la not in old])
+
+
+def _count_up(
+    layer: Layer, layers: dict[Layer, int], counts: dict[Layer, int], hooks: tuple[ActivationHook, ...]
+) -> None:
+    n = counts.get(layer, 0)
+    if n == 0:
+        for hook in hooks:
+            hook(layer, "global")
+        for r in displaced(layer, layers, " globally"):
+            layers.pop(r, None)
+            counts.pop(r, None)
+        layers[layer] = next_stamp()
+    counts[layer] = n + 1
+
+
+def _count_down(layer: Layer, layers: dict[Layer, int], counts: dict[Layer, int]) -> None:
+    n = counts.get(layer, 0)
+    if n == 0:
+        raise ActivationError(f"{layer.name!r} is not globally active")
+    if n == 1:
+        del counts[layer]
+        del layers[layer]
+    else:
+        counts[layer] = n - 1
 
 
 def swap_globally(activate: Iterable[Layer] = (), deactivate: Iterable[Layer] = ()) -> None:
-    """Apply several global changes as one atomic swap (used by event transitions, SD10)."""
+    """Apply several global changes as one atomic swap: a concurrent reader sees the
+    configuration before or after, never in between (event transitions, SD10)."""
     reqs = [("deactivate", la) for la in deactivate] + [("activate", la) for la in activate]
-    if _critical.get() or _in_dispatch():
-        for op, la in reqs:
-            _request(op, la)
-        return
-    _apply(reqs)
+    for _, la in reqs:
+        if not isinstance(la, Layer):
+            raise TypeError(f"expected a Layer, got {la!r}")
+    if not _defer(reqs):
+        _apply(reqs)
+
+
+def bump_version() -> None:
+    """A new global state with the same content: every memo keyed on the old one is stale.
+
+    For changes that alter what a configuration means, e.g. a partial registered.
+    """
+    with _lock:
+        RT.state = replace(RT.state, version=RT.state.version + 1)
 
 
 def global_count(layer: Layer) -> int:
+    """How many :func:`activate_globally` calls on ``layer`` are outstanding (SD8)."""
     return RT.state.counts.get(layer, 0)
+
+
+def global_state() -> GlobalState:
+    """The current global configuration, an immutable value: keep it to :func:`restore_globally` it.
+
+    Use it around work that must leave the process as it found it: a what-if simulation,
+    an operator session that is rolled back, a test.
+    """
+    return RT.state
+
+
+def restore_globally(saved: GlobalState) -> None:
+    """Make ``saved`` (from :func:`global_state`) the global configuration again, atomically.
+
+    Global layers, their counts and the dispatch and activation hooks become those of
+    ``saved``; enter/exit hooks fire for the layers that leave or come back. Requested
+    inside a dispatch or ``critical()``, it waits for the end like any global change (SD9).
+    Scoped activations are untouched: they end with their ``with`` blocks.
+    """
+    if not _defer([("restore", saved)]):
+        _apply([("restore", saved)])
 
 
 # ---------------------------------------------------------------- deferral (SD9)
 
 
 def _in_dispatch(skip: int = 2) -> bool:
-    """Is a dispatch chain running in this thread/task? (Walks the stack: requests are rare.)"""
+    """Is a dispatch running in this thread/task? (Walks the stack: requests are rare.)"""
     f: Any = sys._getframe(skip)
-    codes = DISPATCH_CODES
+    codes = _dispatch_codes
     while f is not None:
         if f.f_code in codes:
             return True
@@ -374,7 +285,10 @@ def _in_dispatch(skip: int = 2) -> bool:
 
 
 def flush_if_outermost() -> None:
-    """Called when a dispatch ends while requests are queued somewhere."""
+    """Apply the requests queued in this thread/task if no dispatch is running any more.
+
+    Called by the dispatchers when a dispatch ends while requests are queued somewhere.
+    """
     q = _queue.get()
     if not q or _critical.get() or _in_dispatch(3):  # 3: above the dispatch that is ending
         return
@@ -386,29 +300,24 @@ def flush_if_outermost() -> None:
         _apply(changes)
     for op, fn in q:  # safe-point callbacks run after the changes queued before them
         if op == "call":
-            fn()  # type: ignore[operator]
+            fn()
 
 
 def at_safe_point(fn: Callable[[], object]) -> None:
     """Run ``fn`` at the next safe point: now if no dispatch runs in this thread/task, else
     when the outermost one ends -- never in the middle of a step (SD15, checklist F42).
 
-    For optional policies such as re-evaluating obligations when a hedge predicate changes.
+    For optional policies such as re-evaluating a decision when a hedge predicate changes.
     """
-    if _critical.get() or _in_dispatch():
-        q = _queue.get()
-        if q is None:
-            q = []
-            _queue.set(q)
-        q.append(("call", fn))  # type: ignore[arg-type]
-        with _lock:
-            RT.queued += 1
-        return
-    fn()
+    if not _defer([("call", fn)]):
+        fn()
 
 
 class critical:
-    """Defer global (de)activations made in the block until it ends (SD9)."""
+    """``with critical():`` defers global (de)activations made in the block until it ends (SD9).
+
+    Use it to make several global changes take effect together, as one step.
+    """
 
     def __enter__(self) -> critical:
         self._token = _critical.set(_critical.get() + 1)
@@ -423,71 +332,34 @@ class critical:
 # ---------------------------------------------------------------- hooks
 
 
-def add_activation_hook(hook: Callable[[Layer, str], None]) -> Callable[[], None]:
-    """``hook(layer, "global" | "scoped")`` runs before each activation; raising vetoes it."""
+def _set_hooks(dispatch: tuple[DispatchHook, ...], activation: tuple[ActivationHook, ...]) -> None:
+    g = RT.state
+    RT.state = replace(g, version=g.version + 1, dispatch_hooks=dispatch, activation_hooks=activation)
+
+
+def add_activation_hook(hook: ActivationHook) -> Callable[[], None]:
+    """``hook(layer, "global" | "scoped")`` runs before each activation; raising vetoes it (E37).
+
+    Returns a function that removes the hook. Use it for access control or constraints
+    that the groups cannot express.
+    """
     with _lock:
-        RT.activation_hooks = (*RT.activation_hooks, hook)
-    hooks_changed()
+        _set_hooks(RT.state.dispatch_hooks, (*RT.state.activation_hooks, hook))
 
     def remove() -> None:
         with _lock:
-            RT.activation_hooks = tuple(h for h in RT.activation_hooks if h is not hook)
-        hooks_changed()
+            _set_hooks(RT.state.dispatch_hooks, tuple(h for h in RT.state.activation_hooks if h is not hook))
 
     return remove
 
 
-# ---------------------------------------------------------------- capture and replay (SD17)
-
-F = TypeVar("F", bound=Callable[..., Any])
-
-
-class Snapshot:
-    """A captured explicit composition (``snapshot()``)."""
-
-    __slots__ = ("frame", "layers")
-
-    def __init__(self, layers: tuple[Layer, ...]) -> None:
-        self.layers = layers
-        self.frame = Frame((), frozenset(), layers)
-
-    def __repr__(self) -> str:
-        return f"Snapshot({[la.name for la in self.layers]})"
-
-
-def snapshot() -> Snapshot:
-    return Snapshot(active_layers())
-
-
-def run_with(snap: Snapshot, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Any:
-    """Run ``fn`` under the captured composition, whatever is active now."""
-    token = _dyn.set(snap.frame)
-    try:
-        return fn(*args, **kwargs)
-    finally:
-        _dyn.reset(token)
-
-
-def bind(fn: F) -> F:
-    """A callable that always runs under the composition current when ``bind`` was called.
-
-    For executors, plain threads and middleware callbacks, which do not carry contextvars.
-    """
-    snap = snapshot()
-
-    def bound(*args: Any, **kwargs: Any) -> Any:
-        return run_with(snap, fn, *args, **kwargs)
-
-    bound.__wrapped__ = fn  # type: ignore[attr-defined]
-    return bound  # type: ignore[return-value]
-
-
-def reset_for_tests() -> None:
-    """Forget every global activation and hook (tests only)."""
+def add_dispatch_hook(hook: DispatchHook) -> Callable[[], None]:
+    """Install ``hook(record)`` for every dispatch; returns its remover (``on_dispatch`` is the face)."""
     with _lock:
-        RT.state = GlobalState(RT.state.version + 1, (), {})
-        RT.dispatch_hooks = ()
-        RT.activation_hooks = ()
-    _queue.set(None)
-    _dyn.set(EMPTY)
-    hooks_changed()
+        _set_hooks((*RT.state.dispatch_hooks, hook), RT.state.activation_hooks)
+
+    def remove() -> None:
+        with _lock:
+            _set_hooks(tuple(h for h in RT.state.dispatch_hooks if h is not hook), RT.state.activation_hooks)
+
+    return remove

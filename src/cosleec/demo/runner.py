@@ -16,22 +16,25 @@ from rich.console import Console
 from rich.text import Text
 
 from cosleec.demo.assistive_care import scenario, tasks
-from cosleec.runtime import Manager, RuntimeEvent, VirtualClock
-from cosleec.runtime.audit import AuditLog
-from cosleec.scenario import Step, play
+from cosleec.demo.player import Step, play
+from cosleec.runtime import AuditLog, Manager, RuntimeEvent, VirtualClock
 
 
 def rules_path() -> str:
+    """Path of the demo's ``rules.sleec`` in the installed package; give it to a Manager or a node."""
     return str(resources.files("cosleec.demo.assistive_care").joinpath("rules.sleec"))
 
 
 @dataclass
 class Run:
+    """What :func:`run` leaves: the (closed) Manager, the simulated robot, every runtime event in order."""
+
     manager: Manager
     robot: tasks.Robot
     events: list[RuntimeEvent] = field(default_factory=list)
 
     def decisions(self) -> list[dict[str, Any]]:
+        """The decision records (JSON form), in order, for ``scenario.outcomes``."""
         return [e.data for e in self.events if e.kind == "decision"]
 
 
@@ -43,10 +46,16 @@ def run(
     on_step: Callable[[float, Step], None] | None = None,
     on_event: Callable[[RuntimeEvent], None] | None = None,
 ) -> Run:
+    """Play ``steps`` (the scripted day by default) against an embedded Manager on a virtual clock.
+
+    The demo's tasks are bound and checked first. Step kinds: ``set``, ``event``,
+    ``advance`` (then a tick), ``request``, and ``fail``/``recover`` to make a robot action
+    fail or work again. ``on_step(now, step)`` runs before each step, ``on_event`` for
+    every runtime event; ``audit`` names a JSON Lines audit trail. The Manager is closed
+    before returning.
+    """
     clock = VirtualClock()
-    manager = Manager(
-        rules_path(), clock=clock, semantics=semantics, audit=AuditLog(audit) if audit else None
-    )
+    manager = Manager.from_file(rules_path(), clock=clock, semantics=semantics, audit=AuditLog(audit) if audit else None)
     robot = tasks.install(manager)
     manager.start()
     result = Run(manager, robot)
@@ -94,6 +103,7 @@ class Display:
         self.time = 0.0
 
     def step(self, t: float, step: Step) -> None:
+        """Print the heading of one scenario step at time ``t`` (seconds), with its note."""
         self.time = t
         kind, arg, note = step
         icon = {"set": "▶", "event": "⚡", "advance": "⏱", "request": "?"}.get(kind, "·")
@@ -111,6 +121,7 @@ class Display:
         self.out.print(head)
 
     def event(self, ev: RuntimeEvent) -> None:
+        """Print one runtime event; pending obligations and ``task-failed`` events are not shown."""
         d = ev.data
         pad = "        "
         if ev.kind == "context":
@@ -156,6 +167,10 @@ class Display:
 
 
 def main(as_json: bool = False, semantics: str = "last-wins", audit: str | None = None) -> int:
+    """``cosleec demo``: play the scripted day and show it (``as_json``: one JSON line per runtime event).
+
+    Returns 0: checking the decisions against ``scenario.EXPECTED`` is the tests' job.
+    """
     if as_json:
 
         def emit(ev: RuntimeEvent) -> None:

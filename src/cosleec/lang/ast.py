@@ -94,11 +94,6 @@ class Not:
     span: Span = _span()
 
 
-BoolOp: TypeAlias = Literal["and", "or"]
-ArithOp: TypeAlias = Literal["+", "-", "*"]
-RelOp: TypeAlias = Literal["<", "<=", ">", ">=", "=", "<>"]
-
-
 @dataclass(frozen=True, slots=True)
 class BinOp:
     """``and``/``or`` (boolean) or ``+ - *`` (arithmetic)."""
@@ -123,7 +118,6 @@ Expr: TypeAlias = BoolLit | IntLit | DecimalLit | Name | Not | BinOp | Compare
 
 BOOL_OPS = frozenset({"and", "or"})
 ARITH_OPS = frozenset({"+", "-", "*"})
-REL_OPS = frozenset({"<", "<=", ">", ">=", "=", "<>"})
 
 # ---------------------------------------------------------------------------- responses
 

@@ -8,13 +8,12 @@ literal's measure), exposed as a :class:`SymbolTable`.
 from __future__ import annotations
 
 import difflib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 from cosleec.lang import ast as A
-from cosleec.lang import visit
+from cosleec.lang import hedges, visit
 from cosleec.lang.diagnostics import DiagnosticSink
-from cosleec.lang.lexer import KEYWORDS
 
 # Names SLEEC-TK rejects because they clash with its CSP encoding (§3).
 TK_RESERVED = frozenset({"STOP", "P", "Q", "c", "d"})
@@ -31,6 +30,7 @@ class Options:
     strict_extensions: bool = False  # cosleec extensions (response conjunction) are errors
     lint: bool = False  # naming conventions and style suggestions
     tk_names: bool = False  # warn about names SLEEC-TK rejects
+    semantics: hedges.HedgeSemantics = hedges.HedgeSemantics.LAST_WINS  # for the hedge lint
 
 
 @dataclass
@@ -158,11 +158,10 @@ class Checker:
                 self.scale_literals |= seen
 
     def _check_name(self, name: str, span: A.Span) -> None:
-        if name in KEYWORDS:
-            self.sink.error(
-                "keyword-name", f"`{name}` is a reserved keyword and cannot be used as a name", span
-            )
-        elif self.opt.tk_names and name in TK_RESERVED:
+        # A keyword reaches the AST as a name only through SLEEC-TK's `^when` escape, which
+        # makes it a name (the language reference §3), or from the paper notation, which does
+        # not reserve the DSL's words: either way it is a name. The printer escapes it.
+        if self.opt.tk_names and name in TK_RESERVED:
             self.sink.warning(
                 "tk-reserved", f"SLEEC-TK rejects the name `{name}` (it clashes with its CSP encoding)", span
             )
@@ -289,35 +288,78 @@ class Checker:
         self._hedges(resp)
 
     def _hedges(self, resp: A.Response) -> None:
-        """Warn about hedge clauses that can never be the active one (last wins)."""
+        """Warn about hedge clauses that no situation selects, under the chosen semantics.
+
+        What is known statically -- conditions that are the literal `true` or `false`, and
+        conditions that imply another (equal, or a conjunct of it) -- is handed to
+        :func:`hedges.reachable`, which asks :func:`hedges.choose` about every situation
+        consistent with it; a clause it never chooses gets a warning naming the cause.
+        """
         ds = resp.defeaters
-        for i, d in enumerate(ds):
-            c = d.condition
-            if isinstance(c, A.BoolLit) and not c.value:
-                self.sink.warning(
-                    "unreachable-hedge", f"clause {i + 1}: condition is `false`, it never applies", d.span
+        if not ds:
+            return
+        conds = [d.condition for d in ds]
+        fixed = {i + 1: c.value for i, c in enumerate(conds) if isinstance(c, A.BoolLit)}
+
+        def implies(i: int, j: int) -> bool:
+            return conds[j - 1] == conds[i - 1] or conds[j - 1] in _conjuncts(conds[i - 1])
+
+        semantics = self.opt.semantics
+        chosen = hedges.reachable(len(ds), semantics, fixed=fixed, implies=implies)
+        if chosen is None:
+            return
+        for i in range(1, len(ds) + 1):
+            if i not in chosen:
+                self._unreachable(ds, i, fixed, implies)
+
+    def _unreachable(
+        self, ds: tuple[A.Defeater, ...], i: int, fixed: dict[int, bool], implies: Callable[[int, int], bool]
+    ) -> None:
+        """Report clause ``i`` as never chosen, with the clause that makes it so."""
+        span = ds[i - 1].span
+        if fixed.get(i) is False:
+            self.sink.warning("unreachable-hedge", f"clause {i}: condition is `false`, it never applies", span)
+            return
+        nested = self.opt.semantics is hedges.HedgeSemantics.NESTED
+        later = [i + 1] if nested and i < len(ds) else [] if nested else range(i + 1, len(ds) + 1)
+        for j in later:
+            if fixed.get(j) is True or implies(i, j):
+                why = (
+                    "and under nested semantics a clause applies only while the next one does not"
+                    if nested
+                    else "and the last clause that holds wins"
                 )
-                continue
-            for j in range(i + 1, len(ds)):
-                later = ds[j].condition
-                if later == c:
+                if ds[j - 1].condition == ds[i - 1].condition:
                     self.sink.warning(
                         "duplicate-hedge",
-                        f"clause {i + 1} has the same condition as clause {j + 1}, which wins; "
-                        f"clause {i + 1} never applies",
-                        d.span,
-                        related=(("the later clause", ds[j].span),),
+                        f"clause {i} has the same condition as clause {j}, which wins; clause {i} never applies",
+                        span,
+                        related=(("the later clause", ds[j - 1].span),),
                     )
-                    break
-                if (isinstance(later, A.BoolLit) and later.value) or later in _conjuncts(c):
+                else:
                     self.sink.warning(
                         "unreachable-hedge",
-                        f"clause {i + 1} never applies: whenever it holds, clause {j + 1} "
-                        "holds too and the last clause that holds wins",
-                        d.span,
-                        related=(("the later clause", ds[j].span),),
+                        f"clause {i} never applies: whenever it holds, clause {j} holds too {why}",
+                        span,
+                        related=(("the later clause", ds[j - 1].span),),
                     )
-                    break
+                return
+        if nested:
+            for k in range(1, i):
+                if fixed.get(k) is False:
+                    self.sink.warning(
+                        "unreachable-hedge",
+                        f"clause {i} never applies: under nested semantics it needs clause {k} to hold, "
+                        "whose condition is `false`",
+                        span,
+                        related=(("the earlier clause", ds[k - 1].span),),
+                    )
+                    return
+        self.sink.warning(
+            "unreachable-hedge",
+            f"clause {i} never applies under {self.opt.semantics} semantics: no situation selects it",
+            span,
+        )
 
     def _time_limit(self, lim: A.TimeLimit) -> None:
         hi = self._duration(lim.hi)

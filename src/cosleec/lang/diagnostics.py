@@ -11,6 +11,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 
+from cosleec.errors import UserError
 from cosleec.lang.ast import NO_SPAN, Span
 
 
@@ -78,16 +79,25 @@ class Diagnostic:
         }
 
 
-class SleecError(Exception):
-    """Raised when a rule file cannot be used; carries every diagnostic found."""
+class SleecError(UserError):
+    """Raised when a rule file cannot be used; carries every diagnostic found.
+
+    Catch it around :func:`cosleec.lang.load` or ``RuleSet.from_file`` to show the user
+    every problem at once (:meth:`render` gives the compiler-style text with carets).
+    """
 
     def __init__(self, diagnostics: Sequence[Diagnostic], source: str | None = None) -> None:
         self.diagnostics = tuple(diagnostics)
         self.source = source
         errors = [d for d in self.diagnostics if d.is_error] or list(self.diagnostics)
-        super().__init__(errors[0].header() if errors else "invalid SLEEC specification")
+        first = errors[0] if errors else None
+        super().__init__(
+            first.header() if first is not None else "invalid SLEEC specification",
+            hint=(first.hint or "") if first is not None else "",
+        )
 
     def render(self) -> str:
+        """Every diagnostic, each with its source line and a caret under the problem."""
         return "\n".join(d.render(self.source) for d in self.diagnostics)
 
 

@@ -1,134 +1,99 @@
 """Which dialect a file is written in, and strict checking against one tool's grammar.
 
-cosleec reads the union of both dialects (sleec-language.md §2). Detection records the
-dialect a file uses; a *forced* dialect (``--dialect tk|legos``) reports every construct
-that tool's grammar would reject (§4.3, §4.4), for users who need a file the other tools
-accept too.
+cosleec reads the union of both dialects (the language reference §2). One walk over the AST
+(:func:`collect`) gathers the *dialect facts*: every construct that only one dialect has,
+with where it is. Detection (:func:`detect`), the mixed-dialect check (:func:`check_mixed`)
+and the strict modes (:func:`check_strict`, ``--dialect tk|legos``: what that tool's grammar
+would reject, §4.3 and §4.4) only read those facts.
 """
 
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
+from dataclasses import dataclass
 
 from cosleec.lang import ast as A
-from cosleec.lang import visit
 from cosleec.lang.diagnostics import DiagnosticSink
 
+Feature = tuple[str, A.Span]
+"""A construct (as a message names it) and where it is."""
+
 _BLOCK_COMMENT = re.compile(r"//[^\n]*|(/\*)")
+_ESCAPE = re.compile(r"//[^\n]*|/\*[\s\S]*?\*/|(\^)[A-Za-z_]")
 
 
-def legos_features(spec: A.Specification) -> Iterator[tuple[str, A.Span]]:
-    """Constructs only the LEGOS dialect has, with where they are."""
-    for kind in ("concern", "purpose", "relation"):
-        for b in spec.blocks:
-            if b.kind == kind:
-                yield f"a {kind} block", b.span
-    for e in _all_exprs(spec):
-        for s in visit.subexpressions(e):
-            if isinstance(s, A.Name) and (s.braced or s.arrow):
-                yield ("`{m}` measure braces" if s.braced else "`->C` constant reference"), s.span
-            elif isinstance(s, A.BinOp) and s.op in A.ARITH_OPS:
-                yield "arithmetic", s.span
-            elif isinstance(s, A.IntLit) and s.value < 0:
-                yield "a signed number", s.span
+@dataclass(frozen=True, slots=True)
+class DialectFacts:
+    """What one file uses that only one dialect has; use :func:`collect` to get them.
+
+    ``legos`` lists the constructs only LEGOS-SLEEC has, in the order detection cites them
+    (blocks, then conditions, deadlines, constants, responses); ``tk`` the constructs
+    LEGOS-SLEEC's grammar rejects; ``tk_rejects`` what else SLEEC-TK's grammar rejects,
+    as complete messages.
+    """
+
+    legos: tuple[Feature, ...]
+    tk: tuple[Feature, ...]
+    tk_rejects: tuple[Feature, ...]
+
+
+def collect(spec: A.Specification, text: str) -> DialectFacts:
+    """Walk ``spec`` (and scan ``text`` for comments and escapes) once for its dialect facts."""
+    w = _Walk({m.name for m in spec.measures})
+    blocks = [
+        (f"a {kind} block", b.span)
+        for kind in ("concern", "purpose", "relation")
+        for b in spec.blocks
+        if b.kind == kind
+    ]
+    for r in spec.rules:
+        w.condition(r.trigger.condition, w.trigger)
+        w.response(r.response)
+        if r.response.braced:
+            w.tk_other.append(("braces around the rule's response", r.response.span))
+    for s in (*spec.concerns, *spec.purposes):
+        cur: A.Situation | None = s
+        while cur is not None:
+            w.condition(cur.trigger.condition, w.trigger)
+            for resp in cur.responses:
+                w.response(resp)
+            cur = cur.meanwhile
+    for rel in spec.relations:
+        w.relation(rel)
+    constants: list[Feature] = []
     for c in spec.constants:
         if c.arrow:
-            yield "`-> C` in a constant", c.span
+            constants.append(("`-> C` in a constant", c.span))
         if isinstance(c.value, int) and c.value < 0:
-            yield "a signed number", c.span
-    for resp in visit.all_responses(spec):
-        for r in visit.responses(resp):
-            for item in r.items:
-                occ = item.occurrence
-                if occ.eventually:
-                    yield "`eventually`", occ.span
-                if occ.limit is not None and occ.limit.lo is not None:
-                    yield "a `within [a, b]` interval", occ.limit.span
-                if item.alternative is not None:
-                    yield "`else`", item.alternative.span
-                if occ.negated and occ.limit is None:
-                    yield "an untimed `not E`", occ.span
-                if item.otherwise is not None and (occ.negated or occ.limit is None):
-                    yield "`otherwise` after a prohibition or an untimed response", item.otherwise.span
+            constants.append(("a signed number", c.span))
+        elif isinstance(c.value, str) and not c.arrow:
+            w.tk_other.append((f"constant reference without `->` (LEGOS writes `-> {c.value}`)", c.span))
+    legos = (*blocks, *w.trigger[0], *w.unless[0], *w.relations[0], *w.deadline[0], *constants, *w.items)
+    tk = (
+        *_text_features(text),
+        *w.trigger[1],
+        *w.unless[1],
+        *w.relations[1],
+        *w.deadline[1],
+        *w.tk_other,
+    )
+    return DialectFacts(legos, tk, tuple(w.tk_rejects))
 
 
-def tk_features(spec: A.Specification, text: str) -> Iterator[tuple[str, A.Span]]:
-    """Constructs the LEGOS grammar rejects (bare measures, loose operators, /* */...)."""
-    for m in _BLOCK_COMMENT.finditer(text) if "/*" in text else ():
-        if m.group(1):
-            line = text.count("\n", 0, m.start()) + 1
-            col = m.start() - (text.rfind("\n", 0, m.start()) + 1) + 1
-            yield "a `/* */` comment", A.Span(line, col, line, col + 2)
-    measures = {m.name for m in spec.measures}
-    for e in _all_exprs(spec):
-        for s in visit.subexpressions(e):
-            if isinstance(s, A.Name) and s.name in measures and not s.braced:
-                yield f"bare measure `{s.name}` (LEGOS writes `{{{s.name}}}`)", s.span
-            if isinstance(s, A.BinOp | A.Compare) and not s.parenthesized:
-                yield f"`{s.op}` outside its own parentheses", s.span
-            elif isinstance(s, A.Name) and s.parenthesized:
-                yield f"`({s.name})`, a lone name in parentheses (LEGOS writes it without)", s.span
-            elif isinstance(s, A.Not) and not s.parenthesized:
-                yield "`not` outside parentheses (LEGOS writes `(not X)`)", s.span
-    for c in spec.constants:
-        if isinstance(c.value, str) and not c.arrow:
-            yield f"constant reference without `->` (LEGOS writes `-> {c.value}`)", c.span
-    for r in spec.rules:
-        if r.response.braced:
-            yield "braces around the rule's response", r.response.span
-
-
-def _all_exprs(spec: A.Specification) -> Iterator[A.Expr]:
-    yield from visit.conditions(spec)
-    for d in visit.all_durations(spec):
-        yield d.value
-
-
-def detect(spec: A.Specification) -> tuple[A.Dialect, tuple[str, A.Span] | None]:
+def detect(facts: DialectFacts) -> tuple[A.Dialect, Feature | None]:
     """LEGOS if the file uses anything only LEGOS has (returned as the evidence); else TK.
 
     Files that both tools accept (no measure in any condition, say) count as TK.
     """
-    for evidence in legos_features(spec):
-        return A.Dialect.LEGOS, evidence
+    if facts.legos:
+        return A.Dialect.LEGOS, facts.legos[0]
     return A.Dialect.TK, None
 
 
-def _tk_free(e: A.Expr, measures: set[str]) -> bool:
-    """Is this expression written the LEGOS way throughout? (A plain recursion: the common
-    answer, yes, is found without building anything.)"""
-    t = type(e)
-    if t is A.Name:
-        return not e.parenthesized and (e.braced or e.name not in measures)  # type: ignore[union-attr]
-    if t is A.BinOp or t is A.Compare:
-        return (
-            e.parenthesized  # type: ignore[union-attr]
-            and _tk_free(e.left, measures)  # type: ignore[union-attr]
-            and _tk_free(e.right, measures)  # type: ignore[union-attr]
-        )
-    if t is A.Not:
-        return e.parenthesized and _tk_free(e.operand, measures)  # type: ignore[union-attr]
-    return True
-
-
-def _looks_legos(spec: A.Specification, text: str) -> bool:
-    if "/*" in text:
-        return False  # maybe a block comment: let the detailed pass decide
-    measures = {m.name for m in spec.measures}
-    if any(isinstance(c.value, str) and not c.arrow for c in spec.constants):
-        return False
-    if any(r.response.braced for r in spec.rules):
-        return False
-    return all(_tk_free(e, measures) for e in _all_exprs(spec))
-
-
-def check_mixed(spec: A.Specification, evidence: tuple[str, A.Span], text: str, sink: DiagnosticSink) -> None:
+def check_mixed(facts: DialectFacts, evidence: Feature, sink: DiagnosticSink) -> None:
     """A file with LEGOS-only syntax must not also use what LEGOS rejects: no tool reads a mix."""
-    if _looks_legos(spec, text):
-        return  # the usual case, settled by the fast check
     what_legos, where = evidence
-    for what, span in tk_features(spec, text):
+    for what, span in facts.tk:
         sink.error(
             "mixed-dialect",
             f"{what} is TK syntax, but this file also uses LEGOS syntax ({what_legos} at line "
@@ -138,24 +103,137 @@ def check_mixed(spec: A.Specification, evidence: tuple[str, A.Span], text: str, 
         )
 
 
-def check_strict(spec: A.Specification, dialect: A.Dialect, text: str, sink: DiagnosticSink) -> None:
+def check_strict(facts: DialectFacts, dialect: A.Dialect, sink: DiagnosticSink) -> None:
     """Report what ``dialect``'s own tool would reject."""
     if dialect is A.Dialect.TK:
-        for what, span in legos_features(spec):
+        for what, span in facts.legos:
             sink.error("dialect", f"{what} is not TK syntax (SLEEC-TK rejects it)", span)
-        for resp in visit.all_responses(spec):
-            for r in visit.responses(resp):
-                for item in r.items:
-                    occ = item.occurrence
-                    if occ.negated and occ.limit is not None and item.otherwise is not None:
-                        sink.error(
-                            "dialect",
-                            "SLEEC-TK allows no `otherwise` after `not E within T`",
-                            item.otherwise.span,
-                        )
-            for d in visit.durations(resp):
-                if not isinstance(d.value, A.IntLit | A.Name):
-                    sink.error("dialect", "SLEEC-TK deadlines are a number or a constant", d.span)
+        for message, span in facts.tk_rejects:
+            sink.error("dialect", message, span)
     elif dialect is A.Dialect.LEGOS:
-        for what, span in tk_features(spec, text):
+        for what, span in facts.tk:
             sink.error("dialect", f"{what} is not LEGOS syntax (LEGOS-SLEEC rejects it)", span)
+
+
+def _text_features(text: str) -> list[Feature]:
+    """TK syntax that leaves no trace in the AST: ``/* */`` comments and ``^`` escapes."""
+    found: list[Feature] = []
+    if "/*" in text:
+        for m in _BLOCK_COMMENT.finditer(text):
+            if m.group(1):
+                found.append(("a `/* */` comment", _span_at(text, m.start(), 2)))
+    if "^" in text:
+        for m in _ESCAPE.finditer(text):
+            if m.group(1):
+                found.append(("a `^` keyword escape", _span_at(text, m.start(), 1)))
+    return found
+
+
+def _span_at(text: str, pos: int, width: int) -> A.Span:
+    line = text.count("\n", 0, pos) + 1
+    col = pos - (text.rfind("\n", 0, pos) + 1) + 1
+    return A.Span(line, col, line, col + width)
+
+
+class _Walk:
+    """The one walk of :func:`collect`. Each kind of place (trigger conditions, ``unless``
+    conditions, relations, deadlines) keeps its own (LEGOS, TK) lists, so that the facts
+    come out grouped in a fixed order, whatever order the walk visits them in."""
+
+    def __init__(self, measures: set[str]) -> None:
+        self.measures = measures
+        self.trigger: tuple[list[Feature], list[Feature]] = ([], [])
+        self.unless: tuple[list[Feature], list[Feature]] = ([], [])
+        self.relations: tuple[list[Feature], list[Feature]] = ([], [])
+        self.deadline: tuple[list[Feature], list[Feature]] = ([], [])
+        self.items: list[Feature] = []  # LEGOS-only response forms
+        self.tk_other: list[Feature] = []
+        self.tk_rejects: list[Feature] = []
+
+    def response(self, r: A.Response) -> None:
+        """``r``, then the responses nested in it (pre-order, as the checker reads them)."""
+        for item in r.items:
+            occ = item.occurrence
+            if occ.eventually:
+                self.items.append(("`eventually`", occ.span))
+            if occ.limit is not None and occ.limit.lo is not None:
+                self.items.append(("a `within [a, b]` interval", occ.limit.span))
+            if item.alternative is not None:
+                self.items.append(("`else`", item.alternative.span))
+            if occ.negated and occ.limit is None:
+                self.items.append(("an untimed `not E`", occ.span))
+            if item.otherwise is not None:
+                if occ.negated or occ.limit is None:
+                    self.items.append(
+                        ("`otherwise` after a prohibition or an untimed response", item.otherwise.span)
+                    )
+                if occ.negated and occ.limit is not None:
+                    self.tk_rejects.append(
+                        ("SLEEC-TK allows no `otherwise` after `not E within T`", item.otherwise.span)
+                    )
+            if occ.limit is not None:
+                for deadline in (occ.limit.lo, occ.limit.hi):
+                    if deadline is not None:
+                        self.duration(deadline)
+                        if not isinstance(deadline.value, A.IntLit | A.Name):
+                            self.tk_rejects.append(
+                                ("SLEEC-TK deadlines are a number or a constant", deadline.span)
+                            )
+        for clause in r.defeaters:
+            self.condition(clause.condition, self.unless)
+        for item in r.items:
+            if item.otherwise is not None:
+                self.response(item.otherwise)
+            if item.alternative is not None:
+                self.response(item.alternative)
+        for clause in r.defeaters:
+            if clause.response is not None:
+                self.response(clause.response)
+
+    def duration(self, d: A.Duration) -> None:
+        self.condition(d.value, self.deadline)
+
+    def relation(self, rel: A.Relation) -> None:
+        if isinstance(rel, A.MeasureRelation):
+            self.condition(rel.first, self.relations)
+            self.condition(rel.second, self.relations)
+        elif isinstance(rel, A.EventMeasureRelation):
+            self.condition(rel.condition, self.relations)
+        elif isinstance(rel, A.UntilRelation):
+            self.condition(rel.trigger.condition, self.trigger)
+            self.condition(rel.condition, self.relations)
+            self.condition(rel.until_condition, self.relations)
+        elif isinstance(rel, A.ForRelation):
+            self.condition(rel.trigger.condition, self.trigger)
+            self.condition(rel.condition, self.relations)
+            self.duration(rel.duration)
+
+    def condition(self, e: A.Expr | None, into: tuple[list[Feature], list[Feature]]) -> None:
+        """The features of expression ``e``, node by node in pre-order, left first."""
+        if e is None:
+            return
+        legos, tk = into
+        t = type(e)
+        if t is A.Name:
+            n: A.Name = e  # type: ignore[assignment]
+            if n.braced or n.arrow:
+                legos.append(("`{m}` measure braces" if n.braced else "`->C` constant reference", n.span))
+            if n.name in self.measures and not n.braced:
+                tk.append((f"bare measure `{n.name}` (LEGOS writes `{{{n.name}}}`)", n.span))
+            if n.parenthesized:
+                tk.append((f"`({n.name})`, a lone name in parentheses (LEGOS writes it without)", n.span))
+        elif t is A.BinOp or t is A.Compare:
+            b: A.BinOp | A.Compare = e  # type: ignore[assignment]
+            if t is A.BinOp and b.op in A.ARITH_OPS:
+                legos.append(("arithmetic", b.span))
+            if not b.parenthesized:
+                tk.append((f"`{b.op}` outside its own parentheses", b.span))
+            self.condition(b.left, into)
+            self.condition(b.right, into)
+        elif t is A.Not:
+            neg: A.Not = e  # type: ignore[assignment]
+            if not neg.parenthesized:
+                tk.append(("`not` outside parentheses (LEGOS writes `(not X)`)", neg.span))
+            self.condition(neg.operand, into)
+        elif t is A.IntLit and e.value < 0:  # type: ignore[union-attr]
+            legos.append(("a signed number", e.span))

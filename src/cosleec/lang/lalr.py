@@ -1,115 +1,196 @@
-"""A tight LALR(1) driver over the tables and callbacks Lark computes from ``sleec.lark``.
+"""A tight LALR(1) driver over the table and callbacks Lark computes from a grammar.
 
 Why: Lark's own driver looks every reduction up by ``Rule``/``Token`` objects that are
-equal but not identical, so each step pays for several Python-level ``__eq__`` calls.
-Re-keying Lark's table once, by plain strings and precomputed ``(size, origin,
-callback)`` triples, roughly doubles parsing speed; the grammar, the table construction
-and the tree-building callbacks (``ChildFilter`` + our inline transformer) all stay
-Lark's.
+equal but not identical, so each step pays for several Python-level ``__eq__`` calls, and
+its tree builder wraps each callback in generic helpers. Re-keying Lark's table once, by
+plain strings and precomputed ``(size, origin, callback)`` triples, and calling the
+transformer directly, makes parsing more than twice as fast (benchmarks/parse_corpus.py
+measures it against plain Lark in the same run; the fast driver stays only while it keeps
+a 2x advantage). The grammar, the table construction and the tree shape all stay Lark's.
+
+Lark offers no public access to its table, so :func:`read_lark_tables` -- and nothing else
+in cosleec -- reads Lark's internals, for the version pinned in pyproject.toml.
+tests/unit/lang/test_parser_crosscheck.py holds the driver equal to plain Lark.
 
 The driver also does panic-mode error recovery, so that one run reports several syntax
 errors instead of stopping at the first.
+
+May import: lark (``Lark``; its internals only in :func:`read_lark_tables`), lexer.py.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
 from lark import Lark
-from lark.parsers.lalr_analysis import Shift
+
+from cosleec.lang.lexer import Production, Token
 
 END = "$END"
-BAD_CHAR = "$BADCHAR"
+"""The type of the end-of-input token (Lark's name for it)."""
+
+
+@dataclass(frozen=True, slots=True)
+class RuleShape:
+    """One grammar rule as Lark's tree builder treats it (read by :func:`read_lark_tables`)."""
+
+    origin: str  # the nonterminal it reduces to
+    name: str  # the transformer method that builds its value: the alias, else the origin
+    symbols: tuple[str, ...]
+    terminal: tuple[bool, ...]  # per symbol: is it a terminal
+    kept: tuple[bool, ...]  # per symbol: is it passed to the callback (filtered tokens are not)
+    placeholders: tuple[int, ...]  # Nones Lark inserts for absent `[x]` before each symbol and at the end
+    expand1: bool  # a `?rule`: a single child is returned unchanged
+    aliased: bool
+    template: bool  # expanded from a template
+    lark_callback: Callable[[list[Any]], Any]  # what Lark's own parser calls on reduction
+
+
+@dataclass(frozen=True)
+class Tables:
+    """An LALR table in plain data: a shift is the target state, a reduction its rule."""
+
+    start_states: dict[str, int]
+    end_states: dict[str, int]
+    states: dict[int, dict[str, int | RuleShape]]
+    rules: list[RuleShape]
+
+    def productions(self) -> list[Production]:
+        """The rules as the lexicon needs them (see lexer.Lexicon)."""
+        return [Production(r.origin, r.symbols) for r in self.rules]
+
+
+def read_lark_tables(lark: Lark) -> Tables:
+    """LARK INTERNALS -- the one place cosleec reads Lark beyond its public API.
+
+    Written against the Lark version pinned in pyproject.toml (1.3.x); any other version
+    may move these attributes, and tests/unit/lang/test_parser_crosscheck.py fails then.
+    Reads: the LALR parse table (``lark.parser.parser.parser.parse_table``), the callbacks
+    Lark's tree builder made for the transformer given to ``Lark`` (``.callbacks``), and
+    each rule's shape (``lark.rules``: origin, alias, expansion, options). Everything is
+    copied into plain data; the rest of cosleec never touches a Lark object but ``Lark``.
+    """
+    inner = lark.parser.parser.parser  # ParsingFrontend -> LALR_Parser -> _Parser
+    table = inner.parse_table
+    shapes: dict[Any, RuleShape] = {}
+    for rule in lark.rules:
+        opts = rule.options
+        n = len(rule.expansion)
+        if opts.empty_indices:
+            bits = "".join(str(int(b)) for b in opts.empty_indices)
+            placeholders = tuple(len(ones) for ones in bits.split("0"))
+        else:
+            placeholders = (0,) * (n + 1)
+        shapes[rule] = RuleShape(
+            origin=str(rule.origin.name),
+            name=str(rule.alias or rule.origin.name),
+            symbols=tuple(str(s.name) for s in rule.expansion),
+            terminal=tuple(bool(s.is_term) for s in rule.expansion),
+            kept=tuple(
+                opts.keep_all_tokens or not (s.is_term and getattr(s, "filter_out", False))
+                for s in rule.expansion
+            ),
+            placeholders=placeholders,
+            expand1=bool(opts.expand1),
+            aliased=rule.alias is not None,
+            template=bool(getattr(opts, "template_source", None)),
+            lark_callback=inner.callbacks[rule],
+        )
+    states: dict[int, dict[str, int | RuleShape]] = {}
+    for state, actions in table.states.items():
+        states[state] = {
+            str(term): (arg if str(action) == "Shift" else shapes[arg])
+            for term, (action, arg) in actions.items()
+        }
+    return Tables(dict(table.start_states), dict(table.end_states), states, list(shapes.values()))
 
 
 @dataclass(frozen=True, slots=True)
 class SyntaxProblem:
     """One syntax error: the token met and the terminals the parser would have taken."""
 
-    token: tuple[str, str, int, int, int]  # see lexer.Token; type END at end of input
+    token: Token  # type END at the end of input
     expected: frozenset[str]
 
 
-def direct_callback(rule: Any, transformer: Any) -> Any:
+def direct_callback(rule: RuleShape, transformer: Any) -> Callable[[list[Any]], Any] | None:
     """A callback for ``rule`` that does what Lark's tree builder does for it -- drop filtered
     tokens, insert ``None`` for absent ``[optional]`` parts, return a single child of a
     ``?rule`` unchanged, then call the transformer's method -- as one generated expression
-    instead of a chain of generic wrappers. Computed from the same rule metadata Lark uses
-    (``parse_tree_builder.maybe_create_child_filter``); None means "keep Lark's own callback"
-    (rules needing tree expansion or without a transformer method).
+    instead of a chain of generic wrappers. None means "keep Lark's own callback" (rules
+    needing tree expansion, or without a transformer method).
     """
-    name = str(rule.alias or rule.origin.name)
-    method = getattr(transformer, name, None)
-    opts = rule.options
-    expansion = rule.expansion
-    if method is None or getattr(opts, "template_source", None):
+    method = getattr(transformer, rule.name, None)
+    if method is None or rule.template:
         return None
-    empty = opts.empty_indices
-    if empty:
-        bits = "".join(str(int(b)) for b in empty)
-        nones = [len(ones) for ones in bits.split("0")]
-    else:
-        nones = [0] * (len(expansion) + 1)
     parts: list[str] = []
-    for i, sym in enumerate(expansion):
-        parts += ["None"] * nones[i]
-        if opts.keep_all_tokens or not (sym.is_term and sym.filter_out):
-            if not sym.is_term and sym.name.startswith("_"):
+    for i, kept in enumerate(rule.kept):
+        parts += ["None"] * rule.placeholders[i]
+        if kept:
+            if _inlined(rule, i):
                 return None  # an inlined helper whose children would be spliced in
             parts.append(f"s[{i}]")
-    parts += ["None"] * nones[len(expansion)]
-    if opts.expand1 and not rule.alias and len(parts) == 1:
+    parts += ["None"] * rule.placeholders[len(rule.kept)]
+    if rule.expand1 and not rule.aliased and len(parts) == 1:
         src = f"lambda s: {parts[0]}"  # a `?rule` with one child returns it unchanged
     else:
         src = f"lambda s: m([{', '.join(parts)}])"
-    return eval(compile(src, f"<cosleec callback {name}>", "eval"), {"m": method})
+    fn: Callable[[list[Any]], Any] = eval(
+        compile(src, f"<cosleec callback {rule.name}>", "eval"), {"m": method}
+    )
+    return fn
 
 
 class CompiledLALR:
-    """Lark's LALR table for one start symbol, re-keyed for speed."""
+    """Lark's LALR table for one start symbol, re-keyed for speed.
 
-    def __init__(self, lark: Lark, start: str = "start", transformer: Any = None) -> None:
-        inner = lark.parser.parser.parser  # ParsingFrontend -> LALR_Parser -> _Parser
-        table = inner.parse_table
-        callbacks = dict(inner.callbacks)
-        if transformer is not None:  # same behaviour, without Lark's generic per-call wrappers
-            for rule in lark.rules:
-                fast = direct_callback(rule, transformer)
-                if fast is not None:
-                    callbacks[rule] = fast
-        self.start_state: int = table.start_states[start]
-        self.end_state: int = table.end_states[start]
-        triples: dict[Any, tuple[int, str, Any]] = {}
+    Use :meth:`parse` on the tokens of :meth:`cosleec.lang.lexer.Lexicon.tokens`. With
+    ``transformer``, reductions call it directly (see :func:`direct_callback`); without,
+    they call Lark's own callbacks (built for the transformer given to ``Lark``).
+    """
+
+    def __init__(self, tables: Tables, start: str = "start", transformer: Any = None) -> None:
+        self.start_state: int = tables.start_states[start]
+        self.end_state: int = tables.end_states[start]
+        triples: dict[int, tuple[int, str, Any]] = {}
         self.states: dict[int, dict[str, Any]] = {}
-        for state, actions in table.states.items():
+        for state, actions in tables.states.items():
             row: dict[str, Any] = {}
-            for term, (action, arg) in actions.items():
-                if action is Shift:
-                    row[str(term)] = arg  # a shift (or goto): the target state, a bare int
-                else:
-                    key = id(arg)
-                    if key not in triples:
-                        # A `?rule` reducing exactly one kept child returns that child
-                        # unchanged: no callback needed (None marks the pass-through).
-                        unit = (
-                            len(arg.expansion) == 1
-                            and arg.options.expand1
-                            and arg.alias is None
-                            and not arg.expansion[0].is_term
-                            and not arg.expansion[0].name.startswith("_")
-                        )
-                        cb = None if unit else callbacks[arg]
-                        triples[key] = (len(arg.expansion), str(arg.origin.name), cb)
-                    row[str(term)] = triples[key]  # a reduction: (size, origin, callback)
+            for term, act in actions.items():
+                if type(act) is int:
+                    row[term] = act  # a shift (or goto): the target state, a bare int
+                    continue
+                assert isinstance(act, RuleShape)
+                key = id(act)
+                if key not in triples:
+                    # A `?rule` reducing exactly one kept child returns that child
+                    # unchanged: no callback needed (None marks the pass-through).
+                    unit = (
+                        len(act.symbols) == 1
+                        and act.expand1
+                        and not act.aliased
+                        and not act.terminal[0]
+                        and not _inlined(act, 0)
+                    )
+                    cb = None
+                    if not unit:
+                        fast = direct_callback(act, transformer) if transformer is not None else None
+                        cb = fast or act.lark_callback
+                    triples[key] = (len(act.symbols), act.origin, cb)
+                row[term] = triples[key]  # a reduction: (size, origin, callback)
             self.states[state] = row
         self.units: dict[tuple[int, int, str], int] = {}  # memo of unit-reduction chains
+        self.terminals = frozenset(
+            {END, *(sym for r in tables.rules for sym, term in zip(r.symbols, r.terminal) if term)}
+        )
 
     def expected(self, state: int) -> frozenset[str]:
-        return frozenset(t for t in self.states[state] if t.isupper() or t.startswith("$"))
+        """The terminals the parser accepts in ``state``."""
+        return frozenset(t for t in self.states[state] if t in self.terminals)
 
-    def parse(self, tokens: Iterable[Any], problems: list[SyntaxProblem]) -> Any:
+    def parse(self, tokens: Iterable[Token], problems: list[SyntaxProblem]) -> Any:
         """Parse; on error, record a :class:`SyntaxProblem`, skip the token and go on.
 
         Returns the value of the start symbol, or None when any error occurred (a tree
@@ -119,23 +200,23 @@ class CompiledLALR:
         """
         states = self.states
         units = self.units
-        sstack: list[int] = [self.start_state]
+        state = self.start_state  # always sstack[-1]
+        sstack: list[int] = [state]
         vstack: list[Any] = []
         quiet = 0
-        last: Any = None
+        recovered: Token | None = None  # the token an error recovery was last tried for
+        tok: Token | None = None
         for tok in tokens:
-            last = tok
             t = tok[0]
-            recovered = False
             while True:
-                act = states[sstack[-1]].get(t)
+                act = states[state].get(t)
                 if act is None:
                     if quiet == 0:
-                        problems.append(SyntaxProblem(tok, self.expected(sstack[-1])))
+                        problems.append(SyntaxProblem(tok, self.expected(state)))
                     quiet = 3
-                    if recovered:  # resynchronising did not help: drop the token
+                    if recovered is tok:  # resynchronising did not help: drop the token
                         break
-                    recovered = True
+                    recovered = tok
                     # Pop to the nearest state that can take this token (its values go
                     # with it, so the stacks stay a viable prefix); none: drop the token.
                     depth = len(sstack) - 1
@@ -145,10 +226,12 @@ class CompiledLALR:
                         break
                     del sstack[depth:]
                     del vstack[depth - 1 :]
+                    state = sstack[-1]
                     continue
                 if type(act) is int:  # shift
                     sstack.append(act)
                     vstack.append(tok)
+                    state = act
                     if quiet:
                         quiet -= 1
                     break
@@ -158,7 +241,7 @@ class CompiledLALR:
                     # whole chain of them (primary -> term -> ... -> condition) ends in a state
                     # that depends only on (state below, top state, lookahead): memoized.
                     below = sstack[-2]
-                    key = (below, sstack[-1], t)
+                    key = (below, state, t)
                     top = units.get(key)
                     if top is None:
                         top = states[below][origin]
@@ -168,7 +251,7 @@ class CompiledLALR:
                                 break
                             top = states[below][nxt[1]]
                         units[key] = top
-                    sstack[-1] = top
+                    sstack[-1] = state = top
                     continue
                 if size:
                     s = vstack[-size:]
@@ -177,8 +260,12 @@ class CompiledLALR:
                 else:
                     s = []
                 vstack.append(cb(s))
-                sstack.append(states[sstack[-1]][origin])
-        end = (END, "", 0, last[3], last[4] + len(last[1])) if last is not None else (END, "", 0, 1, 1)
+                state = states[sstack[-1]][origin]
+                sstack.append(state)
+        if tok is not None:
+            end = Token(END, "", 0, tok.line, tok.column + len(tok.value))
+        else:
+            end = Token(END, "", 0, 1, 1)
         while True:
             act = states[sstack[-1]].get(END)
             if act is None:
@@ -199,3 +286,8 @@ class CompiledLALR:
             vstack.append(value)
             if sstack[-1] == self.end_state:
                 return None if problems else value
+
+
+def _inlined(rule: RuleShape, i: int) -> bool:
+    """Is symbol ``i`` an `_rule`, whose children Lark's tree builder splices into the parent?"""
+    return not rule.terminal[i] and rule.symbols[i].startswith("_")

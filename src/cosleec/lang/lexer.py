@@ -1,175 +1,267 @@
-"""A fast scanner that feeds Lark's LALR parser.
+"""The words and marks of SLEEC, read from a grammar's terminals, and the fast scanner built on them.
 
-Why not Lark's own lexer: it spends about 3.6 µs per token here (a Python-level Token,
-line bookkeeping and keyword callbacks per token), which alone caps parsing well below
-the project's 20,000 rules/s target. This scanner uses one compiled regular expression
-and a keyword table, both *derived from the grammar's own terminal definitions*, so the
-``.lark`` file stays the single source of truth for the language.
+Why a scanner of our own: Lark's lexer spends about 3.6 µs per token (a Python ``Token``
+object, line bookkeeping, a keyword callback), which alone caps parsing well below the
+project's 20,000 rules/s target. This one runs a single compiled regular expression over
+the whole text. Nothing in it is written by hand: the keywords, the punctuation, the token
+patterns, the layout (whitespace and comments) and the relation-only keywords all come
+from the ``.lark`` grammar, so the grammar stays the single source of truth.
 
-Keyword reservation follows sleec-language.md §3: the ordinary keywords are reserved
-everywhere; the relation keywords (``witness``, ``imply``, ``until``, ...) only between
-``relation_start`` and ``relation_end``.
+What a lexicon decides, the way Lark's own lexer decides it (the cross-check test,
+tests/unit/lang/test_parser_crosscheck.py, holds the two equal):
+
+- terminals are tried in Lark's order (priority, then longest possible match, ...);
+- a string terminal that the name pattern matches entirely (``"when"``) is a *keyword*:
+  a word scanned as a name becomes that keyword -- case-insensitively for ``"when"i``;
+- keyword reservation (the language reference §3): keywords are reserved everywhere, except
+  the *contextual* ones, which only the rules inside a relation block use (``witness``,
+  ``until``, ...): those are reserved only between ``relation_start`` and ``relation_end``.
+
+May import: lark (public API: ``Lark.terminals``, ``lexer_conf.ignore``, ``PostLex``).
 """
 
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
-from typing import Any
+from collections.abc import Collection, Iterable, Iterator, Mapping
+from typing import Any, NamedTuple
 
-from lark.lexer import Lexer, PatternStr
-
-# Reserved only inside a relation block (§3 "contextual keywords"), plus the two
-# non-standard sleecvalDef relation words that the grammar parses only to reject them.
-CONTEXTUAL_KEYWORDS = frozenset(
-    {
-        "witness",
-        "mutualExclusive",
-        "equal",
-        "happenBefore",
-        "isContradictoryWith",
-        "imply",
-        "iff",
-        "opposite",
-        "invariant",
-        "causation",
-        "includes",
-        "forbid",
-        "until",
-        "for",
-        "conflict",
-        "effect",
-    }
-)
-
-# Reserved everywhere (sleec-language.md §3); the checker rejects them as names.
-KEYWORDS = frozenset(
-    [
-        "def_start",
-        "def_end",
-        "rule_start",
-        "rule_end",
-        "concern_start",
-        "concern_end",
-        "purpose_start",
-        "purpose_end",
-        "relation_start",
-        "relation_end",
-        "event",
-        "measure",
-        "constant",
-        "boolean",
-        "numeric",
-        "scale",
-        "when",
-        "then",
-        "and",
-        "or",
-        "not",
-        "within",
-        "otherwise",
-        "unless",
-        "else",
-        "eventually",
-        "exists",
-        "while",
-        "meanwhile",
-        "true",
-        "false",
-        "seconds",
-        "minutes",
-        "hours",
-        "days",
-    ]
-)
+from lark import Token as LarkToken
+from lark.lark import PostLex
 
 BAD_CHAR = "$BADCHAR"
-
-_IDENT = re.compile(r"\^?[A-Za-z_][A-Za-z0-9_]*\Z")
-
-# One findall over the whole text (it runs in C): each match is the layout (whitespace and
-# comments) before a token, then the token in exactly one group. BAD catches any other
-# character so that nothing is skipped silently; END lets trailing layout match.
-_SCAN = re.compile(
-    r"((?:[ \t\f\r\n\ufeff]+|//[^\n]*|/\*[^*]*\*+(?:[^/*][^*]*\*+)*/)*)"
-    r"(?:(\^?[A-Za-z_][A-Za-z0-9_]*)"
-    r"|(->|<=|>=|<>|[{}()\[\],:=<>+\-*])"
-    r"|([0-9]+(?:\.[0-9]+)?)"
-    r"|(\Z)"
-    r"|([\s\S]))"
-)
-
-# A token is a plain tuple (type, value, start_pos, line, column): building it costs a
-# fraction of a class instance, and lexing is on the hot path of parsing.
-Token = tuple[str, str, int, int, int]
+"""The type of a character no terminal matches (the parser reports it)."""
 
 
-class SleecLexer(Lexer):
-    """Scans SLEEC text into the grammar's terminals (see module docstring)."""
+class Token(NamedTuple):
+    """One token: the attributes the transformer reads, named as on Lark's own ``Token``.
 
-    def __init__(self, lexer_conf: Any) -> None:
-        self.keywords: dict[str, str] = {}
-        self.contextual: dict[str, str] = {}
-        self.punct: dict[str, str] = {}
-        # The paper notation's keywords are case-insensitive ("when"i): look names up lowered.
-        self.fold_case = False
-        for term in lexer_conf.terminals:
-            pat = term.pattern
-            if not isinstance(pat, PatternStr):
-                continue
-            if _IDENT.match(pat.value):
-                table = self.contextual if pat.value in CONTEXTUAL_KEYWORDS else self.keywords
-                if "i" in pat.flags:
-                    self.fold_case = True
-                    table[pat.value.lower()] = term.name
-                else:
-                    table[pat.value] = term.name
+    A named tuple because it is built at C speed, and lexing is on the hot path of parsing;
+    the transformer reads ``type``, ``value``, ``line`` and ``column`` and so works on the
+    tokens of either lexer.
+    """
+
+    type: str
+    value: str
+    start_pos: int
+    line: int
+    column: int
+
+
+class Production(NamedTuple):
+    """A grammar rule as the lexicon needs it: its name and the names of its symbols."""
+
+    origin: str
+    symbols: tuple[str, ...]
+
+
+_new = tuple.__new__
+_MEMO_LIMIT = 100_000
+
+
+class Lexicon:
+    """The lexical rules of one grammar, and a scanner applying them (see module docstring).
+
+    Build one per grammar from ``Lark.terminals``, the names of the ignored terminals
+    (``Lark.lexer_conf.ignore``) and the grammar's rules; ``contextual_block`` names the rule
+    whose inner keywords are reserved only inside it. Use :meth:`tokens` to scan text for
+    the fast driver, and a :class:`ContextualKeywords` post-lexer to have Lark's own lexer
+    apply the same reservation.
+    """
+
+    def __init__(
+        self,
+        terminals: Iterable[Any],
+        ignore: Collection[str],
+        productions: Iterable[Production],
+        contextual_block: str | None = None,
+    ) -> None:
+        terminals, productions = list(terminals), list(productions)
+        terms = [t for t in terminals if t.name not in ignore]
+        regexps = [t for t in terms if t.pattern.type == "re"]
+        strings = [t for t in terms if t.pattern.type == "str"]
+        exact: dict[str, str] = {}  # word -> keyword terminal
+        folded: dict[str, str] = {}  # lower-cased word -> case-insensitive keyword terminal
+        owner: dict[str, str] = {}  # keyword terminal -> the regexp terminal that scans it
+        punct: dict[str, str] = {}
+        for s in strings:
+            value = s.pattern.value
+            for r in regexps:  # as Lark does: the pattern's first match is the whole string
+                m = re.match(r.pattern.to_regexp(), value)
+                if s.priority == r.priority and m is not None and m.group() == value:
+                    if "i" in s.pattern.flags:
+                        folded[value.lower()] = s.name
+                    else:
+                        exact[value] = s.name
+                    owner[s.name] = r.name
+                    break
             else:
-                self.punct[pat.value] = term.name
-        self.relation_start = self.keywords.get("relation_start", "RELATION_START")
-        self.relation_end = self.keywords.get("relation_end", "RELATION_END")
+                punct[value] = s.name
+        words = {**exact, **folded}
+        contextual = _contextual(set(words.values()), productions, contextual_block)
+        #: Reserved everywhere (word -> terminal).
+        self.keywords: dict[str, str] = {w: t for w, t in words.items() if t not in contextual}
+        #: Reserved only inside the contextual block (word -> terminal).
+        self.contextual: dict[str, str] = {w: t for w, t in words.items() if t in contextual}
+        #: Punctuation (mark -> terminal).
+        self.punct = punct
+        #: The terminals that open and close the contextual block.
+        self.block_marks = _block_marks(contextual_block, productions)
+        #: A contextual keyword's terminal -> the terminal it is outside the block (a name).
+        self.relaxed = {t: owner[t] for t in self.contextual.values()}
+        self._exact, self._folded = exact, folded
+        self._owner = owner
+        # Lark's own order of trial: priority, then the longest possible match, ...
+        order = sorted(
+            (t for t in terms if t.name not in owner),
+            key=lambda t: (-t.priority, -t.pattern.max_width, -len(t.pattern.value), t.name),
+        )
+        self._classes: list[tuple[str, re.Pattern[str]]] = [
+            (t.name, re.compile(t.pattern.to_regexp())) for t in order
+        ]
+        layout = "|".join(t.pattern.to_regexp() for t in terminals if t.name in ignore)
+        tokens = "|".join(t.pattern.to_regexp() for t in order)
+        # One findall over the whole text (it runs in C): each match is the layout before a
+        # token, then the token; at the end the token is empty; any other character is a
+        # token of its own (a BAD_CHAR), so nothing is skipped silently. Layout is tried
+        # before tokens, where Lark tries all in its one order: the same, as long as no
+        # ignored terminal starts like a token (`//` and `/*` comments, and no `/` mark).
+        self._scan = re.compile(f"((?:{layout})*)({tokens}|\\Z|[\\s\\S])")
+        self._memo: tuple[dict[str, str], dict[str, str]] = ({}, {})
 
-    def lex(self, data: Any) -> Iterator[Any]:  # type: ignore[override]
-        return iter(self.tokens(data if isinstance(data, str) else data.text))
+    def reserved(self, word: str) -> bool:
+        """Is ``word`` a keyword everywhere (so that it can never be a name unescaped)?"""
+        return (word in self._exact or word.lower() in self._folded) and word not in self.contextual
+
+    # ------------------------------------------------------------------ the fast scanner
+    def _classify(self, text: str, inside: bool) -> str:
+        """The type of one scanned token's text, inside a contextual block or not."""
+        for name, pattern in self._classes:  # the terminal that matched: the first in order
+            if pattern.fullmatch(text):
+                kw = self._exact.get(text) or self._folded.get(text.lower())
+                if kw is not None and self._owner[kw] == name and (inside or text not in self.contextual):
+                    return kw
+                return name
+        return BAD_CHAR
 
     def tokens(self, text: str) -> list[Token]:
-        keywords, contextual, punct = self.keywords, self.contextual, self.punct
-        rel_start, rel_end = self.relation_start, self.relation_end
+        """Scan ``text``; a character no terminal matches becomes a BAD_CHAR token.
+
+        An unterminated ``/*`` comment is one BAD_CHAR token ``/*``, and scanning stops there.
+        No token spans lines (the grammars make newlines layout).
+        """
+        # token text -> type, learnt as scans go (one table outside the contextual block, one
+        # inside), so that most tokens are one dictionary look-up. Shared by every scan: a
+        # race only computes an entry twice. Bounded, for long-lived processes.
+        outside, inside = self._memo
+        if len(outside) + len(inside) > _MEMO_LIMIT:
+            outside.clear()
+            inside.clear()
+        memo = outside
+        classify = self._classify
+        start_mark, end_mark = self.block_marks
+        special = {start_mark, end_mark, BAD_CHAR}
         out: list[Token] = []
-        append = out.append
+        append, new, token, length = out.append, _new, Token, len  # locals: this loop is hot
         pos, line, line_start = 0, 1, 0
-        in_relations = False
-        fold = self.fold_case
-        for layout, name, p, num, _end, bad in _SCAN.findall(text):
+        for layout, tok in self._scan.findall(text):
             if layout:
-                pos += len(layout)
+                pos += length(layout)
                 if "\n" in layout:
                     line += layout.count("\n")
-                    line_start = pos - (len(layout) - layout.rindex("\n") - 1)
-            if name:
-                t = keywords.get(name.lower() if fold else name)
-                if t is None:
-                    t = contextual.get(name, "NAME") if in_relations else "NAME"
-                elif t == rel_start:
-                    in_relations = True
-                elif t == rel_end:
-                    in_relations = False
-                append((t, name, pos, line, pos - line_start + 1))
-                pos += len(name)
-            elif p:
-                append((punct.get(p, BAD_CHAR), p, pos, line, pos - line_start + 1))
-                pos += len(p)
-            elif num:
-                append(("DECIMAL" if "." in num else "INT", num, pos, line, pos - line_start + 1))
-                pos += len(num)
-            elif bad:
-                if bad == "/" and text.startswith("/*", pos):
-                    bad = "/*"  # an unterminated block comment: report it once, then stop
-                    append((BAD_CHAR, bad, pos, line, pos - line_start + 1))
-                    break
-                append((BAD_CHAR, bad, pos, line, pos - line_start + 1))
-                pos += 1
-                if bad == "\n":
-                    line += 1
-                    line_start = pos
+                    line_start = pos - (length(layout) - layout.rindex("\n") - 1)
+            t = memo.get(tok)
+            if t is None:
+                if not tok:
+                    break  # the end of the text
+                t = memo[tok] = classify(tok, memo is inside)
+            if t in special:
+                if t == start_mark:
+                    memo = inside
+                elif t == end_mark:
+                    memo = outside
+                elif tok == "/" and text.startswith("/*", pos):
+                    append(new(token, (BAD_CHAR, "/*", pos, line, pos - line_start + 1)))
+                    break  # an unterminated block comment: report it once, then stop
+            append(new(token, (t, tok, pos, line, pos - line_start + 1)))
+            pos += length(tok)
         return out
+
+
+class ContextualKeywords(PostLex):
+    """Lark's own lexer reserves every keyword everywhere; SLEEC reserves the relation
+    keywords only inside a relation block (the language reference §3). Outside one, this
+    post-lexer turns them back into names.
+
+    Give it to ``Lark(..., lexer="basic", postlex=...)``: that is SLEEC as plain Lark reads
+    it, the reference the fast driver is held equal to. Lark needs the post-lexer before it
+    builds the grammar, the lexicon is read from the built grammar: set ``lexicon`` then.
+    """
+
+    always_accept = ()
+
+    def __init__(self, lexicon: Lexicon | None = None) -> None:
+        self.lexicon = lexicon
+
+    def process(self, stream: Iterator[LarkToken]) -> Iterator[LarkToken]:
+        relaxed = self.lexicon.relaxed if self.lexicon is not None else {}
+        if not relaxed:
+            yield from stream
+            return
+        assert self.lexicon is not None
+        start_mark, end_mark = self.lexicon.block_marks
+        inside = False
+        for tok in stream:
+            t = tok.type
+            if t == start_mark:
+                inside = True
+            elif t == end_mark:
+                inside = False
+            elif not inside and t in relaxed:
+                tok = LarkToken.new_borrow_pos(relaxed[t], tok.value, tok)
+            yield tok
+
+
+def _reachable(
+    roots: Iterable[str], rules: Mapping[str, list[tuple[str, ...]]], stop: Collection[str]
+) -> set[str]:
+    """Every symbol reachable from ``roots`` through the rules, not expanding ``stop``."""
+    seen: set[str] = set()
+    todo = list(roots)
+    while todo:
+        sym = todo.pop()
+        if sym in seen:
+            continue
+        seen.add(sym)
+        if sym not in stop:
+            for expansion in rules.get(sym, ()):
+                todo.extend(expansion)
+    return seen
+
+
+def _rules(productions: Iterable[Production]) -> dict[str, list[tuple[str, ...]]]:
+    rules: dict[str, list[tuple[str, ...]]] = {}
+    for p in productions:
+        rules.setdefault(p.origin, []).append(p.symbols)
+    return rules
+
+
+def _contextual(keywords: set[str], productions: Iterable[Production], block: str | None) -> set[str]:
+    """The keyword terminals used only inside ``block``: by the rules its body reaches, by no other."""
+    if block is None:
+        return set()
+    rules = _rules(productions)
+    body = {sym for expansion in rules.get(block, ()) for sym in expansion if sym in rules}
+    outside = _reachable(["start"], rules, stop=body)
+    inside = _reachable(body, rules, stop=())
+    return {k for k in keywords if k in inside and k not in outside}
+
+
+def _block_marks(block: str | None, productions: Iterable[Production]) -> tuple[str | None, str | None]:
+    """The terminals that open and close ``block`` (the first and last symbol of its rule)."""
+    if block is None:
+        return None, None
+    for expansion in _rules(productions).get(block, ()):
+        if len(expansion) >= 2:
+            return expansion[0], expansion[-1]
+    return None, None

@@ -1,16 +1,22 @@
 """Text -> :class:`~cosleec.lang.ast.Specification`, with syntax diagnostics.
 
-Both grammars live in ``grammar/*.lark``; Lark builds their LALR tables once per process.
+Both grammars live in ``grammar/*.lark``; Lark builds their LALR tables once, at import.
+Each :class:`Grammar` then holds two readings of the same grammar: plain Lark (its own
+lexer and parser, ``Grammar.lark``) and the fast path cosleec parses with (the scanner of
+lexer.py feeding the driver of lalr.py). tests/unit/lang/test_parser_crosscheck.py holds
+them equal; benchmarks/parse_corpus.py measures the second against the first.
+
 The DSL (TK and LEGOS dialects) and the paper notation are told apart per file: a file
 with ``def_start`` or ``rule_start`` is DSL, any other file that contains ``when`` is the
 paper notation.
+
+May import: lark (public API), the other lang modules below the front end.
 """
 
 from __future__ import annotations
 
 import difflib
 import re
-import threading
 from dataclasses import dataclass
 from importlib import resources
 from typing import Any
@@ -19,47 +25,73 @@ from lark import Lark
 
 from cosleec.lang import ast as A
 from cosleec.lang.diagnostics import DiagnosticSink
-from cosleec.lang.lalr import END, CompiledLALR, SyntaxProblem
-from cosleec.lang.lexer import BAD_CHAR, KEYWORDS, SleecLexer
+from cosleec.lang.lalr import END, CompiledLALR, SyntaxProblem, read_lark_tables
+from cosleec.lang.lexer import BAD_CHAR, ContextualKeywords, Lexicon, Token
+from cosleec.lang.paper import PaperToAst
 from cosleec.lang.transformer import Block, ToAst
 
 
 @dataclass(frozen=True)
-class _Grammar:
-    lalr: CompiledLALR
-    lexer: SleecLexer
-    display: dict[str, str]
+class Grammar:
+    """One grammar of ``grammar/``, built once: use :data:`SLEEC` and :data:`PAPER`.
+
+    ``lark`` is plain Lark -- ``Lark(..., parser="lalr", lexer="basic", transformer=...)``
+    with the lexicon's post-lexer for relation keywords -- whose ``parse`` is the reference
+    reading of the grammar; :meth:`parse` is the fast path the front end uses.
+    """
+
+    name: str
+    lark: Lark
+    lexicon: Lexicon
+    driver: CompiledLALR
+    display: dict[str, str]  # terminal -> how messages name it
+    rel_ops: frozenset[str]  # the relational operators (the `rel_op` rule)
+
+    @classmethod
+    def load(cls, name: str, transformer: ToAst, contextual_block: str | None = None) -> Grammar:
+        """Build ``grammar/<name>.lark``; the keywords used only inside ``contextual_block``
+        are reserved only there (the language reference §3)."""
+        text = resources.files("cosleec.lang").joinpath(f"grammar/{name}.lark").read_text("utf-8")
+        postlex = ContextualKeywords()
+        lark = Lark(
+            text,
+            parser="lalr",
+            lexer="basic",
+            postlex=postlex,
+            maybe_placeholders=True,
+            transformer=transformer,
+        )
+        tables = read_lark_tables(lark)
+        lexicon = Lexicon(lark.terminals, lark.lexer_conf.ignore, tables.productions(), contextual_block)
+        postlex.lexicon = lexicon
+        display = {END: "end of file", "NAME": "a name", "INT": "a number", "DECIMAL": "a number"}
+        for term in lark.terminals:
+            if term.pattern.type == "str":
+                display[term.name] = f"`{term.pattern.value}`"
+        rel_ops = frozenset(
+            display[sym].strip("`") for r in tables.rules if r.origin == "rel_op" for sym in r.symbols
+        )
+        return cls(name, lark, lexicon, CompiledLALR(tables, transformer=transformer), display, rel_ops)
+
+    def parse(self, text: str, problems: list[SyntaxProblem]) -> Any:
+        """The transformer's value for ``text``, or None with the syntax errors in ``problems``."""
+        return self.driver.parse(self.lexicon.tokens(text), problems)
 
 
-_lock = threading.Lock()
-_grammars: dict[str, _Grammar] = {}
+SLEEC = Grammar.load("sleec", ToAst(), contextual_block="relation_block")
+PAPER = Grammar.load("paper", PaperToAst())
 
-
-def _grammar(name: str, transformer: Any) -> _Grammar:
-    g = _grammars.get(name)
-    if g is not None:
-        return g
-    with _lock:
-        g = _grammars.get(name)
-        if g is None:
-            text = resources.files("cosleec.lang").joinpath(f"grammar/{name}.lark").read_text("utf-8")
-            lark = Lark(
-                text, parser="lalr", lexer=SleecLexer, maybe_placeholders=True, transformer=transformer
-            )
-            display = {END: "end of file", "NAME": "a name", "INT": "a number", "DECIMAL": "a number"}
-            for term in lark.terminals:
-                if hasattr(term.pattern, "value") and type(term.pattern).__name__ == "PatternStr":
-                    display[term.name] = f"`{term.pattern.value}`"
-            g = _Grammar(CompiledLALR(lark, transformer=transformer), SleecLexer(lark.lexer_conf), display)
-            _grammars[name] = g
-    return g
-
+KEYWORDS = frozenset(SLEEC.lexicon.keywords)
+"""The DSL's reserved words (the language reference §3), read from ``grammar/sleec.lark``."""
+CONTEXTUAL_KEYWORDS = frozenset(SLEEC.lexicon.contextual)
+"""The DSL's words reserved only inside a relation block, read from ``grammar/sleec.lark``."""
 
 _DSL_MARK = re.compile(r"\b(?:def_start|rule_start)\b")
 _PAPER_MARK = re.compile(r"(?i)\bwhen\b")
 
 
 def looks_like_paper(text: str) -> bool:
+    """Is ``text`` in the paper notation (no ``def_start``/``rule_start``, but a ``when``)?"""
     return _DSL_MARK.search(text) is None and _PAPER_MARK.search(text) is not None
 
 
@@ -73,22 +105,19 @@ def parse_blocks(text: str, sink: DiagnosticSink) -> list[Block] | None:
             hint="save it as plain text (UTF-8)",
         )
         return None
-    blocks: list[Block] | None = _parse("sleec", ToAst, text, sink)
+    blocks: list[Block] | None = _parse(SLEEC, text, sink)
     return blocks
 
 
 def parse_paper_rules(text: str, sink: DiagnosticSink) -> list[A.Rule] | None:
     """Parse the paper notation into rules; syntax errors go to ``sink``."""
-    from cosleec.lang.paper import PaperToAst
-
-    rules: list[A.Rule] | None = _parse("paper", PaperToAst, text, sink)
+    rules: list[A.Rule] | None = _parse(PAPER, text, sink)
     return rules
 
 
-def _parse(grammar: str, transformer: type[ToAst], text: str, sink: DiagnosticSink) -> Any:
-    g = _grammar(grammar, transformer())
+def _parse(g: Grammar, text: str, sink: DiagnosticSink) -> Any:
     problems: list[SyntaxProblem] = []
-    result = g.lalr.parse(g.lexer.tokens(text), problems)
+    result = g.parse(text, problems)
     for p in problems:
         _report(p, g, text, sink)
     return None if problems else result
@@ -140,13 +169,13 @@ def assemble(blocks: list[Block], path: str, sink: DiagnosticSink) -> A.Specific
 # ------------------------------------------------------------------ syntax messages
 
 
-def _report(p: SyntaxProblem, g: _Grammar, text: str, sink: DiagnosticSink) -> None:
+def _report(p: SyntaxProblem, g: Grammar, text: str, sink: DiagnosticSink) -> None:
     tok = p.token
-    ttype, value = tok[0], tok[1]
-    span = A.Span(tok[3], tok[4], tok[3], tok[4] + max(len(value), 1))
+    ttype, value = tok.type, tok.value
+    span = A.Span(tok.line, tok.column, tok.line, tok.column + max(len(value), 1))
     expected = sorted({g.display.get(t, t) for t in p.expected if t != BAD_CHAR})
     expected_values = {g.display.get(t, t).strip("`") for t in p.expected}
-    special = _special_message(ttype, value, p.expected, expected_values, text, tok)
+    special = _special_message(g, tok, p.expected, expected_values, text)
     if special is not None:
         code, message, hint = special
         sink.error(code, message, span, hint=hint)
@@ -161,16 +190,17 @@ def _report(p: SyntaxProblem, g: _Grammar, text: str, sink: DiagnosticSink) -> N
         close = difflib.get_close_matches(value, [k for k in kws if k.isidentifier()], n=1, cutoff=0.6)
         if close:
             hint = f"did you mean `{close[0]}`?"
-    elif ttype != END and value in KEYWORDS and "NAME" in p.expected:
+    elif ttype != END and g.lexicon.reserved(value) and "NAME" in p.expected:
         hint = f"`{value}` is a reserved keyword and cannot be used as a name"
     sink.error("syntax", f"unexpected {shown}; expected {exp}", span, hint=hint)
 
 
 def _special_message(
-    ttype: str, value: str, expected: frozenset[str], values: set[str], text: str, tok: Any
+    g: Grammar, tok: Token, expected: frozenset[str], values: set[str], text: str
 ) -> tuple[str, str, str | None] | None:
-    """Messages for the mistakes real files make (sleec-language.md §11 item 17)."""
-    if tok[2] == 0 and text.lstrip().startswith("{\\rtf"):
+    """Messages for the mistakes real files make (the language reference §11 item 17)."""
+    ttype, value = tok.type, tok.value
+    if tok.start_pos == 0 and text.lstrip().startswith("{\\rtf"):
         return ("rtf", "this file is RTF, not plain text", "save it as plain text (UTF-8)")
     if ttype == BAD_CHAR:
         if value == "/*":
@@ -192,7 +222,7 @@ def _special_message(
         )
     if value == "not" and values == {"a name"}:
         return ("negated-trigger", "a trigger is a single event and cannot be negated", None)
-    if value in _REL_OPS and not (values & _REL_OPS):
+    if value in g.rel_ops and not (values & g.rel_ops):
         return (
             "comparison-chain",
             f"a comparison cannot be chained (`a < b {value} c`)",
@@ -201,6 +231,3 @@ def _special_message(
     if value == "{" and values == {"("}:
         return ("scale-braces", "scale literals are listed in parentheses: `scale(low, medium, high)`", None)
     return None
-
-
-_REL_OPS = frozenset({"<", "<=", ">", ">=", "=", "<>"})

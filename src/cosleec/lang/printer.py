@@ -3,13 +3,14 @@
 The printer's contract is round-tripping: for every AST, ``parse(print(ast)) == ast``
 (spans and syntactic hints aside). It therefore adds exactly the parentheses and braces
 needed to keep the tree's shape under TK precedence and the greedy attachment rules of
-sleec-language.md §4.5, and in the LEGOS dialect it writes LEGOS' mandatory forms
+the language reference §4.5, and in the LEGOS dialect it writes LEGOS' mandatory forms
 (``{m}``, every operator in its own parentheses, ``(not X)``, ``-> C``).
 """
 
 from __future__ import annotations
 
 from cosleec.lang import ast as A
+from cosleec.lang.parser import CONTEXTUAL_KEYWORDS, KEYWORDS
 
 # precedence levels of the unified grammar (higher binds tighter)
 _LEVEL = {"and": 1, "or": 1, "not": 2, "cmp": 3, "+": 4, "-": 4, "*": 5}
@@ -17,10 +18,18 @@ _ATOM = 6
 
 
 class Printer:
+    """Prints one specification in one dialect; use :func:`format_spec` for a whole file,
+    the methods for one part of it (a rule, a response, an expression)."""
+
     def __init__(self, spec: A.Specification, dialect: A.Dialect) -> None:
         self.legos = dialect is A.Dialect.LEGOS
         self.measures = {m.name for m in spec.measures}
         self.spec = spec
+        self.reserved = KEYWORDS  # the words that need SLEEC-TK's `^` escape to be names
+
+    def name(self, n: str) -> str:
+        """A name as the DSL reads it back: a keyword gets SLEEC-TK's ``^`` escape."""
+        return "^" + n if n in self.reserved else n
 
     # ------------------------------------------------------------------ whole file
     def specification(self) -> str:
@@ -37,32 +46,40 @@ class Printer:
         for kind, items in (("concern", spec.concerns), ("purpose", spec.purposes)):
             if items:
                 out += ["", f"{kind}_start"]
-                out += ["    " + f"{s.name} {self.situation_body(s)}" for s in items]
+                out += ["    " + f"{self.name(s.name)} {self.situation_body(s)}" for s in items]
                 out.append(f"{kind}_end")
         if spec.relations:
             out += ["", "relation_start"]
+            self.reserved = KEYWORDS | CONTEXTUAL_KEYWORDS
             out += ["    " + self.relation(r) for r in spec.relations]
+            self.reserved = KEYWORDS
             out.append("relation_end")
         return "\n".join(out) + "\n"
 
     def definition(self, d: A.Definition) -> str:
+        name = self.name(d.name)
         if isinstance(d, A.EventDecl):
-            return f"event {d.name}"
+            return f"event {name}"
         if isinstance(d, A.MeasureDecl):
-            return f"measure {d.name} : {d.type}"
+            if isinstance(d.type, A.ScaleType):
+                return f"measure {name} : scale({', '.join(map(self.name, d.type.literals))})"
+            return f"measure {name} : {d.type}"
         if isinstance(d, A.ConstantDecl):
             if isinstance(d.value, int):
-                return f"constant {d.name} = {d.value}"
-            return f"constant {d.name} = -> {d.value}" if self.legos else f"constant {d.name} = {d.value}"
-        return f"fluent {d.name} <{{{', '.join(d.initiating)}}}, {{{', '.join(d.terminating)}}}>"
+                return f"constant {name} = {d.value}"
+            value = self.name(d.value)
+            return f"constant {name} = -> {value}" if self.legos else f"constant {name} = {value}"
+        starts, ends = ", ".join(map(self.name, d.initiating)), ", ".join(map(self.name, d.terminating))
+        return f"fluent {name} <{{{starts}}}, {{{ends}}}>"
 
     def rule(self, r: A.Rule) -> str:
-        return f"{r.name} when {self.trigger(r.trigger)} then {self.response(r.response, braced=False)}"
+        response = self.response(r.response, braced=False)
+        return f"{self.name(r.name)} when {self.trigger(r.trigger)} then {response}"
 
     def trigger(self, t: A.Trigger) -> str:
         if t.condition is None:
-            return t.event
-        return f"{t.event} and {self.expr(t.condition)}"
+            return self.name(t.event)
+        return f"{self.name(t.event)} and {self.expr(t.condition)}"
 
     # ------------------------------------------------------------------ responses
     def response(self, r: A.Response, braced: bool) -> str:
@@ -92,7 +109,7 @@ class Printer:
         return self.response(r, braced=bool(r.defeaters) or followed)
 
     def occurrence(self, o: A.Occurrence) -> str:
-        text = ("not " if o.negated else "") + o.event
+        text = ("not " if o.negated else "") + self.name(o.event)
         if o.limit is not None:
             if o.limit.lo is None:
                 text += f" within {self.duration(o.limit.hi)}"
@@ -103,15 +120,16 @@ class Printer:
         return text
 
     def duration(self, d: A.Duration) -> str:
-        return f"{self.expr(d.value)} {d.unit}"
+        unit = d.unit if d.unit in A.TIME_UNITS else self.name(d.unit)
+        return f"{self.expr(d.value)} {unit}"
 
     # ------------------------------------------------------------------ expressions
     def expr(self, e: A.Expr, need: int = 0) -> str:
         """``e`` as text, parenthesised if it binds looser than ``need``."""
         if isinstance(e, A.Name):
             if self.legos and e.name in self.measures:
-                return f"{{{e.name}}}"
-            return e.name
+                return f"{{{self.name(e.name)}}}"
+            return self.name(e.name)
         if isinstance(e, A.BoolLit):
             return "true" if e.value else "false"
         if isinstance(e, A.IntLit):
@@ -146,15 +164,16 @@ class Printer:
 
     def relation(self, r: A.Relation) -> str:
         if isinstance(r, A.EventRelation):
-            return f"{r.kind} {r.first} {r.second}"
+            return f"{r.kind} {self.name(r.first)} {self.name(r.second)}"
         if isinstance(r, A.MeasureRelation):
             if r.second is None:
                 return f"measure invariant {self.expr(r.first, _ATOM)}"
             return f"measure {r.kind} {self.expr(r.first, _ATOM)} {self.expr(r.second, _ATOM)}"
         if isinstance(r, A.EventMeasureRelation):
-            return f"{r.kind} {r.event} {self.expr(r.condition, _ATOM)}"
+            return f"{r.kind} {self.name(r.event)} {self.expr(r.condition, _ATOM)}"
         if isinstance(r, A.UntilRelation):
-            text = f"when {self.trigger(r.trigger)} then {self.expr(r.condition)} until {r.until_event}"
+            until = self.name(r.until_event)
+            text = f"when {self.trigger(r.trigger)} then {self.expr(r.condition)} until {until}"
             if r.until_condition is not None:
                 text += f" and {self.expr(r.until_condition)}"
             return text

@@ -3,6 +3,10 @@
 Callbacks take the children list directly (no ``v_args`` wrapper): it is the fastest
 calling convention Lark offers, and parsing speed is a project target. Optional grammar
 parts are ``[x]`` so the children have fixed positions (``None`` when absent).
+
+Tokens are read only through ``type``, ``value``, ``line`` and ``column``, which Lark's
+``Token`` and the fast scanner's ``lexer.Token`` both have: the same transformer serves
+plain Lark and the fast driver (lalr.py), and the cross-check test compares the two.
 """
 
 from __future__ import annotations
@@ -18,20 +22,21 @@ _new = tuple.__new__
 
 
 def tok_span(tok: Any) -> A.Span:
-    """A token is ``(type, value, start_pos, line, column)`` (see lexer.py); no token spans lines."""
-    line, col = tok[3], tok[4]
-    span: A.Span = _new(A.Span, (line, col, line, col + len(tok[1])))
+    """Where a token is (no token spans lines)."""
+    line, col = tok.line, tok.column
+    span: A.Span = _new(A.Span, (line, col, line, col + len(tok.value)))
     return span
 
 
 def join(a: A.Span, b: A.Span) -> A.Span:
+    """From the start of ``a`` to the end of ``b``."""
     span: A.Span = _new(A.Span, (a[0], a[1], b[2], b[3]))
     return span
 
 
 def ident(tok: Any) -> str:
     """An identifier's text; SLEEC-TK's ``^`` keyword escape is dropped."""
-    v: str = tok[1]
+    v: str = tok.value
     return v[1:] if v[0] == "^" else v
 
 
@@ -40,7 +45,7 @@ _NUMERIC = A.NumericType()
 
 
 class Block:
-    """A parsed block before the Specification is assembled."""
+    """A parsed block before the Specification is assembled (parser.assemble)."""
 
     __slots__ = ("items", "kind", "span")
 
@@ -51,7 +56,11 @@ class Block:
 
 
 class ToAst(Transformer[Token, Any]):
-    """Builds :mod:`cosleec.lang.ast` nodes; ``start`` returns the list of blocks."""
+    """Builds :mod:`cosleec.lang.ast` nodes; ``start`` returns the list of blocks.
+
+    Give an instance to ``Lark(..., transformer=...)`` (it keeps no state, so one instance
+    serves every parse, in any thread).
+    """
 
     # -- lists (left-recursive list rules of the grammar)
     def list_first(self, c: list[Any]) -> list[Any]:
@@ -102,10 +111,10 @@ class ToAst(Transformer[Token, Any]):
         return A.ConstantDecl(ident(c[0]), value, arrow=arrow, span=tok_span(c[0]))
 
     def const_int(self, c: list[Any]) -> tuple[int, bool]:
-        return int(c[0][1]), False
+        return int(c[0].value), False
 
     def const_neg(self, c: list[Any]) -> tuple[int, bool]:
-        return -int(c[0][1]), False
+        return -int(c[0].value), False
 
     def const_name(self, c: list[Any]) -> tuple[str, bool]:
         return ident(c[0]), False
@@ -164,7 +173,7 @@ class ToAst(Transformer[Token, Any]):
 
     def duration(self, c: list[Any]) -> A.Duration:
         unit = c[1]
-        return A.Duration(c[0], unit[1], span=join(_span_of(c[0]), tok_span(unit)))
+        return A.Duration(c[0], unit.value, span=join(_span_of(c[0]), tok_span(unit)))
 
     def time_unit(self, c: list[Any]) -> Any:
         return c[0]
@@ -181,7 +190,7 @@ class ToAst(Transformer[Token, Any]):
 
     def compare(self, c: list[Any]) -> A.Compare:
         op = c[1]
-        return A.Compare(op[1], c[0], c[2], span=tok_span(op))
+        return A.Compare(op.value, c[0], c[2], span=tok_span(op))
 
     def rel_op(self, c: list[Any]) -> Any:
         return c[0]
@@ -196,17 +205,18 @@ class ToAst(Transformer[Token, Any]):
         return A.BinOp("*", c[0], c[1], span=join(_span_of(c[0]), _span_of(c[1])))
 
     def bool_lit(self, c: list[Any]) -> A.BoolLit:
-        return A.BoolLit(c[0][0] == "TRUE", span=tok_span(c[0]))
+        return A.BoolLit(c[0].type == "TRUE", span=tok_span(c[0]))
 
     def int_lit(self, c: list[Any]) -> A.IntLit:
-        return A.IntLit(int(c[0][1]), span=tok_span(c[0]))
+        return A.IntLit(int(c[0].value), span=tok_span(c[0]))
 
     def neg_int(self, c: list[Any]) -> A.IntLit:
         t = c[0]
-        return A.IntLit(-int(t[1]), span=A.Span(t[3], max(t[4] - 1, 1), t[3], t[4] + len(t[1])))
+        line, col, value = t.line, t.column, t.value
+        return A.IntLit(-int(value), span=A.Span(line, max(col - 1, 1), line, col + len(value)))
 
     def decimal_lit(self, c: list[Any]) -> A.DecimalLit:
-        return A.DecimalLit(c[0][1], span=tok_span(c[0]))
+        return A.DecimalLit(c[0].value, span=tok_span(c[0]))
 
     def name(self, c: list[Any]) -> A.Name:
         return A.Name(ident(c[0]), span=tok_span(c[0]))
@@ -251,16 +261,16 @@ class ToAst(Transformer[Token, Any]):
 
     # -- LEGOS relations
     def event_relation(self, c: list[Any]) -> A.EventRelation:
-        return A.EventRelation(c[0][1], ident(c[1]), ident(c[2]), span=tok_span(c[0]))
+        return A.EventRelation(c[0].value, ident(c[1]), ident(c[2]), span=tok_span(c[0]))
 
     def measure_relation(self, c: list[Any]) -> A.MeasureRelation:
-        return A.MeasureRelation(c[0][1], c[1], c[2], span=tok_span(c[0]))
+        return A.MeasureRelation(c[0].value, c[1], c[2], span=tok_span(c[0]))
 
     def measure_invariant(self, c: list[Any]) -> A.MeasureRelation:
         return A.MeasureRelation("invariant", c[0], None, span=_span_of(c[0]))
 
     def event_measure_relation(self, c: list[Any]) -> A.EventMeasureRelation:
-        return A.EventMeasureRelation(c[0][1], ident(c[1]), c[2], span=tok_span(c[0]))
+        return A.EventMeasureRelation(c[0].value, ident(c[1]), c[2], span=tok_span(c[0]))
 
     def until_relation(self, c: list[Any]) -> A.UntilRelation:
         return A.UntilRelation(c[0], c[1], ident(c[2]), c[3], span=c[0].span)

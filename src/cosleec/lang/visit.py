@@ -1,4 +1,4 @@
-"""Walks over the AST that several passes share (checker, inference, dialect detection)."""
+"""Walks over the AST, for passes that need one kind of node at a time (declaration inference)."""
 
 from __future__ import annotations
 
@@ -21,12 +21,14 @@ def responses(resp: A.Response) -> Iterator[A.Response]:
 
 
 def occurrences(resp: A.Response) -> Iterator[A.Occurrence]:
+    """Every occurrence in the response and the responses nested in it."""
     for r in responses(resp):
         for item in r.items:
             yield item.occurrence
 
 
 def durations(resp: A.Response) -> Iterator[A.Duration]:
+    """Every deadline in the response and the responses nested in it (interval starts first)."""
     for occ in occurrences(resp):
         if occ.limit is not None:
             if occ.limit.lo is not None:
@@ -35,12 +37,14 @@ def durations(resp: A.Response) -> Iterator[A.Duration]:
 
 
 def response_conditions(resp: A.Response) -> Iterator[A.Expr]:
+    """The condition of every hedge clause in the response and the responses nested in it."""
     for r in responses(resp):
         for d in r.defeaters:
             yield d.condition
 
 
 def situations(spec: A.Specification) -> Iterator[A.Situation]:
+    """Every concern and purpose, each followed by its ``meanwhile`` chain."""
     for s in (*spec.concerns, *spec.purposes):
         cur: A.Situation | None = s
         while cur is not None:
@@ -49,6 +53,7 @@ def situations(spec: A.Specification) -> Iterator[A.Situation]:
 
 
 def triggers(spec: A.Specification) -> Iterator[A.Trigger]:
+    """Every trigger: of the rules, of the situations, of ``until``/``for`` relations."""
     for r in spec.rules:
         yield r.trigger
     for s in situations(spec):
@@ -59,6 +64,7 @@ def triggers(spec: A.Specification) -> Iterator[A.Trigger]:
 
 
 def all_responses(spec: A.Specification) -> Iterator[A.Response]:
+    """Every top-level response: of the rules, then of the situations."""
     for r in spec.rules:
         yield r.response
     for s in situations(spec):
@@ -88,32 +94,12 @@ def conditions(spec: A.Specification) -> Iterator[A.Expr]:
 
 
 def all_durations(spec: A.Specification) -> Iterator[A.Duration]:
+    """Every deadline of the responses, then of ``for`` relations."""
     for resp in all_responses(spec):
         yield from durations(resp)
     for rel in spec.relations:
         if isinstance(rel, A.ForRelation):
             yield rel.duration
-
-
-def subexpressions(e: A.Expr) -> Iterator[A.Expr]:
-    """Every node of an expression, pre-order, left first (an explicit stack: no recursion)."""
-    stack: list[A.Expr] = [e]
-    pop, push = stack.pop, stack.append
-    while stack:
-        x = pop()
-        yield x
-        t = type(x)
-        if t is A.Not:
-            push(x.operand)  # type: ignore[union-attr]
-        elif t is A.BinOp or t is A.Compare:
-            push(x.right)  # type: ignore[union-attr]
-            push(x.left)  # type: ignore[union-attr]
-
-
-def names(e: A.Expr) -> Iterator[A.Name]:
-    for s in subexpressions(e):
-        if isinstance(s, A.Name):
-            yield s
 
 
 def event_references(spec: A.Specification) -> Iterator[tuple[str, A.Span]]:

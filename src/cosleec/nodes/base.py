@@ -1,4 +1,8 @@
-"""What every node shares: topic names, JSON handling, rejection of bad messages, counters."""
+"""What every node shares: topic names, JSON handling, rejection of bad messages, counters.
+
+It exists so that the Manager, the Layer Manager, the Context Listener and the task nodes
+behave alike on the wire: a bad message is rejected and counted, never fatal.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +12,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from cosleec.transport import DEFAULT_NAMESPACE, LATCHED, Transport, dumps, topic
+from cosleec.nodes.transport import DEFAULT_NAMESPACE, LATCHED, Transport, dumps, topic
 
 log = logging.getLogger("cosleec.nodes")
 
@@ -45,17 +49,31 @@ class Node:
             self.advertise(t)
 
     def topic(self, name: str) -> str:
+        """The full name of topic ``name`` under this node's namespace (``/cosleec/decisions``)."""
         return topic(self.namespace, name)
 
     def advertise(self, name: str) -> None:
+        """Declare that this node publishes on ``name`` (latched if it is in ``LATCHED``).
+
+        Advertise every output in the constructor: :meth:`status` reports the subscriber
+        count of each advertised topic, which is how a harness sees the graph is connected.
+        """
         self.transport.advertise(self.topic(name), latched=name in LATCHED)
         self._advertised.append(name)
 
     def publish(self, name: str, message: dict[str, Any]) -> None:
+        """Send ``message`` as JSON on topic ``name`` and count it (values JSON lacks go as ``str``)."""
         self.transport.publish(self.topic(name), dumps(message))
         self._count("published")
 
     def on(self, name: str, handler: Callable[[dict[str, Any]], None]) -> None:
+        """Call ``handler`` with every JSON object received on topic ``name``.
+
+        A payload that is not a JSON object, or that the handler refuses by raising
+        ValueError, TypeError or KeyError, is :meth:`reject`-ed and the node carries on;
+        any other exception goes to the transport. The handler runs on a thread of the
+        transport, not the caller's.
+        """
         full = self.topic(name)
 
         def receive(payload: str) -> None:
@@ -71,6 +89,11 @@ class Node:
         self.transport.subscribe(full, receive)
 
     def reject(self, where: str, reason: str, payload: Any) -> None:
+        """Log, count and publish on ``rejected`` a message this node cannot use.
+
+        ``where`` is the topic it came from; the payload is published cut to 500
+        characters. With ``status_each`` a status message follows at once.
+        """
         self._count("rejected")
         log.warning("%s: rejected message on %s: %s", self.name, where, reason)
         text = (
@@ -89,7 +112,12 @@ class Node:
             self.counters[key] = self.counters.get(key, 0) + n
 
     def status(self, **extra: Any) -> None:
-        """Publish the node's counters; snapshots go out in the order they are taken."""
+        """Publish the node's counters on ``status``; snapshots go out in the order they are taken.
+
+        ``extra`` fields join the message, with the subscriber count of every advertised
+        topic when the transport can tell. :func:`cosleec.ros.serve` calls it every 0.5 s
+        as a heartbeat.
+        """
         with self._status_lock:
             with self._count_lock:
                 counters = dict(self.counters)

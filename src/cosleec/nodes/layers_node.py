@@ -9,24 +9,32 @@ from __future__ import annotations
 from typing import Any
 
 from cosleec.nodes.base import Node, context_values
-from cosleec.runtime import ContextError
-from cosleec.runtime.context import Context
-from cosleec.runtime.layers import LayerManager, switch_records, switches_json
-from cosleec.runtime.manager import load_rules
-from cosleec.runtime.model import compile_rules
+from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
+from cosleec.runtime import Context, ContextError, HedgeSemantics, LayerManager, RuleSet
 
 
 class LayersNode(Node):
+    """The Layer Manager as a node of its own: run it when other nodes want the active layers.
+
+    It decides nothing: the Manager node keeps its own Layer Manager and stamps each
+    decision with its clause. This node publishes the same layer state for everyone else
+    (dashboards, the scenario driver), once at start and after every switch.
+    """
+
     name = "layers"
 
     def __init__(
-        self, transport: Any, rules: str, *, namespace: str = "/cosleec", semantics: str = "last-wins"
+        self,
+        transport: Transport,
+        rules: RuleSet,
+        *,
+        namespace: str = DEFAULT_NAMESPACE,
+        semantics: HedgeSemantics = HedgeSemantics.LAST_WINS,
     ) -> None:
         super().__init__(transport, namespace)
-        spec, symbols = load_rules(rules)
-        self.ruleset = compile_rules(spec, symbols)
-        self.context = Context(self.ruleset.measures)
-        self.layers = LayerManager(self.ruleset, semantics)
+        self.ruleset = rules
+        self.context = Context(rules.measures)
+        self.layers = LayerManager(rules, semantics)
         self.version = 0
         self.advertise("layers")
         self.on("context", self._context)
@@ -40,7 +48,7 @@ class LayersNode(Node):
         changed = self.context.apply(stored, 0.0)
         switches = self.layers.update(changed, self.context.values)
         if switches:
-            self._publish(switches_json(switch_records(switches)))
+            self._publish([sw.to_json() for sw in switches])
 
     def _publish(self, switches: list[dict[str, Any]]) -> None:
         self.version += 1

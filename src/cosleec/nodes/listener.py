@@ -29,8 +29,9 @@ from typing import Any
 
 import yaml
 
+from cosleec.errors import UserError
 from cosleec.nodes.base import Node
-from cosleec.runtime.values import MeasureSpec
+from cosleec.runtime import MeasureSpec
 
 COMPARISONS = {
     "above": lambda x, t: x > t,
@@ -43,12 +44,14 @@ COMPARISONS = {
 KEYS = {"topic", "type", "field", "json", "bands", *COMPARISONS}
 
 
-class MappingError(ValueError):
+class MappingError(UserError, ValueError):
     """A mapping file is wrong; the message names the file and the entry."""
 
 
 @dataclass(frozen=True)
 class Entry:
+    """One checked mapping entry: where a measure or event is read, and how its value is made."""
+
     name: str
     kind: str  # "measure" | "event"
     topic: str
@@ -90,6 +93,13 @@ class Entry:
 
 @dataclass
 class Mapping:
+    """A checked Context Listener mapping: its entries and the namespace it asks for.
+
+    Build it with :meth:`load` or :meth:`parse`, giving the rule set's measures and events:
+    a mapping that names something the rules do not declare, or gives a value of the
+    wrong kind, then fails at start-up instead of in front of the robot.
+    """
+
     entries: list[Entry] = field(default_factory=list)
     namespace: str | None = None
     source: str = "<mapping>"
@@ -101,7 +111,15 @@ class Mapping:
         measures: dict[str, MeasureSpec] | None = None,
         events: frozenset[str] | None = None,
     ) -> Mapping:
-        text = Path(path).read_text(encoding="utf-8")
+        """Read and check the mapping file at ``path``; MappingError names the file and entry at fault.
+
+        ``measures`` and ``events`` (from the :class:`~cosleec.runtime.RuleSet`) turn on the
+        checks against the rules; None skips them.
+        """
+        try:
+            text = Path(path).read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as e:
+            raise MappingError(f"{path}: cannot read the mapping: {e}") from None
         return cls.parse(text, str(path), measures, events)
 
     @classmethod
@@ -112,6 +130,7 @@ class Mapping:
         measures: dict[str, MeasureSpec] | None = None,
         events: frozenset[str] | None = None,
     ) -> Mapping:
+        """Check mapping ``text`` as :meth:`load` does; ``source`` names it in messages."""
         try:
             doc = yaml.safe_load(text) or {}
         except yaml.YAMLError as e:
@@ -131,7 +150,7 @@ class Mapping:
         return m
 
     def topics(self) -> dict[str, str]:
-        """topic -> message type (one type per topic)."""
+        """topic -> message type; MappingError if one topic is given two types."""
         out: dict[str, str] = {}
         for e in self.entries:
             if out.setdefault(e.topic, e.type) != e.type:
@@ -211,7 +230,12 @@ def _entry(
 
 
 class ListenerNode(Node):
-    """Subscribes to the mapped robot topics; publishes ``context`` updates and ``events``."""
+    """Subscribes to the mapped robot topics; publishes ``context`` updates and ``events``.
+
+    Run one per robot, next to the Manager node. The mapping's ``namespace``, when set,
+    wins over ``namespace``. A message a mapping entry cannot read is rejected for that
+    entry; the other entries of the message still count.
+    """
 
     name = "listener"
 

@@ -12,20 +12,38 @@ from __future__ import annotations
 from typing import Any
 
 from cosleec.nodes.base import Node, context_values
-from cosleec.runtime import ContextError, Manager, RuntimeEvent, VirtualClock
-from cosleec.runtime.clock import Clock, MonotonicClock
+from cosleec.nodes.recording import McapRecorder
+from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
+from cosleec.runtime import (
+    Clock,
+    ContextError,
+    HedgeSemantics,
+    Manager,
+    MonotonicClock,
+    RuleSet,
+    RuntimeEvent,
+    VirtualClock,
+)
 
 
 class ManagerNode(Node):
+    """The Manager as a node: one per robot, the only node that decides.
+
+    It decides only; task nodes run the implementations. ``sim_time`` takes time from the
+    ``clock`` topic and judges deadlines on each clock message (no timer thread);
+    otherwise the monotonic clock and a timer thread do. ``audit`` and ``record`` name a
+    JSON Lines audit trail and an MCAP recording; ``manager_kw`` goes to :class:`Manager`.
+    """
+
     name = "manager"
 
     def __init__(
         self,
-        transport: Any,
-        rules: str,
+        transport: Transport,
+        rules: RuleSet,
         *,
-        namespace: str = "/cosleec",
-        semantics: str = "last-wins",
+        namespace: str = DEFAULT_NAMESPACE,
+        semantics: HedgeSemantics = HedgeSemantics.LAST_WINS,
         sim_time: bool = False,
         audit: str | None = None,
         record: str | None = None,
@@ -37,14 +55,8 @@ class ManagerNode(Node):
         # deployment the heartbeat (every 0.5 s) is enough and keeps the hot path short
         self.status_each = status_each
         self.clock: Clock = VirtualClock() if sim_time else MonotonicClock()
-        self.manager = Manager(
-            rules, clock=self.clock, semantics=semantics, audit=audit, dispatch=False, **manager_kw
-        )
-        self.recorder = None
-        if record:
-            from cosleec.recording import McapRecorder
-
-            self.recorder = McapRecorder(record)
+        self.manager = Manager(rules, clock=self.clock, semantics=semantics, audit=audit, dispatch=False, **manager_kw)
+        self.recorder = McapRecorder(record) if record else None
         for t in ("decisions", "obligations", "violations", "request_reply"):
             self.advertise(t)
         self.manager.subscribe(self._runtime_event)
@@ -57,6 +69,10 @@ class ManagerNode(Node):
         self.status()
 
     def status(self, **extra: Any) -> None:
+        """Publish the counters with the context version, runtime statistics, active layers and time.
+
+        The scenario driver reads these to know when the system is quiet.
+        """
         m = self.manager
         with self._status_lock:  # the extra fields are part of the same ordered snapshot
             super().status(
@@ -120,6 +136,7 @@ class ManagerNode(Node):
             self.recorder.write(ev.kind, ev.time, d)
 
     def close(self) -> None:
+        """Stop the Manager (timer, audit log) and finish the recording; the transport is the caller's."""
         self.manager.close()
         if self.recorder is not None:
             self.recorder.close()

@@ -11,46 +11,30 @@ from __future__ import annotations
 import itertools
 import queue
 import threading
+from collections.abc import Callable
 from typing import Any
 
 from cosleec.nodes.base import Node
-from cosleec.runtime.decision import Decision
-from cosleec.runtime.dispatcher import Capability, TaskDispatcher
-from cosleec.runtime.manager import load_rules
-from cosleec.runtime.model import Obligation, compile_rules
-from cosleec.runtime.tasks import Task
-
-
-def decision_from_json(d: dict[str, Any]) -> Decision:
-    obligations = tuple(
-        Obligation(o["event"], bool(o.get("negated")), o.get("within_s"), rule=d.get("rule", ""))
-        for o in d.get("obligations", [])
-    )
-    return Decision(
-        int(d["id"]),
-        float(d.get("time", 0.0)),
-        str(d.get("event", "")),
-        str(d["rule"]),
-        d.get("clause"),
-        d.get("layer"),
-        str(d.get("semantics", "")),
-        dict(d.get("values", {})),
-        tuple((c["clause"], c["condition"], c["value"]) for c in d.get("conditions", [])),
-        obligations,
-        tuple(d.get("missing", [])),
-        str(d.get("explanation", "")),
-    )
+from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
+from cosleec.runtime import Capability, Decision, Implementations, RuleSet, Task
 
 
 class TaskNode(Node):
+    """A task node: runs the implementations of some rules in its own process.
+
+    Build it from the same rule set as the Manager, bind tasks and capabilities (an
+    ``install(node)`` function of the ``--module``), then :meth:`start` it. It offers the
+    part of the Manager's interface tasks use (``event``, ``request``).
+    """
+
     name = "task"
 
     def __init__(
         self,
-        transport: Any,
-        rules: str,
+        transport: Transport,
+        rules: RuleSet,
         *,
-        namespace: str = "/cosleec",
+        namespace: str = DEFAULT_NAMESPACE,
         name: str = "task",
         request_timeout: float = 2.0,
         status_each: bool = False,
@@ -58,10 +42,8 @@ class TaskNode(Node):
         super().__init__(transport, namespace)
         self.name = name
         self.status_each = status_each  # status after every handled obligation (harnesses)
-        spec, symbols = load_rules(rules)
-        self.spec = spec
-        self.ruleset = compile_rules(spec, symbols)
-        self.dispatcher = TaskDispatcher(self.ruleset)
+        self.ruleset = rules
+        self.implementations = Implementations(rules)
         self.request_timeout = request_timeout
         self._ids = itertools.count(1)
         self._replies: dict[str, tuple[threading.Event, list[bool]]] = {}
@@ -73,15 +55,19 @@ class TaskNode(Node):
         self._worker.start()
         self.on("request_reply", self._reply)
 
-    # the subset of the Manager's interface that tasks use
+    # the subset of the Manager's interface that tasks use (cosleec.runtime.Reporter)
     def event(self, name: str) -> None:
+        """The robot did ``name``: tell the Manager."""
         self._count("reported")
         self.publish("events", {"event": name})
 
-    report = event
-
     def request(self, event: str) -> bool:
-        """Ask the Manager whether ``event`` is allowed now; no answer in time means no."""
+        """Ask the Manager whether ``event`` is allowed now; no answer in time means no.
+
+        Blocks for up to ``request_timeout`` seconds. Call it from task code, which runs on
+        the node's worker thread, never from a transport callback: the reply may need that
+        very thread, and would then arrive only after the wait.
+        """
         rid = f"{self.name}-{next(self._ids)}"
         self._count("requested")
         done = threading.Event()
@@ -93,18 +79,24 @@ class TaskNode(Node):
         return bool(box and box[0])
 
     def bind(self, *tasks: Task) -> TaskNode:
+        """Bind paper-style tasks (one per rule) to this node."""
         for t in tasks:
-            self.dispatcher.bind(t)
-            t.manager = self  # type: ignore[assignment]
+            self.implementations.bind(t)
+            t.manager = self
         return self
 
-    def capability(self, event: str) -> Any:
-        return self.dispatcher.capability(event)
+    def capability(self, event: str) -> Callable[[Capability], Capability]:
+        """Decorator: register the handler that performs ``event``."""
+        return self.implementations.capability(event)
 
     def start(self, rules: list[str] | None = None) -> TaskNode:
-        """Check that the bound rules are fully implemented, then start taking obligations."""
+        """Check that the bound rules are fully implemented, then start taking obligations.
+
+        ``rules`` limits the node to those rule names (``--only``); obligations of other
+        rules are left to other task nodes. BindingError lists what is missing. Returns ``self``.
+        """
         chosen = [r for r in self.ruleset.rules if rules is None or r.name in rules]
-        self.dispatcher.check(chosen)
+        self.implementations.check(chosen)
         self.rules = {r.name for r in chosen}
         self.on("obligations", self._obligation)
         self.status()
@@ -113,7 +105,7 @@ class TaskNode(Node):
     def _obligation(self, msg: dict[str, Any]) -> None:
         if msg.get("rule") not in self.rules:
             return  # another task node's rule
-        self._work.put(decision_from_json(msg))
+        self._work.put(Decision.from_json(msg))
 
     def _reply(self, msg: dict[str, Any]) -> None:
         entry = self._replies.get(str(msg.get("id")))
@@ -128,20 +120,23 @@ class TaskNode(Node):
                 return
             rule = self.ruleset.rule(d.rule)
             if d.event == "otherwise":  # a fallback after a missed deadline
-                self.dispatcher.dispatch_fallback(rule, d)
+                self.implementations.dispatch_fallback(rule, d)
             else:
-                self.dispatcher.dispatch(rule, d)
+                self.implementations.dispatch(rule, d)
             self.handled.append(d)
             if self.status_each:
                 self.status()
 
     def status(self, **extra: Any) -> None:
+        """Publish the counters with ``handled`` (decisions run) and ``failures`` (implementations raised)."""
         with self._status_lock:
-            super().status(handled=len(self.handled), failures=self.dispatcher.failures, **extra)
+            super().status(handled=len(self.handled), failures=self.implementations.failures, **extra)
 
     def close(self) -> None:
+        """Stop the worker once the decisions already queued have run (waits up to 5 s).
+
+        The transport is the caller's to close.
+        """
         self._work.put(None)
         self._worker.join(5)
 
-
-__all__ = ["Capability", "TaskNode", "decision_from_json"]

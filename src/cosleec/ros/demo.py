@@ -1,15 +1,16 @@
 """``cosleec ros2 demo`` / ``cosleec ros1 demo``: the assistive-care scenario over real
-middleware, with the Manager, the Layer Manager and a task node in separate processes."""
+middleware, with the Manager, the Layer Manager and a task node in separate processes.
+
+The end-to-end tests start their systems with :class:`System` too.
+"""
 
 from __future__ import annotations
 
 import json
 import os
-import sys
 from typing import Any
 
-from cosleec.demo.assistive_care import scenario
-from cosleec.demo.runner import rules_path
+from cosleec.demo import Display, rules_path, scenario
 from cosleec.ros import env as rosenv
 from cosleec.ros.launch import node_command, start, stop
 from cosleec.runtime import RuntimeEvent
@@ -18,7 +19,13 @@ TASKS = "cosleec.demo.assistive_care.tasks"
 
 
 class System:
-    """The demo's processes; a context manager that always stops them (by PID)."""
+    """The demo's processes; a context manager that always stops them (by PID).
+
+    Entering starts a private rosmaster (ROS 1, unless ``env`` is given), then ``nodes``
+    (by default the Manager in simulated time, the Layer Manager and a task node running
+    ``task_module``). It also copies the node environment into this process's
+    ``os.environ``, so a driver created afterwards joins the same graph.
+    """
 
     def __init__(
         self,
@@ -68,19 +75,25 @@ class System:
             stop(self.master)
 
     def codes(self) -> list[int | None]:
+        """Each node's exit code, None while it runs."""
         return [p.poll() for p in self.procs]
 
 
 def transport(backend: str, name: str) -> Any:
+    """A transport for this process's driver: :func:`cosleec.ros.run.transport`."""
     from cosleec.ros.run import transport as make
 
     return make(backend, name)
 
 
 def main(backend: str, namespace: str = "/cosleec", as_json: bool = False) -> int:
+    """Play the scripted day across processes on ``backend`` and show each decision and violation.
+
+    ``as_json`` prints one JSON object per line instead. Returns 0 when every decision
+    matches ``scenario.EXPECTED``, 1 otherwise; the processes are stopped either way.
+    """
     from rich.console import Console
 
-    from cosleec.demo.runner import Display
     from cosleec.ros.driver import Driver
 
     console = Console(highlight=False)
@@ -121,6 +134,3 @@ def main(backend: str, namespace: str = "/cosleec", as_json: bool = False) -> in
         finally:
             t.close()
 
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main(sys.argv[1]))

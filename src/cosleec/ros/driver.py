@@ -13,11 +13,20 @@ import threading
 import time
 from typing import Any
 
-from cosleec.scenario import Step, play
-from cosleec.transport import dumps, topic
+from cosleec.demo import Step, play
+from cosleec.nodes import dumps, topic
 
 
 class Driver:
+    """Plays scenario steps into a running system and collects everything the nodes publish.
+
+    Call :meth:`ready` before the first step. Each step publishes one message and waits
+    until the system is quiet, so ``decisions``, ``obligations``, ``violations`` and
+    ``rejected`` are complete after it. Expects a Manager in simulated time
+    (``--sim-time``), as :class:`cosleec.ros.demo.System` starts it; ``--status-each`` on the
+    Manager and task nodes makes the waits short. ``tasks`` names the task nodes to wait for.
+    """
+
     def __init__(
         self, transport: Any, namespace: str = "/cosleec", tasks: tuple[str, ...] = ("task",)
     ) -> None:
@@ -76,6 +85,11 @@ class Driver:
 
     # ------------------------------------------------------------------ waiting
     def wait(self, predicate: Any, timeout: float = 20.0, what: str = "condition") -> None:
+        """Block until ``predicate()`` holds, checked under the driver's lock as messages arrive.
+
+        TimeoutError after ``timeout`` seconds, naming ``what`` and the last status of
+        every node.
+        """
         deadline = time.monotonic() + timeout
         with self._lock:
             while not predicate():
@@ -123,6 +137,12 @@ class Driver:
                 time.sleep(0.02)
 
     def quiet(self, timeout: float = 20.0) -> None:
+        """Wait until the Manager has received every message sent to it and the tasks ran every obligation.
+
+        Messages to the Manager come from this driver and from the task nodes (reports and
+        requests); TimeoutError if that does not happen within ``timeout`` seconds.
+        """
+
         def settled() -> bool:
             m = self.status.get("manager")
             if m is None:
@@ -146,19 +166,26 @@ class Driver:
         self.raw(name, dumps(message))
 
     def set(self, values: dict[str, Any]) -> None:
+        """Publish one atomic context update and wait until the system is quiet."""
         self._send("context", {"values": values})
         self.quiet()
 
     def event(self, name: str) -> None:
+        """Publish the event ``name`` and wait until the system is quiet."""
         self._send("events", {"event": name})
         self.quiet()
 
     def advance(self, seconds: float) -> None:
+        """Move simulated time forward by ``seconds`` on the ``clock`` topic and wait until quiet."""
         self.now += seconds
         self._send("clock", {"t": self.now})
         self.quiet()
 
     def request(self, event: str, settle: bool = True) -> bool:
+        """Ask the Manager whether ``event`` may happen now and return its answer.
+
+        With ``settle`` it also waits until the system is quiet afterwards.
+        """
         rid = f"driver-{self.sent}"
         self._send("request", {"id": rid, "event": event})
         self.wait(lambda: rid in self.replies, what=f"reply to {rid}")
@@ -172,5 +199,10 @@ class Driver:
         self.t.publish(topic(self.ns, name), payload)
 
     def run(self, steps: list[Step], on_step: Any = None) -> None:
+        """Play ``steps`` (kinds set, event, advance, request); ``on_step(now, step)`` runs before each.
+
+        ValueError for a step kind the driver cannot play (``fail``/``recover`` exist only
+        in the embedded demo).
+        """
         actions = {"set": self.set, "event": self.event, "advance": self.advance, "request": self.request}
         play(steps, actions, lambda: self.now, on_step)  # type: ignore[arg-type]

@@ -1,4 +1,8 @@
-"""Process environments for ROS nodes: loopback-only settings, own ROS_HOME, a master for ROS 1."""
+"""Process environments for ROS nodes: loopback-only settings, own ROS_HOME, a master for ROS 1.
+
+The ROS demo and the end-to-end tests start their nodes with these, so that their traffic
+stays on this machine, parallel runs do not meet, and nothing is written to ``~/.ros``.
+"""
 
 from __future__ import annotations
 
@@ -11,11 +15,17 @@ import time
 import xmlrpc.client
 from typing import Any
 
-# variables of the ROS 2 wheels' bootstrap that must not leak into a ROS 1 child (ros-setup.md §2.6)
+# variables set by the ROS 2 wheels' bootstrap; they must not leak into a ROS 1 child process
 ROS2_BOOTSTRAP = ("_ROS_WHEELS_BOOTSTRAP_COMPLETE", "LD_LIBRARY_PATH")
 
 
 def ros2_env(base: dict[str, str] | None = None) -> dict[str, str]:
+    """A copy of ``base`` (default ``os.environ``) for ROS 2 processes that keeps DDS on this machine.
+
+    Fast DDS, discovery limited to localhost, no static peers; a random domain (1-100)
+    unless ROS_DOMAIN_ID is set; ROS_HOME (and its log directory) in a new temporary
+    directory unless ROS_HOME is set. ``base`` itself is not changed.
+    """
     env = dict(base if base is not None else os.environ)
     env.pop("ROS_STATIC_PEERS", None)
     env["RMW_IMPLEMENTATION"] = "rmw_fastrtps_cpp"
@@ -28,12 +38,22 @@ def ros2_env(base: dict[str, str] | None = None) -> dict[str, str]:
 
 
 def free_port() -> int:
+    """A TCP port on 127.0.0.1 that was free a moment ago, for a private rosmaster.
+
+    Another process may take it before the master binds it.
+    """
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return int(s.getsockname()[1])
 
 
 def ros1_env(port: int, base: dict[str, str] | None = None) -> dict[str, str]:
+    """A copy of ``base`` (default ``os.environ``) for ROS 1 processes of a private master on ``port``.
+
+    Master at 127.0.0.1, ROS_HOSTNAME=localhost, ROS_IP and the ROS 2 bootstrap variables
+    removed, ROS_HOME in a new temporary directory unless set. Start the master with
+    :func:`start_master`.
+    """
     env = {
         k: v
         for k, v in (base if base is not None else os.environ).items()
@@ -46,7 +66,12 @@ def ros1_env(port: int, base: dict[str, str] | None = None) -> dict[str, str]:
 
 
 def start_master(env: dict[str, str], timeout: float = 15.0) -> subprocess.Popen[Any]:
-    """A rosmaster on the port of ``env``'s ROS_MASTER_URI, bound to 127.0.0.1; waits until up."""
+    """A rosmaster on the port of ``env``'s ROS_MASTER_URI; waits until it answers.
+
+    It listens on loopback only when ``env`` says ROS_HOSTNAME=localhost, as
+    :func:`ros1_env` does. RuntimeError (and the process killed) if it does not answer
+    within ``timeout`` seconds. Stop it with :func:`cosleec.ros.launch.stop`.
+    """
     port = env["ROS_MASTER_URI"].rsplit(":", 1)[1]
     proc = subprocess.Popen(
         ["rosmaster", "--core", "-p", port], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL

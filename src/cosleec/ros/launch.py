@@ -27,6 +27,8 @@ from typing import Any
 
 import yaml
 
+from cosleec.errors import UserError
+
 PR_SET_PDEATHSIG = 1
 
 
@@ -36,6 +38,11 @@ def _die_with_parent() -> None:  # runs in the child, before exec
 
 
 def node_command(backend: str, args: list[str], namespace: str | None) -> list[str]:
+    """The command that runs one node: ``python -m cosleec.cli.main <backend> <kind> args...``.
+
+    It uses this interpreter, so the node runs in the same environment; ``--namespace``
+    is added unless ``args`` already give one.
+    """
     cmd = [sys.executable, "-m", "cosleec.cli.main", backend, *[str(a) for a in args]]
     if namespace and "--namespace" not in args:
         cmd += ["--namespace", namespace]
@@ -43,11 +50,18 @@ def node_command(backend: str, args: list[str], namespace: str | None) -> list[s
 
 
 def start(cmd: list[str], env: dict[str, str] | None = None, **kw: Any) -> subprocess.Popen[bytes]:
+    """Start ``cmd`` as a child that gets SIGTERM when this process dies (Linux), so none is orphaned.
+
+    ``env`` None inherits this process's environment; ``kw`` goes to :class:`subprocess.Popen`.
+    """
     return subprocess.Popen(cmd, env=env, preexec_fn=_die_with_parent, **kw)
 
 
 def stop(proc: subprocess.Popen[Any], grace: float = 5.0) -> int:
-    """Stop exactly this process: SIGTERM, wait, then SIGKILL."""
+    """Stop exactly this process: SIGTERM, wait up to ``grace`` seconds, then SIGKILL.
+
+    Returns its exit code (negative: the signal that ended it).
+    """
     if proc.poll() is None:
         proc.send_signal(signal.SIGTERM)
         try:
@@ -59,18 +73,23 @@ def stop(proc: subprocess.Popen[Any], grace: float = 5.0) -> int:
 
 
 def load(path: str) -> dict[str, Any]:
+    """Read and check a launch file: ``{"backend", "namespace", "nodes"}``.
+
+    UserError naming the file when ``backend`` or ``nodes`` is wrong. A node argument that
+    names a file next to the launch file becomes that file's absolute path.
+    """
     doc = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
     if (
         not isinstance(doc, dict)
         or doc.get("backend") not in ("ros1", "ros2")
         or not isinstance(doc.get("nodes"), list)
     ):
-        raise SystemExit(f"{path}: expected `backend: ros1|ros2` and a list `nodes` of [kind, args...]")
+        raise UserError("expected `backend: ros1|ros2` and a list `nodes` of [kind, args...]", where=path)
     base = Path(path).resolve().parent
     nodes = []
     for n in doc["nodes"]:
         if not isinstance(n, list) or not n or n[0] not in ("manager", "layers", "listener", "task"):
-            raise SystemExit(f"{path}: each node is [manager|layers|listener|task, args...], not {n!r}")
+            raise UserError(f"each node is [manager|layers|listener|task, args...], not {n!r}", where=path)
         # relative file arguments are relative to the launch file
         nodes.append(
             [n[0], *[str(base / a) if isinstance(a, str) and (base / a).exists() else str(a) for a in n[1:]]]
@@ -79,6 +98,11 @@ def load(path: str) -> dict[str, Any]:
 
 
 def launch(path: str) -> int:
+    """Start the nodes of the launch file ``path`` and supervise them until SIGINT/SIGTERM or a node exits.
+
+    Then every node is stopped. Returns 0 after a clean stop, 1 when a node exited on its
+    own or did not stop cleanly. Installs signal handlers, so call it from the main thread.
+    """
     cfg = load(path)
     stopping = threading.Event()
 
@@ -105,6 +129,3 @@ def launch(path: str) -> int:
     time.sleep(0)
     return 1 if failed else (0 if all(c in (0, -signal.SIGTERM) for c in codes) else 1)
 
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(launch(sys.argv[1]))

@@ -7,7 +7,11 @@ from typing import Any
 
 
 def message_class(type_name: str) -> Any:
-    """``std_msgs/Bool`` (or ``std_msgs/msg/Bool``) -> the message class."""
+    """``std_msgs/Bool`` (or ``std_msgs/msg/Bool``) -> the message class.
+
+    ValueError for a malformed name or a type the package lacks; ImportError when the
+    message package is not installed.
+    """
     parts = type_name.replace("/msg/", "/").split("/")
     if len(parts) != 2 or not all(p.isidentifier() for p in parts):
         raise ValueError(f"message type {type_name!r} is not of the form package/Type")

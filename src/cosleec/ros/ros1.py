@@ -1,6 +1,9 @@
 """ROS 1 transport (rospy, TCPROS): JSON in std_msgs/String, latched topics latched.
 
-Network safety: run with ROS_HOSTNAME=localhost and a 127.0.0.1 master (ros-setup.md §1).
+Imported only when a ROS 1 transport is created, so the rest of cosleec runs without
+rospy. Network safety: run with ROS_HOSTNAME=localhost and a master on 127.0.0.1
+(:func:`cosleec.ros.env.ros1_env` sets both); unlike the ROS 2 transport, this one does
+not check.
 """
 
 from __future__ import annotations
@@ -9,11 +12,18 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
+from cosleec.nodes import Handler
 from cosleec.ros.messages import message_class, to_dict
-from cosleec.transport import Handler
 
 
 class Ros1Transport:
+    """The :class:`~cosleec.nodes.Transport` on ROS 1: the process's one rospy node.
+
+    One per node process (see :func:`cosleec.ros.run.transport`); it needs the master of
+    ``ROS_MASTER_URI``. rospy's signal handlers are off: the node's own loop owns
+    SIGINT/SIGTERM. rospy calls handlers on its own threads, so they may run concurrently.
+    """
+
     def __init__(self, node_name: str) -> None:
         import rospy
         from std_msgs.msg import String
@@ -28,6 +38,10 @@ class Ros1Transport:
         self._lock = threading.Lock()
 
     def advertise(self, topic: str, latched: bool = False) -> None:
+        """Create the publisher of ``topic``, latched when ``latched``; the first call decides.
+
+        Thread-safe.
+        """
         with self._lock:
             if latched:
                 self._latched.add(topic)
@@ -37,11 +51,17 @@ class Ros1Transport:
                 )
 
     def publish(self, topic: str, payload: str) -> None:
+        """Publish JSON text on ``topic``, advertising it (not latched) on first use."""
         if topic not in self._pubs:
             self.advertise(topic)
         self._pubs[topic].publish(self._String(data=payload))
 
     def subscribe(self, topic: str, handler: Handler) -> None:
+        """Call ``handler`` with the JSON text of every message on ``topic``.
+
+        Latching is the publisher's business in ROS 1: a late subscriber gets a latched
+        topic's last message without asking.
+        """
         self._subs.append(
             self._rospy.Subscriber(
                 topic, self._String, lambda m: handler(m.data), queue_size=1000, tcp_nodelay=True
@@ -49,6 +69,10 @@ class Ros1Transport:
         )
 
     def subscribe_typed(self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None]) -> None:
+        """Call ``handler`` with every ``type_name`` message on ``topic``, as nested dicts.
+
+        ValueError or ImportError for a message type that cannot be loaded.
+        """
         cls = message_class(type_name)
         self._subs.append(self._rospy.Subscriber(topic, cls, lambda m: handler(to_dict(m)), queue_size=1000))
 
@@ -61,17 +85,24 @@ class Ros1Transport:
         pub.publish(message_class(type_name)(**fields))
 
     def typed_subscribers(self, topic: str, type_name: str) -> int:
+        """Connections of this transport's typed publisher on ``topic`` (0 before :meth:`publish_typed`)."""
         pub = self._pubs.get(f"{topic}#{type_name}")
         return pub.get_num_connections() if pub is not None else 0
 
     def subscribers(self, topic: str) -> int:
+        """Subscribers connected to this transport's publisher on ``topic`` (0 if it has none).
+
+        ROS 1 delivers nothing to a subscriber before its connection is made: wait for it.
+        """
         pub = self._pubs.get(topic)
         return pub.get_num_connections() if pub is not None else 0
 
     def ok(self) -> bool:
+        """False once rospy has shut down: :func:`cosleec.ros.serve` then stops the node."""
         return not self._rospy.is_shutdown()
 
     def close(self) -> None:
+        """Unregister every subscriber and publisher, then shut rospy down for this process."""
         for s in self._subs:
             s.unregister()
         for p in self._pubs.values():

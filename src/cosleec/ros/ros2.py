@@ -1,6 +1,8 @@
 """ROS 2 transport (rclpy, Fast DDS): JSON in std_msgs/String, latched topics transient-local.
 
-Network safety is the caller's job and is checked here: see ``check_network`` (ros-setup.md §1).
+Imported only when a ROS 2 transport is created, so the rest of cosleec runs without
+rclpy. Network safety is checked here, fail closed: the transport refuses to start unless
+DDS discovery is confined to this machine (:func:`check_network`).
 """
 
 from __future__ import annotations
@@ -11,22 +13,40 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
+from cosleec.errors import UserError
+from cosleec.nodes import Handler
 from cosleec.ros.messages import message_class, to_dict
-from cosleec.transport import Handler
+
+
+class UnsafeNetworkError(UserError):
+    """ROS 2 discovery could leave this machine: cosleec refuses to start (fail closed)."""
 
 
 def check_network() -> None:
-    """Refuse to start DDS where discovery could leave loopback (fail closed)."""
+    """Refuse to start DDS where discovery could leave loopback (fail closed).
+
+    Passes when ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` (as
+    :func:`cosleec.ros.env.ros2_env` sets it) or ``COSLEEC_ALLOW_NETWORK`` is set, for a
+    deployment on a real robot network; raises :class:`UnsafeNetworkError` otherwise.
+    """
     if os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE") != "LOCALHOST" and not os.environ.get(
         "COSLEEC_ALLOW_NETWORK"
     ):
-        raise SystemExit(
-            "cosleec: refusing to start ROS 2 without ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST "
-            "(set COSLEEC_ALLOW_NETWORK=1 to deploy on a real robot network)"
+        raise UnsafeNetworkError(
+            "refusing to start ROS 2 without ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST",
+            hint="set COSLEEC_ALLOW_NETWORK=1 to deploy on a real robot network",
         )
 
 
 class Ros2Transport:
+    """The :class:`~cosleec.nodes.Transport` on ROS 2: one rclpy node, spun on its own thread.
+
+    One per node process (see :func:`cosleec.ros.run.transport`). It checks the network
+    first (:class:`UnsafeNetworkError`), and initialises rclpy if needed without rclpy's
+    signal handlers: the node's own loop owns SIGINT/SIGTERM. A single-threaded executor
+    runs every handler of this transport, one at a time, on the spin thread.
+    """
+
     def __init__(self, node_name: str) -> None:
         check_network()
         import rclpy
@@ -73,6 +93,10 @@ class Ros2Transport:
         )
 
     def advertise(self, topic: str, latched: bool = False) -> None:
+        """Create the publisher of ``topic``, reliable; transient-local with depth 1 when ``latched``.
+
+        The first call for a topic fixes its QoS. Thread-safe.
+        """
         with self._lock:
             if latched:
                 self._latched.add(topic)
@@ -82,11 +106,17 @@ class Ros2Transport:
                 )
 
     def publish(self, topic: str, payload: str) -> None:
+        """Publish JSON text on ``topic``, advertising it (not latched) on first use."""
         if topic not in self._pubs:
             self.advertise(topic)
         self._pubs[topic].publish(self._String(data=payload))
 
     def subscribe(self, topic: str, handler: Handler, latched: bool | None = None) -> None:
+        """Call ``handler`` with the JSON text of every message on ``topic``.
+
+        ``latched`` asks for transient-local QoS, to receive a latched publisher's last
+        message; None decides by the name (a topic ending in ``layers``).
+        """
         is_latched = topic.rsplit("/", 1)[-1] == "layers" if latched is None else latched
         sub = self.node.create_subscription(
             self._String, topic, lambda m: handler(m.data), self._qos(is_latched)
@@ -94,6 +124,10 @@ class Ros2Transport:
         self._subs.append(sub)
 
     def subscribe_typed(self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None]) -> None:
+        """Call ``handler`` with every ``type_name`` message on ``topic``, as nested dicts.
+
+        ValueError or ImportError for a message type that cannot be loaded.
+        """
         cls = message_class(type_name)
         sub = self.node.create_subscription(cls, topic, lambda m: handler(to_dict(m)), self._qos(False))
         self._subs.append(sub)
@@ -109,21 +143,31 @@ class Ros2Transport:
         pub.publish(message_class(type_name)(**fields))
 
     def typed_subscribers(self, topic: str, type_name: str) -> int:
+        """Subscribers of this transport's typed publisher on ``topic`` (0 before :meth:`publish_typed`)."""
         pub = self._pubs.get(f"{topic}#{type_name}")
         return pub.get_subscription_count() if pub is not None else 0
 
     def subscribers(self, topic: str) -> int:
+        """Subscribers matched to this transport's publisher on ``topic`` (0 if it has none).
+
+        Node status reports these, so a harness can tell the graph is connected.
+        """
         pub = self._pubs.get(topic)
         return pub.get_subscription_count() if pub is not None else 0
 
     def publishers(self, topic: str) -> int:
+        """Publishers on ``topic`` in the whole ROS graph, as this node sees it."""
         return int(self.node.count_publishers(topic))
 
     def ok(self) -> bool:
+        """False once rclpy has shut down: :func:`cosleec.ros.serve` then stops the node."""
         return bool(self._rclpy.ok())
 
     def close(self) -> None:
-        """The shutdown order that avoids aborts at exit (ros-setup.md §2.6)."""
+        """Shut down in the order that avoids aborts at exit: executor, spin thread, node, rclpy.
+
+        Errors along the way (a context already invalid) are ignored.
+        """
         with contextlib.suppress(Exception):
             self.executor.shutdown()
         self._thread.join(5)

@@ -1,38 +1,55 @@
-"""Run one CO-SLEEC node on ROS 2 or ROS 1 until SIGINT/SIGTERM, then stop it cleanly."""
+"""Run one CO-SLEEC node on ROS 2 or ROS 1 until SIGINT/SIGTERM, then stop it cleanly.
+
+Behind ``cosleec ros2 <node>`` and ``cosleec ros1 <node>``: it picks the transport,
+turns a missing middleware into a user error, and keeps the node's heartbeat going.
+"""
 
 from __future__ import annotations
 
 import importlib
 import logging
 import signal
-import sys
 import threading
 from typing import Any
 
+from cosleec.errors import UserError
+
+
+class MiddlewareMissingError(UserError):
+    """The chosen middleware cannot be imported in this Python environment."""
+
 
 def transport(backend: str, node_name: str) -> Any:
+    """A transport for node ``node_name`` on ``backend`` (``"ros2"``; anything else is ROS 1).
+
+    MiddlewareMissingError, with a hint, when rclpy or rospy cannot be imported here; on
+    ROS 2, UnsafeNetworkError when discovery could leave this machine.
+    """
     if backend == "ros2":
         try:
             from cosleec.ros.ros2 import Ros2Transport
         except ImportError as e:
-            raise SystemExit(
-                f"cosleec: ROS 2 (rclpy) is not available here: {e}; use .venv-ros2 (bash scripts/setup-ros)"
+            raise MiddlewareMissingError(
+                f"ROS 2 (rclpy) is not available here: {e}", hint="use .venv-ros2 (bash scripts/setup-ros)"
             ) from None
         return Ros2Transport(node_name)
     try:
         from cosleec.ros.ros1 import Ros1Transport
     except ImportError as e:
-        raise SystemExit(
-            f"cosleec: ROS 1 (rospy) is not available here: {e}; use .venv-ros1 (bash scripts/setup-ros)"
+        raise MiddlewareMissingError(
+            f"ROS 1 (rospy) is not available here: {e}", hint="use .venv-ros1 (bash scripts/setup-ros)"
         ) from None
     return Ros1Transport(node_name)
 
 
 def load_module(name: str) -> Any:
+    """Import the task module given by ``--module``; UserError with a hint if it cannot be imported."""
     try:
         return importlib.import_module(name)
     except ImportError as e:
-        raise SystemExit(f"cosleec: cannot import task module {name!r}: {e}") from None
+        raise UserError(
+            f"cannot import task module {name!r}: {e}", hint="check --module and that the module is on PYTHONPATH"
+        ) from None
 
 
 def serve(backend: str, kind: str, make: Any, node_name: str) -> int:
@@ -40,6 +57,10 @@ def serve(backend: str, kind: str, make: Any, node_name: str) -> int:
 
     The signal handlers come first, so that a stop requested while the node is still
     starting ends it cleanly (exit 0) instead of killing it half-initialised.
+
+    ``make(transport)`` builds the node. Once it is up, ``ready`` is printed and the
+    node's ``status()`` runs every 0.5 s as a heartbeat, so late joiners learn its state.
+    Returns 0; call it from the main thread.
     """
     logging.basicConfig(level=logging.INFO, format=f"[{node_name}] %(levelname)s %(message)s")
     stop = threading.Event()
@@ -66,6 +87,3 @@ def serve(backend: str, kind: str, make: Any, node_name: str) -> int:
         t.close()
     return 0
 
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(0)

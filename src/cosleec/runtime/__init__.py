@@ -1,38 +1,59 @@
 """CO-SLEEC: SLEEC rules become COP layers; the context drives activation; triggers dispatch.
 
-from cosleec.runtime import Manager, Task, hedge
+The face of the runtime: other packages import only what is listed here. ::
 
-m = Manager("rules.sleec")
-m.update(userUndressed=True, userDistressed=False)
-m.event("CurtainOpenRequest")     # -> [Decision(rule="R1", clause=1, layer="R1.1", ...)]
+    from cosleec.runtime import Manager
+
+    m = Manager.from_file("rules.sleec")
+    m.update(userUndressed=True, userDistressed="low")
+    m.event("CurtainOpenRequest")     # -> [Decision(rule="R1", clause=1, layer="R1.1", ...)]
+
+How a rule becomes layers: :mod:`cosleec.runtime.model`; how the context picks them:
+:mod:`cosleec.runtime.layers`; how a trigger reaches its variant:
+:mod:`cosleec.runtime.implementations`.
 """
 
-from cosleec.runtime.audit import AuditLog
+from cosleec.lang import HedgeSemantics, Unknowns
+from cosleec.runtime.audit import AuditLog, read_audit
 from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
+from cosleec.runtime.context import Context
 from cosleec.runtime.decision import Decision
-from cosleec.runtime.errors import BindingError, ContextError, UnknownMeasureError
-from cosleec.runtime.layers import LayerManager, select
-from cosleec.runtime.manager import Manager, RuntimeEvent, load_rules
-from cosleec.runtime.model import Obligation
+from cosleec.runtime.errors import BindingError, ConfigurationError, ContextError
+from cosleec.runtime.implementations import Capability, Implementations
+from cosleec.runtime.layers import LayerManager, LayerSwitch
+from cosleec.runtime.manager import Manager, RuntimeEvent
+from cosleec.runtime.model import CompiledRule, Obligation
 from cosleec.runtime.obligations import Tracked
-from cosleec.runtime.tasks import Task, hedge
+from cosleec.runtime.ruleset import RuleSet
+from cosleec.runtime.tasks import Reporter, Task, hedge
+from cosleec.runtime.values import MeasureSpec, Value
 
 __all__ = [
     "AuditLog",
     "BindingError",
+    "Capability",
     "Clock",
+    "CompiledRule",
+    "ConfigurationError",
+    "Context",
     "ContextError",
     "Decision",
+    "HedgeSemantics",
+    "Implementations",
     "LayerManager",
+    "LayerSwitch",
     "Manager",
+    "MeasureSpec",
     "MonotonicClock",
     "Obligation",
+    "Reporter",
+    "RuleSet",
     "RuntimeEvent",
     "Task",
     "Tracked",
-    "UnknownMeasureError",
+    "Unknowns",
+    "Value",
     "VirtualClock",
     "hedge",
-    "load_rules",
-    "select",
+    "read_audit",
 ]

@@ -15,6 +15,13 @@ from typing import Any, TextIO
 
 
 class AuditLog:
+    """An append-only JSON Lines file of runtime events; pass one (or a path) as ``Manager(audit=...)``.
+
+    Opening it creates missing parent directories and appends to an existing file.
+    Thread-safe: records are written whole, one per line, in the order of the calls.
+    ``count`` is the number of records this object wrote.
+    """
+
     def __init__(self, path: str | Path, *, fsync: bool = False) -> None:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -24,6 +31,7 @@ class AuditLog:
         self.count = 0
 
     def write(self, record: dict[str, Any]) -> None:
+        """Append one record and flush it to the operating system before returning."""
         line = json.dumps(record, default=str, separators=(",", ":")) + "\n"
         with self._lock:
             self._fh.write(line)
@@ -33,11 +41,12 @@ class AuditLog:
             self.count += 1
 
     def close(self) -> None:
+        """Close the file; later writes fail."""
         with self._lock:
             self._fh.close()
 
 
-def read(path: str | Path) -> list[dict[str, Any]]:
+def read_audit(path: str | Path) -> list[dict[str, Any]]:
     """Every complete record of an audit log (a torn last line is skipped)."""
     out = []
     for line in Path(path).read_text(encoding="utf-8").splitlines():

@@ -11,8 +11,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from cosleec.lang import Printer, SymbolTable
 from cosleec.lang import ast as A
-from cosleec.lang.checker import SymbolTable
 
 Values = dict[str, Any]
 PYOP = {
@@ -31,12 +31,23 @@ PYOP = {
 
 
 class Compiler:
+    """Compiles the conditions and deadlines of one checked specification to Python functions.
+
+    It needs the checker's symbol table to tell measures, constants and scale literals
+    apart, so there is one per :class:`~cosleec.runtime.RuleSet`, used while the rule set
+    is built; identical conditions share one compiled function.
+    """
+
     def __init__(self, symbols: SymbolTable) -> None:
         self.symbols = symbols
         self._cache: dict[str, Callable[[Values], Any]] = {}
 
     def source(self, e: A.Expr, reads: set[str], scale: str | None = None) -> str:
-        """Python source for ``e``; ``scale`` is the measure whose literals bare names denote."""
+        """Python source for ``e``; ``scale`` is the measure whose literals bare names denote.
+
+        Adds every measure ``e`` reads to ``reads``. ValueError for a name that is neither a
+        measure, a constant nor (with ``scale``) a literal -- the checker rules that out.
+        """
         if isinstance(e, A.BoolLit):
             return "True" if e.value else "False"
         if isinstance(e, A.IntLit):
@@ -90,6 +101,4 @@ def text(e: A.Expr | None) -> str:
     """A condition as SLEEC text, for explanations."""
     if e is None:
         return "true"
-    from cosleec.lang.printer import Printer
-
     return Printer(A.Specification((), ()), A.Dialect.TK).expr(e)

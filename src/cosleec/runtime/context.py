@@ -14,15 +14,22 @@ from cosleec.runtime.values import MeasureSpec, Value
 
 
 class Context:
-    """Current measure values (stored form: scale values as positions). Not thread-safe:
-    the Manager serialises access."""
+    """Current measure values (stored form: scale values as positions).
 
-    def __init__(self, measures: Mapping[str, MeasureSpec]) -> None:
+    ``max_age`` maps a measure to the seconds after which its value is stale (unknown).
+    Not thread-safe: the Manager serialises access.
+    """
+
+    def __init__(self, measures: Mapping[str, MeasureSpec], max_age: Mapping[str, float] | None = None) -> None:
         self.measures = dict(measures)
+        ages = dict(max_age or {})
+        unknown = sorted(set(ages) - set(self.measures))
+        if unknown:
+            raise ContextError(f"max_age names no measure: {', '.join(unknown)}")
         self.values: dict[str, Any] = {}
         self.stamps: dict[str, float] = {}
         self.version = 0
-        self._aged = [(n, s.max_age) for n, s in self.measures.items() if s.max_age is not None]
+        self._aged = sorted(ages.items())
 
     def validate(self, updates: Mapping[str, object]) -> dict[str, Any]:
         """The stored form of every update, or ContextError naming the first bad one."""
@@ -63,11 +70,11 @@ class Context:
         return gone
 
     def next_expiry(self) -> float | None:
-        times = [
-            self.stamps[n] + s.max_age
-            for n, s in self.measures.items()
-            if s.max_age is not None and n in self.values
-        ]
+        """When the next known value reaches its ``max_age`` (clock time, seconds); None if none can.
+
+        The Manager's timer thread sleeps until then; the value goes stale just after it.
+        """
+        times = [self.stamps[n] + age for n, age in self._aged if n in self.values]
         return min(times) if times else None
 
     def external(self, names: Any = None) -> dict[str, Value | None]:

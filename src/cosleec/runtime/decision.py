@@ -1,64 +1,68 @@
 """Decision records: everything a trigger decided, and why, in one immutable value.
 
 Every decision renders as a short explanation a person (or an ``ExplainWhy`` obligation)
-can use: ``R1: Refuse and ExplainWhy, because userUndressed was true; userDistressed was
-false``.
+can use: ``R1: Refuse and ExplainWhy [clause 1 (unless userUndressed)], because
+userUndressed was true; userDistressed >= high was false``. Which condition values are
+named is decided by :func:`cosleec.lang.hedges.decisive`, so the explanation follows the
+same clause semantics as the choice itself.
+
+:meth:`Decision.to_json` and :meth:`Decision.from_json` are the one wire format: the audit
+log, the ROS topics and the task nodes all use them.
 """
 
 from __future__ import annotations
 
+import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import Any
 
+from cosleec.lang import HedgeSemantics, decisive
 from cosleec.runtime.model import Obligation
 from cosleec.runtime.values import Value
 
 
-class ConditionValue(NamedTuple):
-    clause: int  # 0: the trigger condition; i: clause i
-    text: str
-    value: bool | None  # None: unknown
-
-
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Decision:
+    """What one trigger decided for one rule (or what an ``otherwise`` started).
+
+    ``clause`` is 0 for the default response, i for clause i (layer ``R.i``), None when
+    undetermined (a measure it needed had no value: nothing is done). ``conditions``
+    holds ``(clause, condition text, value)`` with clause 0 for the trigger condition.
+    A fallback decision (``event == "otherwise"``) has ``violated``, the obligation whose
+    miss started it, and its explanation in ``reason``.
+    """
+
     id: int
     time: float
     event: str
     rule: str
-    clause: int | None  # 0 default, i clause i, None undetermined
+    clause: int | None
     layer: str | None
-    semantics: str
+    semantics: HedgeSemantics
     values: dict[str, Value | None]
-    conditions: tuple[tuple[int, str, bool | None], ...]  # (clause, condition text, value); 0: trigger
+    conditions: tuple[tuple[int, str, bool | None], ...]
     obligations: tuple[Obligation, ...]
     missing: tuple[str, ...] = ()
-    reason: str = ""  # set for decisions that are not a rule's clause choice (otherwise follow-ups)
+    reason: str = ""
     context_version: int = 0
-    extra: dict[str, Any] = field(default_factory=dict)
+    violated: int | None = None
+    _explanation: list[str] = field(default_factory=list, init=False, compare=False, repr=False)
 
     @property
     def explanation(self) -> str:
         """Why this decision, in a sentence (computed when first asked for)."""
-        cached = self.__dict__.get("_explanation")
-        if cached is None:
-            cached = self.reason or explain(
-                self.rule,
-                self.clause,
-                tuple(ConditionValue(*c) for c in self.conditions),
-                self.obligations,
-                self.values,
-                self.semantics,
-                self.missing,
-            )
-            object.__setattr__(self, "_explanation", cached)
-        return cached
+        if not self._explanation:
+            self._explanation.append(self.reason or _because(self))
+        return self._explanation[0]
 
     @property
     def undetermined(self) -> bool:
+        """True when no clause could be chosen (a measure had no value)."""
         return self.clause is None
 
     def to_json(self) -> dict[str, Any]:
+        """The wire and audit form; :meth:`from_json` reads it back."""
         return {
             "type": "decision",
             "id": self.id,
@@ -67,14 +71,38 @@ class Decision:
             "rule": self.rule,
             "clause": self.clause,
             "layer": self.layer,
-            "semantics": self.semantics,
+            "semantics": str(self.semantics),
             "values": self.values,
             "conditions": [{"clause": c, "condition": t, "value": v} for c, t, v in self.conditions],
             "obligations": [o.to_json() for o in self.obligations],
             "missing": list(self.missing),
+            "reason": self.reason,
             "explanation": self.explanation,
             "context_version": self.context_version,
+            "violated": self.violated,
         }
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> Decision:
+        """A decision read back from :meth:`to_json`; raises KeyError/ValueError/TypeError when malformed."""
+        clause = d.get("clause")
+        violated = d.get("violated")
+        return cls(
+            id=int(d["id"]),
+            time=float(d.get("time", 0.0)),
+            event=str(d.get("event", "")),
+            rule=str(d["rule"]),
+            clause=None if clause is None else int(clause),
+            layer=d.get("layer"),
+            semantics=HedgeSemantics(d.get("semantics", HedgeSemantics.LAST_WINS)),
+            values=dict(d.get("values", {})),
+            conditions=tuple((int(c["clause"]), str(c["condition"]), c["value"]) for c in d.get("conditions", [])),
+            obligations=tuple(Obligation.from_json(o) for o in d.get("obligations", [])),
+            missing=tuple(d.get("missing", ())),
+            reason=str(d.get("reason", "")),
+            context_version=int(d.get("context_version", 0)),
+            violated=None if violated is None else int(violated),
+        )
 
 
 def _fmt(v: Value | None) -> str:
@@ -85,40 +113,29 @@ def _fmt(v: Value | None) -> str:
     return str(v)
 
 
-def explain(
-    rule: str,
-    clause: int | None,
-    conditions: tuple[ConditionValue, ...],
-    obligations: tuple[Obligation, ...],
-    values: dict[str, Value | None],
-    semantics: str,
-    missing: tuple[str, ...] = (),
-) -> str:
+def _because(d: Decision) -> str:
     """Why this clause: the conditions that decided it, with the values they read."""
-    hedges = [c for c in conditions if c.clause > 0]
-
-    def reason(c: ConditionValue) -> str:
-        t = c.text
-        if t in values:  # a boolean measure: "userUndressed was true"
-            return f"{t} was {_fmt(c.value)}"
-        shown = ", ".join(f"{n} = {_fmt(v)}" for n, v in values.items() if _mentions(t, n))
-        return f"{t} was {_fmt(c.value)}" + (f" ({shown})" if shown else "")
-
+    rule, clause = d.rule, d.clause
     if clause is None:
-        return f"{rule}: undetermined, no value for {', '.join(missing)}; nothing was done"
-    what = " and ".join(o.describe() for o in obligations) if obligations else "nothing is required"
+        return f"{rule}: undetermined, no value for {', '.join(d.missing)}; nothing was done"
+    what = " and ".join(o.describe() for o in d.obligations) if d.obligations else "nothing is required"
+    hedges = [(c, t, v) for c, t, v in d.conditions if c > 0]
     if not hedges:
         return f"{rule}: {what}"
-    if semantics == "nested":
-        decisive = hedges[: clause + 1]
-    else:
-        decisive = hedges[clause - 1 :] if clause else hedges
-    because = "; ".join(reason(c) for c in decisive)
-    head = "default" if clause == 0 else f"clause {clause} (unless {hedges[clause - 1].text})"
+    chosen = set(decisive([v for _, _, v in hedges], clause, d.semantics))
+
+    def reason(t: str, v: bool | None) -> str:
+        if t in d.values:  # a boolean measure: "userUndressed was true"
+            return f"{t} was {_fmt(v)}"
+        shown = ", ".join(f"{n} = {_fmt(x)}" for n, x in d.values.items() if _mentions(t, n))
+        return f"{t} was {_fmt(v)}" + (f" ({shown})" if shown else "")
+
+    because = "; ".join(reason(t, v) for c, t, v in hedges if c in chosen)
+    head = "default" if clause == 0 else f"clause {clause}" + (
+        f" (unless {hedges[clause - 1][1]})" if clause <= len(hedges) else ""
+    )
     return f"{rule}: {what} [{head}], because {because}"
 
 
 def _mentions(text: str, name: str) -> bool:
-    import re
-
     return re.search(rf"\b{re.escape(name)}\b", text) is not None

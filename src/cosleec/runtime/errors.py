@@ -1,27 +1,36 @@
-"""Errors of the CO-SLEEC runtime."""
+"""Errors of the CO-SLEEC runtime, named after the situation; all are user errors.
+
+Both derive from :class:`cosleec.errors.UserError`: the CLI prints them with their hint
+and exits 1. :class:`ContextError` is also a ``ValueError`` for callers who catch that.
+"""
 
 from __future__ import annotations
 
+from cosleec.errors import UserError
 
-class RuntimeErrorBase(Exception):
-    """Base class of runtime errors."""
-
-
-class ContextError(RuntimeErrorBase, ValueError):
-    """A context update was rejected (unknown measure, wrong type, value outside the scale)."""
+__all__ = ["BindingError", "ConfigurationError", "ContextError"]
 
 
-class UnknownMeasureError(RuntimeErrorBase, LookupError):
-    """A condition needs a measure that has no (fresh) value."""
+class ContextError(UserError, ValueError):
+    """An input was rejected: unknown measure or event, wrong type, value outside the scale.
 
-    def __init__(self, names: tuple[str, ...]) -> None:
-        self.names = names
-        super().__init__(f"no value for {', '.join(names)}")
+    Nothing changed: every update is all-or-nothing.
+    """
 
 
-class BindingError(RuntimeErrorBase):
-    """Tasks or capabilities do not cover the rules they are bound to (completeness check)."""
+class BindingError(UserError):
+    """Tasks or capabilities do not cover the rules they are bound to (completeness check).
+
+    ``missing`` lists every clause or event without an implementation.
+    """
 
     def __init__(self, missing: list[str]) -> None:
         self.missing = missing
-        super().__init__("incomplete implementation:\n  - " + "\n  - ".join(missing))
+        super().__init__(
+            "incomplete implementation:\n  - " + "\n  - ".join(missing),
+            hint="implement each listed clause in its task (@hedge(i)) or register a capability for the event",
+        )
+
+
+class ConfigurationError(UserError, ValueError):
+    """An option has a value it does not accept (``semantics="nestd"``); the message lists the choices."""

@@ -1,29 +1,29 @@
-"""The COP Layer Manager: which hedge layer of each rule is active, kept up to date.
+"""The COP Layer Manager: which layer of each rule is active, kept in step with the context.
 
-On every context change only the rules whose hedge conditions read a changed measure are
-re-evaluated (a dependency index from measure to rules), so the cost of an update does
-not depend on the rules it does not touch. Each rule's clauses form one exclusive group;
-the active layer is chosen by the rule set's semantics:
+Each rule's clauses are COP layers (``R1.1``, ``R1.2``, ...; see :mod:`cosleec.runtime.model`).
+On every context change the Layer Manager re-evaluates only the rules whose clause
+conditions read a changed measure (a dependency index from measure to rules), so the cost
+of an update does not depend on the rules it does not touch, and activates, for each of
+them, exactly the layer :func:`cosleec.lang.hedges.choose` selects -- none for the
+default, none either when the choice is undetermined (a measure is unknown and the
+``unknowns`` policy does not say how to read it).
 
-- ``last-wins`` (default, SLEEC): the last clause whose condition holds;
-- ``nested`` (the CO-SLEEC paper's formula): clause i iff conditions 1..i hold and i+1 not.
-
-A clause whose condition cannot be evaluated (a measure is unknown) makes the selection
-*undetermined* unless the ``unknown`` policy says to read unknown conditions as false or
-true.
+A trigger is decided against this state: the decision takes the rule's active clause,
+and the rule's layered method is dispatched under that clause's composition, so COP runs
+that clause's variant (see :mod:`cosleec.runtime.implementations`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import NamedTuple
 
+from cosleec.cop import Snapshot
+from cosleec.lang import HedgeSemantics, Unknowns, choose
 from cosleec.runtime.compile import Values
-from cosleec.runtime.model import CompiledRule, RuleSet
-
-Semantics = Literal["last-wins", "nested"]
-UnknownPolicy = Literal["undetermined", "false", "true"]
-SEMANTICS: tuple[str, ...] = ("last-wins", "nested")
+from cosleec.runtime.model import Clause, CompiledRule
+from cosleec.runtime.ruleset import RuleSet
 
 
 @dataclass(frozen=True, slots=True)
@@ -35,7 +35,20 @@ class RuleStatus:
     missing: tuple[str, ...] = ()
 
 
-def evaluate(conds: tuple[Any, ...], v: Values) -> tuple[tuple[bool | None, ...], tuple[str, ...]]:
+class LayerSwitch(NamedTuple):
+    """A rule's active layer changed: ``None`` is the base (default), ``"?"`` undetermined."""
+
+    rule: str
+    before: str | None
+    after: str | None
+
+    def to_json(self) -> dict[str, str | None]:
+        """The form of one entry of a ``layers`` message's ``switches``."""
+        return {"rule": self.rule, "from": self.before, "to": self.after}
+
+
+def evaluate(conds: Iterable[Clause], v: Values) -> tuple[tuple[bool | None, ...], tuple[str, ...]]:
+    """Every condition's value (None when a measure it reads has no value) and those measures."""
     out: list[bool | None] = []
     missing: list[str] = []
     for c in conds:
@@ -49,78 +62,46 @@ def evaluate(conds: tuple[Any, ...], v: Values) -> tuple[tuple[bool | None, ...]
     return tuple(out), tuple(missing)
 
 
-def layer_name(rule: CompiledRule, clause: int | None) -> str | None:
-    """The rule's active layer: None for the default (base), "?" when undetermined."""
+def _layer_name(rule: CompiledRule, clause: int | None) -> str | None:
     return "?" if clause is None else rule.layer_of(clause)
 
 
-def switch_records(
-    switches: list[tuple[CompiledRule, int | None, int | None]],
-) -> list[tuple[str, str | None, str | None]]:
-    """Layer switches ``(rule, old clause, new clause)`` as ``(rule, old layer, new layer)`` names."""
-    return [(r.name, layer_name(r, o), layer_name(r, n)) for r, o, n in switches]
-
-
-def switches_json(records: list[tuple[str, str | None, str | None]]) -> list[dict[str, str | None]]:
-    """The ``switches`` field of a ``layers`` message, the same from the Manager and the Layer Manager node."""
-    return [{"rule": r, "from": a, "to": b} for r, a, b in records]
-
-
-def select(values: tuple[bool | None, ...], semantics: str, unknown: str = "undetermined") -> int | None:
-    """The active clause (0 = default) for these condition values, or None if undetermined."""
-    if unknown != "undetermined":
-        sub = unknown == "true"
-        values = tuple(sub if x is None else x for x in values)
-    if semantics == "last-wins":
-        for i in range(len(values) - 1, -1, -1):
-            x = values[i]
-            if x is None:
-                return None
-            if x:
-                return i + 1
-        return 0
-    k = 0
-    for x in values:
-        if x is None:
-            return None
-        if not x:
-            break
-        k += 1
-    return k
-
-
 class LayerManager:
-    """Keeps every rule's active hedge layer in step with the context (see module doc)."""
+    """Keeps every rule's active layer in step with the context (see the module docstring).
 
-    def __init__(self, ruleset: RuleSet, semantics: str = "last-wins", unknown: str = "undetermined") -> None:
-        if semantics not in SEMANTICS:
-            raise ValueError(f"semantics must be one of {SEMANTICS}, not {semantics!r}")
+    Used by the embedded Manager and by the Layer Manager node; not thread-safe (its owner
+    serialises access).
+    """
+
+    def __init__(
+        self,
+        ruleset: RuleSet,
+        semantics: HedgeSemantics = HedgeSemantics.LAST_WINS,
+        unknowns: Unknowns = Unknowns.UNDETERMINED,
+    ) -> None:
         self.ruleset = ruleset
-        self.semantics = semantics
-        self.unknown = unknown
+        self.semantics = HedgeSemantics(semantics)
+        self.unknowns = Unknowns(unknowns)
         self.index: dict[str, list[CompiledRule]] = {}
         for r in ruleset.rules:
             for m in r.hedge_reads:
                 self.index.setdefault(m, []).append(r)
         self.status: list[RuleStatus] = [self._compute(r, {}) for r in ruleset.rules]
-        self.active: dict[int, str] = {}  # rule index -> active hedge layer (rules at default absent)
+        self._active: dict[int, str] = {}  # rule index -> active layer (rules at their default absent)
 
     def _compute(self, r: CompiledRule, v: Values) -> RuleStatus:
-        if not r.clauses:
+        if r.evaluate_all is None:
             return RuleStatus((), 0)
-        if r.evaluate_all is not None:
-            try:
-                values: tuple[bool | None, ...] = r.evaluate_all(v)
-                return RuleStatus(values, select(values, self.semantics, self.unknown))
-            except KeyError:
-                pass  # some measure is unknown: find out which, clause by clause
+        try:
+            values: tuple[bool | None, ...] = r.evaluate_all(v)
+            return RuleStatus(values, choose(values, self.semantics, self.unknowns))
+        except KeyError:
+            pass  # some measure is unknown: find out which, clause by clause
         values, missing = evaluate(r.clauses, v)
-        return RuleStatus(values, select(values, self.semantics, self.unknown), missing)
+        return RuleStatus(values, choose(values, self.semantics, self.unknowns), missing)
 
-    def update(
-        self, changed: set[str] | frozenset[str], v: Values
-    ) -> list[tuple[CompiledRule, int | None, int | None]]:
-        """Re-evaluate the rules that read ``changed``; return (rule, old, new) layer switches."""
+    def update(self, changed: Iterable[str], v: Values) -> list[LayerSwitch]:
+        """Re-evaluate the rules that read a ``changed`` measure; return the layer switches."""
         touched: dict[int, CompiledRule] = {}
         index = self.index
         for m in changed:
@@ -133,27 +114,30 @@ class LayerManager:
             old = status[i]
             status[i] = new
             if new.clause != old.clause:
-                switches.append((r, old.clause, new.clause))
+                switches.append(LayerSwitch(r.name, _layer_name(r, old.clause), _layer_name(r, new.clause)))
                 if new.clause:
-                    self.active[i] = r.clauses[new.clause - 1].layer
+                    self._active[i] = r.clauses[new.clause - 1].layer
                 else:
-                    self.active.pop(i, None)
+                    self._active.pop(i, None)
         return switches
 
     def recompute_all(self, v: Values) -> None:
+        """Re-evaluate every rule (after a change of semantics)."""
         self.status = [self._compute(r, v) for r in self.ruleset.rules]
-        self.active = {
-            r.index: r.clauses[st.clause - 1].layer
-            for r, st in zip(self.ruleset.rules, self.status)
-            if st.clause
+        self._active = {
+            r.index: r.clauses[st.clause - 1].layer for r, st in zip(self.ruleset.rules, self.status) if st.clause
         }
 
     def active_layers(self) -> list[str]:
-        """The active hedge layers, in rule order (a rule at its default contributes none)."""
-        return [self.active[i] for i in sorted(self.active)]
+        """The active layers, in rule order (a rule at its default or undetermined has none)."""
+        return [self._active[i] for i in sorted(self._active)]
 
-    def set_semantics(self, semantics: str, v: Values) -> None:
-        if semantics not in SEMANTICS:
-            raise ValueError(f"semantics must be one of {SEMANTICS}, not {semantics!r}")
-        self.semantics = semantics
+    def composition(self) -> Snapshot:
+        """The active layers as one COP composition (for introspection with ``cosleec.cop``)."""
+        rules = self.ruleset.rules
+        return Snapshot(tuple(rules[i].layers[c - 1] for i in sorted(self._active) if (c := self.status[i].clause)))
+
+    def set_semantics(self, semantics: HedgeSemantics, v: Values) -> None:
+        """Switch between last-wins and nested clause choice, re-evaluating every rule."""
+        self.semantics = HedgeSemantics(semantics)
         self.recompute_all(v)

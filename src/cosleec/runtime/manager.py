@@ -1,89 +1,110 @@
 """The Manager: rules, context, layers, decisions and obligations, in one process.
 
-It plays the paper's *Manager* role (parses and evaluates rules, owns the context) and
-hosts the *COP Layer Manager*; a *Context Listener* (see listener.py) feeds it. Every
-state change happens under one lock, so a trigger is always decided against a context
-that no update has half-changed; implementations run outside the lock, so a slow or
-failing task never blocks the Manager.
+It plays the paper's *Manager* role (owns the rules and the context) and hosts the COP
+*Layer Manager* (:mod:`cosleec.runtime.layers`); a *Context Listener* feeds it from the
+robot's topics (``cosleec.nodes``). Every state change happens under one lock, so a
+trigger is always decided against a context that no update has half-changed;
+implementations run outside the lock, so a slow or failing task never blocks it.
 """
 
 from __future__ import annotations
 
 import itertools
 import logging
-import re
 import threading
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
+from enum import StrEnum
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
-from cosleec.lang import SleecError, Specification, analyse, analyse_file
+from cosleec.lang import HedgeSemantics, Specification, Unknowns, choose
 from cosleec.runtime.audit import AuditLog
 from cosleec.runtime.clock import Clock, MonotonicClock
 from cosleec.runtime.context import Context
 from cosleec.runtime.decision import Decision
-from cosleec.runtime.dispatcher import Capability, TaskDispatcher
-from cosleec.runtime.errors import ContextError
-from cosleec.runtime.layers import LayerManager, evaluate, select, switch_records, switches_json
-from cosleec.runtime.model import CompiledRule, Obligation, ResponseSpec, RuleSet, compile_rules
+from cosleec.runtime.errors import ConfigurationError, ContextError
+from cosleec.runtime.implementations import Capability, Implementations
+from cosleec.runtime.layers import LayerManager, LayerSwitch, evaluate
+from cosleec.runtime.model import CompiledRule, Obligation, ResponseSpec
 from cosleec.runtime.obligations import Outcome, Tracked, Tracker
+from cosleec.runtime.ruleset import RuleSet
 from cosleec.runtime.tasks import Task
+
+E = TypeVar("E", bound=StrEnum)
+
+
+def _option(kind: type[E], value: object, name: str) -> E:
+    """``value`` as a member of the option enum ``kind``, or ConfigurationError listing the choices."""
+    if isinstance(value, str):
+        try:
+            return kind(value)
+        except ValueError:
+            pass
+    choices = ", ".join(repr(str(k)) for k in kind)
+    raise ConfigurationError(f"{name} must be one of {choices}, not {value!r}")
 
 
 @dataclass(frozen=True)
 class RuntimeEvent:
-    """What observers (terminal display, ROS publishers, tests) are told, in order."""
+    """What observers (terminal display, ROS publishers, the audit log, tests) are told, in order.
 
-    kind: str  # context | layers | decision | obligation | refused | rejected | task-failed
+    ``kind`` is one of context, layers, decision, obligation, refused, rejected, task-failed.
+    """
+
+    kind: str
     time: float
     data: dict[str, Any] = field(default_factory=dict)
 
 
-def _looks_like_rules(text: str) -> bool:
-    """SLEEC text rather than a file name: it has a rule (a file name has no spaces around `when`)."""
-    return re.search(r"(?i)(\brule_start\b|\swhen\s)", text) is not None
-
-
-def load_rules(source: Specification | str | Path, infer_defs: bool = False) -> tuple[Specification, Any]:
-    """A checked specification and its symbol table, from a Specification, a path or text."""
-    if isinstance(source, Specification):
-        from cosleec.lang.printer import format_spec
-
-        result = analyse(format_spec(source), source.path, infer_defs=True)
-    elif isinstance(source, Path) or not _looks_like_rules(source):
-        result = analyse_file(source, infer_defs=infer_defs)
-    else:
-        result = analyse(str(source), infer_defs=infer_defs)
-    if not result.ok or result.spec is None:
-        raise SleecError(result.diagnostics, result.source)
-    return result.spec, result.symbols
-
-
 class Manager:
+    """Runs a rule set in one process: the embedded CO-SLEEC runtime.
+
+    Use it to enforce SLEEC rules inside a Python program (the ROS Manager node wraps
+    one). Build it from a :class:`RuleSet` or with :meth:`from_file` / :meth:`from_text`;
+    bind tasks (:meth:`bind`) or capabilities (:meth:`capability`), :meth:`start` it, then
+    feed it measures (:meth:`update`) and events (:meth:`event`), and ask before acting
+    (:meth:`request`).
+
+    Options: ``semantics`` (``"last-wins"`` or ``"nested"``, :class:`HedgeSemantics`);
+    ``clock`` -- a :class:`Clock` (monotonic by default; a VirtualClock for tests);
+    ``unknown`` -- how a clause condition over a measure with no value is read
+    (``"undetermined"``, the fail-closed default: the decision is undetermined and nothing
+    runs; ``"false"``/``"true"``); ``untimed`` -- the deadline of an untimed response
+    (``"none"``, ``"immediate"`` or seconds); ``max_age`` -- seconds after which a
+    measure's value is stale; ``audit`` -- a JSON Lines audit log; ``history`` -- how
+    many decisions :attr:`decisions` keeps; ``dispatch=False`` decides without running
+    implementations (the ROS Manager node, ``cosleec decide``).
+    """
+
     def __init__(
         self,
-        rules: Specification | str | Path,
+        rules: RuleSet,
         *,
-        semantics: str = "last-wins",
+        semantics: HedgeSemantics | str = HedgeSemantics.LAST_WINS,
         clock: Clock | None = None,
-        unknown: str = "undetermined",
+        unknown: Unknowns | str = Unknowns.UNDETERMINED,
         untimed: str | float = "none",
         audit: str | Path | AuditLog | None = None,
         max_age: Mapping[str, float] | None = None,
-        infer_defs: bool = False,
         history: int = 10_000,
         dispatch: bool = True,
     ) -> None:
-        spec, symbols = load_rules(rules, infer_defs)
-        self.spec = spec
-        self.ruleset: RuleSet = compile_rules(spec, symbols, dict(max_age or {}))
+        if not isinstance(rules, RuleSet):
+            raise TypeError(
+                f"Manager needs a RuleSet, not {type(rules).__name__}: "
+                "use Manager.from_file(path), Manager.from_text(text) or Manager(RuleSet.from_spec(spec))"
+            )
+        self.ruleset = rules
+        self.spec = rules.spec
         self.clock: Clock = clock or MonotonicClock()
-        self.context = Context(self.ruleset.measures)
-        self.layers = LayerManager(self.ruleset, semantics, unknown)
+        self.context = Context(rules.measures, max_age)
+        self.layers = LayerManager(
+            rules, _option(HedgeSemantics, semantics, "semantics"), _option(Unknowns, unknown, "unknown")
+        )
         self.tracker = Tracker(untimed)
-        self.dispatcher = TaskDispatcher(self.ruleset)
+        self.implementations = Implementations(rules)
         self.dispatch_locally = dispatch
         self.audit = audit if isinstance(audit, AuditLog) else AuditLog(audit) if audit else None
         self.decisions: deque[Decision] = deque(maxlen=history)
@@ -96,36 +117,80 @@ class Manager:
         self._timer: threading.Thread | None = None
         self._stop = threading.Event()
 
+    @classmethod
+    def from_file(cls, path: str | Path, *, infer_defs: bool = False, **options: Any) -> Manager:
+        """A Manager for the rules in ``path``; ``options`` as for the constructor."""
+        return cls(RuleSet.from_file(path, infer_defs=infer_defs), **options)
+
+    @classmethod
+    def from_text(cls, text: str, *, infer_defs: bool = False, **options: Any) -> Manager:
+        """A Manager for SLEEC ``text``; ``options`` as for the constructor."""
+        return cls(RuleSet.from_text(text, infer_defs=infer_defs), **options)
+
+    @classmethod
+    def from_spec(cls, spec: Specification, *, infer_defs: bool = False, **options: Any) -> Manager:
+        """A Manager for a Specification built in Python; ``options`` as for the constructor."""
+        return cls(RuleSet.from_spec(spec, infer_defs=infer_defs), **options)
+
     @property
-    def semantics(self) -> str:
+    def semantics(self) -> HedgeSemantics:
+        """How clauses combine: last-wins (SLEEC) or nested (the paper's formula)."""
         return self.layers.semantics
 
     # ------------------------------------------------------------------ wiring
     def bind(self, *tasks: Task) -> Manager:
+        """Bind paper-style tasks, one per rule, and make this Manager their reporter (``task.manager``).
+
+        BindingError when a task names no rule, an unknown rule, or a clause its rule does
+        not have; a second task for the same rule replaces the first. Bind before
+        :meth:`start`: its completeness check sees only what is bound. Returns ``self``.
+        """
         for t in tasks:
-            self.dispatcher.bind(t)
+            self.implementations.bind(t)
             t.manager = self
         return self
 
     def capability(self, event: str) -> Callable[[Capability], Capability]:
-        return self.dispatcher.capability(event)
+        """Decorator: register ``fn(obligation, decision)`` as the way the robot performs ``event``.
+
+        Use it for actions many rules share: a rule without a task, and every ``otherwise``
+        fallback, runs the capability of each event its decision obliges. A second
+        registration for the same event replaces the first.
+        """
+        return self.implementations.capability(event)
 
     def subscribe(self, fn: Callable[[RuntimeEvent], None]) -> Callable[[], None]:
+        """Call ``fn`` with every :class:`RuntimeEvent` from now on; returns the function that unsubscribes.
+
+        Observers run in order on the thread that caused the event, once the state change is
+        complete; one that raises is logged and ignored. Keep them quick: they delay the
+        caller (the Manager node publishes on its topics from one). While anyone listens,
+        the Manager builds event payloads it otherwise skips.
+        """
         self._observers.append(fn)
         return lambda: self._observers.remove(fn)
 
     def start(self, *, check: bool = True, timer: bool = False) -> Manager:
-        """Check that every clause has an implementation; optionally run deadlines on a thread."""
+        """Check that every clause has an implementation; optionally run deadlines on a thread.
+
+        The check raises BindingError listing what is missing; it is skipped with
+        ``check=False`` or when the Manager does not dispatch. With ``timer=True`` a daemon
+        thread judges deadlines and stale values as time passes; without it, call
+        :meth:`tick` yourself (as tests with a VirtualClock do). Returns ``self``.
+        """
         if check and self.dispatch_locally:
-            self.dispatcher.check()
-        if self.dispatch_locally:
-            self.dispatcher.warm()
+            self.implementations.check()
         if timer and self._timer is None:
             self._timer = threading.Thread(target=self._run_timer, name="cosleec-deadlines", daemon=True)
             self._timer.start()
         return self
 
     def close(self) -> None:
+        """Stop the timer thread (waiting up to 5 s) and close the audit log.
+
+        Call it once, when done: with an audit log, a Manager used after closing fails on
+        its next record.
+        """
         self._stop.set()
         with self._wake:
             self._wake.notify_all()
@@ -135,9 +200,7 @@ class Manager:
             self.audit.close()
 
     # ------------------------------------------------------------------ context
-    def update(
-        self, values: Mapping[str, object] | None = None, /, **kw: object
-    ) -> list[tuple[str, str | None, str | None]]:
+    def update(self, values: Mapping[str, object] | None = None, /, **kw: object) -> list[LayerSwitch]:
         """Set measure values atomically; returns the layer switches ``(rule, old, new)``.
 
         A wrong type, unknown measure or value outside a scale raises ContextError with the
@@ -171,16 +234,23 @@ class Manager:
         return result
 
     def values(self) -> dict[str, Any]:
+        """Every measure's value as users see it (scale literals by name), None when unknown.
+
+        A copy, safe to take from any thread. A value past its ``max_age`` shows as unknown
+        once the next update, event, request or tick has noticed it.
+        """
         with self._lock:
             return self.context.external()
 
     def active_layers(self) -> list[str]:
+        """The active clause layers in rule order (``["R1.1", ...]``); a rule at its default has none."""
         with self._lock:
             return self.layers.active_layers()
 
-    def set_semantics(self, semantics: str) -> None:
+    def set_semantics(self, semantics: HedgeSemantics | str) -> None:
+        """Switch clause semantics at run time; every rule's layer is re-evaluated."""
         with self._lock:
-            self.layers.set_semantics(semantics, self.context.values)
+            self.layers.set_semantics(_option(HedgeSemantics, semantics, "semantics"), self.context.values)
 
     # ------------------------------------------------------------------ events
     def event(self, name: str) -> list[Decision]:
@@ -210,21 +280,18 @@ class Manager:
                 decisions.append((rule, d))
                 self._record(d, events)
                 for ob in d.obligations:
-                    t = self.tracker.start(d.id, ob, now, seq)
+                    t = self.tracker.start(d.id, d.clause, ob, now, seq)
                     if self._listening:
                         self._emit_later(events, "obligation", t.to_json())
         self._flush(events)
         self._notify_timer()
         if self.dispatch_locally:
             for rule, d in decisions:
-                if d.clause is not None and not self.dispatcher.dispatch(rule, d):
+                if d.clause is not None and not self.implementations.dispatch(rule, d):
                     self._flush([RuntimeEvent("task-failed", now, {"rule": rule.name, "decision": d.id})])
             for rule, d in followups:
-                self.dispatcher.dispatch_fallback(rule, d)
+                self.implementations.dispatch_fallback(rule, d)
         return [d for _, d in decisions]
-
-    trigger = event
-    report = event
 
     def request(self, name: str) -> bool:
         """May ``name`` happen now? False (and the attempt recorded) while a prohibition holds."""
@@ -257,10 +324,14 @@ class Manager:
         self._flush(events)
         if self.dispatch_locally:
             for rule, d in followups:
-                self.dispatcher.dispatch_fallback(rule, d)
+                self.implementations.dispatch_fallback(rule, d)
         return [d for _, d in followups]
 
     def outstanding(self) -> list[Tracked]:
+        """Pending obligations that require an event (prohibitions left out): what the robot still owes.
+
+        The records are live: read them, do not change them.
+        """
         with self._lock:
             return self.tracker.outstanding()
 
@@ -281,17 +352,15 @@ class Manager:
             followups += self._settle(out, now, next(self._seq), events)
         return followups
 
-    def _switched(
-        self, switches: list[tuple[CompiledRule, int | None, int | None]], events: list[RuntimeEvent]
-    ) -> list[tuple[str, str | None, str | None]]:
-        """The layer switches as ``(rule, old layer, new layer)``, announced to observers."""
-        result = switch_records(switches)
+    def _switched(self, switches: list[LayerSwitch], events: list[RuntimeEvent]) -> list[LayerSwitch]:
+        """Announce layer switches to observers; returns them."""
+        result = switches
         if result and self._listening:
             self._emit_later(
                 events,
                 "layers",
                 {
-                    "switches": switches_json(result),
+                    "switches": [sw.to_json() for sw in result],
                     "active": self.layers.active_layers(),
                 },
             )
@@ -314,33 +383,26 @@ class Manager:
                 " and ".join(o.describe() for o in obligations) or "nothing is required"
             )
             d = Decision(
-                next(self._ids),
-                start,
-                "otherwise",
-                rule.name,
-                self._clause_of(t),
-                None,
-                self.semantics,
-                {},
-                (),
-                obligations,
-                (),
-                why,
-                self.context.version,
-                {"violated": t.id},
+                id=next(self._ids),
+                time=start,
+                event="otherwise",
+                rule=rule.name,
+                clause=t.clause,
+                layer=None,
+                semantics=self.semantics,
+                values={},
+                conditions=(),
+                obligations=obligations,
+                reason=why,
+                context_version=self.context.version,
+                violated=t.id,
             )
             self._record(d, events)
             for o in obligations:
-                nt = self.tracker.start(d.id, o, start, seq, t.depth + 1)
+                nt = self.tracker.start(d.id, d.clause, o, start, seq, t.depth + 1)
                 self._emit_later(events, "obligation", nt.to_json())
             followups.append((rule, d))
         return followups
-
-    def _clause_of(self, t: Tracked) -> int | None:
-        for d in reversed(self.decisions):
-            if d.id == t.decision_id:
-                return d.clause
-        return None
 
     def _decide(self, rule: CompiledRule, event: str, now: float) -> Decision | None:
         v = self.context.values
@@ -356,7 +418,7 @@ class Manager:
         if clause is None and not missing:
             missing = status.missing
         obligations = self._issue(rule.response_of(clause), rule.name) if clause is not None else ()
-        conds = ((0, rule.trigger_text, fired), *zip(rule.clause_ids, rule.clause_texts, status.values))
+        conds = ((0, rule.trigger_text, fired), *((c.index, c.text, x) for c, x in zip(rule.clauses, status.values)))
         values = {
             n: (lits[x] if lits is not None and x is not None else x)
             for n, lits in rule.value_specs
@@ -364,19 +426,18 @@ class Manager:
         }
         # the explanation is computed from these parts when first read (Decision.explanation)
         return Decision(
-            next(self._ids),
-            now,
-            event,
-            rule.name,
-            clause,
-            rule.layer_of(clause) if clause else None,
-            self.semantics,
-            values,
-            conds,
-            obligations,
-            missing,
-            "",
-            self.context.version,
+            id=next(self._ids),
+            time=now,
+            event=event,
+            rule=rule.name,
+            clause=clause,
+            layer=rule.layer_of(clause) if clause else None,
+            semantics=self.semantics,
+            values=values,
+            conditions=conds,
+            obligations=obligations,
+            missing=missing,
+            context_version=self.context.version,
         )
 
     def _issue(self, spec: ResponseSpec | None, rule: str) -> tuple[Obligation, ...]:
@@ -386,7 +447,7 @@ class Manager:
         v = self.context.values
         if spec.clauses:  # a braced inner response: its own hedges, read when it starts
             vals, _ = evaluate(spec.clauses, v)
-            k = select(vals, self.semantics, self.layers.unknown)
+            k = choose(vals, self.semantics, self.layers.unknowns)
             if k:
                 return self._issue(spec.clauses[k - 1].response, rule)
         out = []
@@ -399,7 +460,16 @@ class Manager:
                 hi = 0.0  # a deadline that depends on an unknown measure: the strictest reading
             alts = tuple(a.event for a in it.alternative.items) if it.alternative is not None else ()
             out.append(
-                Obligation(it.event, it.negated, hi, lo or 0.0, it.eventually, alts, it.otherwise, rule)
+                Obligation(
+                    event=it.event,
+                    negated=it.negated,
+                    within_s=hi,
+                    from_s=lo or 0.0,
+                    eventually=it.eventually,
+                    alternatives=alts,
+                    otherwise=it.otherwise,
+                    rule=rule,
+                )
             )
         return tuple(out)
 

@@ -1,30 +1,41 @@
-"""A checked Specification, compiled for execution: rules, clauses, responses, obligations.
+"""A checked rule compiled for execution: clauses, responses, obligations, COP layers.
 
-Table 1 of the CO-SLEEC paper, made concrete: each rule has a default response (the base
-implementation) and one *clause* per ``unless`` (a layer named ``R1.1``, ``R1.2``, ...),
-each with a compiled condition and the measures it reads (for the dependency index).
+Table 1 of the CO-SLEEC paper, made concrete. A rule becomes:
+
+- a *default response* (clause 0): the base implementation of the rule's layered method;
+- one *clause* per ``unless`` (clause i, a COP layer named ``R1.i``) with its compiled
+  condition and the measures it reads (for the Layer Manager's dependency index);
+- one exclusive COP :class:`~cosleec.cop.LayerGroup` holding the rule's layers, and one
+  composition per clause (:attr:`CompiledRule.compositions`): the empty composition for
+  the default, ``(R1.i,)`` for clause i. A decision dispatches the rule's layered method
+  under the composition of the clause the Layer Manager had active at the trigger, so the
+  COP runtime runs that clause's variant.
+
+These records are immutable and hold no runtime state: one :class:`~cosleec.runtime.RuleSet`
+may serve several Managers.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from cosleec.cop import Layer, LayerGroup, Snapshot
 from cosleec.lang import ast as A
-from cosleec.lang.checker import SymbolTable
 from cosleec.runtime.compile import Compiler, Values, text
-from cosleec.runtime.values import MeasureSpec
 
 Seconds = Callable[[Values], float]
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class Obligation:
     """What one decision requires: produce (or, negated, do not produce) ``event``.
 
     Windows are relative to the moment the obligation starts, in seconds: ``within_s``
     is the deadline (None: none), ``from_s`` the start of a LEGOS interval.
+    ``otherwise`` is the compiled fallback; it stays in this process (the wire form only
+    describes its first item, and :meth:`from_json` leaves it ``None``).
     """
 
     event: str
@@ -37,14 +48,34 @@ class Obligation:
     rule: str = ""
 
     def to_json(self) -> dict[str, Any]:
+        """The wire and audit form (see :meth:`from_json`)."""
         return {
             "event": self.event,
             "negated": self.negated,
             "within_s": self.within_s,
+            "from_s": self.from_s,
+            "eventually": self.eventually,
+            "alternatives": list(self.alternatives),
+            "rule": self.rule,
             "otherwise": self.otherwise.first_json() if self.otherwise is not None else None,
         }
 
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> Obligation:
+        """An obligation read back from :meth:`to_json` (its ``otherwise`` is not carried)."""
+        within = d.get("within_s")
+        return cls(
+            event=str(d["event"]),
+            negated=bool(d.get("negated", False)),
+            within_s=None if within is None else float(within),
+            from_s=float(d.get("from_s", 0.0)),
+            eventually=bool(d.get("eventually", False)),
+            alternatives=tuple(d.get("alternatives", ())),
+            rule=str(d.get("rule", "")),
+        )
+
     def describe(self) -> str:
+        """The obligation in SLEEC words: ``not RecordVideo within 600 s``."""
         s = ("not " if self.negated else "") + self.event
         if self.within_s is not None:
             s += (
@@ -61,8 +92,10 @@ def _fmt_s(x: float) -> str:
     return f"{x:g} s"
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class ItemSpec:
+    """One compiled response item: the event, its window as functions of the context."""
+
     event: str
     negated: bool
     lo: Seconds | None
@@ -70,12 +103,11 @@ class ItemSpec:
     eventually: bool
     otherwise: ResponseSpec | None
     alternative: ResponseSpec | None
-    reads: frozenset[str]
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class Clause:
-    """A hedge clause: ``unless condition [then response]`` -- one layer."""
+    """A hedge clause: ``unless condition [then response]`` -- one COP layer."""
 
     index: int  # 1-based
     layer: str  # "R1.2"
@@ -88,14 +120,17 @@ class Clause:
 
 @dataclass(frozen=True, slots=True)
 class ResponseSpec:
+    """A compiled response: its items and, for a braced inner response, its own clauses."""
+
     items: tuple[ItemSpec, ...]
     clauses: tuple[Clause, ...] = ()  # defeaters of a braced inner response
-    reads: frozenset[str] = frozenset()
 
     def events(self) -> tuple[str, ...]:
+        """The events its items name, in order."""
         return tuple(i.event for i in self.items)
 
     def first_json(self) -> dict[str, Any] | None:
+        """A description of the first item, for records (deadlines known only if constant)."""
         if not self.items:
             return None
         it = self.items[0]
@@ -114,148 +149,109 @@ def _const(fn: Seconds) -> float | None:
         return None  # depends on a measure: known only when the response starts
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class CompiledRule:
+    """One rule ready to run: trigger, default response, clauses and its COP layers."""
+
     index: int
     name: str
     trigger: str
     condition: Callable[[Values], Any]
-    trigger_reads: frozenset[str]
     trigger_text: str
     default: ResponseSpec
     clauses: tuple[Clause, ...]
     ast: A.Rule
-    hedge_reads: frozenset[str] = frozenset()  # every measure a clause condition reads
-    all_reads: tuple[str, ...] = ()  # trigger and clause measures, sorted (for decision records)
-    clause_ids: tuple[int, ...] = ()
-    clause_texts: tuple[str, ...] = ()
-    evaluate_all: Callable[[Values], tuple[bool, ...]] | None = None  # every clause condition at once
-    value_specs: tuple[tuple[str, tuple[str, ...] | None], ...] = ()  # (measure, scale literals)
+    layers: tuple[Layer, ...]  # clause i's COP layer is layers[i - 1]
+    compositions: tuple[Snapshot, ...]  # [0]: no layer (default); [i]: (layers[i - 1],)
+    hedge_reads: frozenset[str]  # every measure a clause condition reads
+    value_specs: tuple[tuple[str, tuple[str, ...] | None], ...]  # measures read, scale literals
+    evaluate_all: Callable[[Values], tuple[bool, ...]] | None  # every clause condition at once
 
     def response_of(self, clause: int) -> ResponseSpec | None:
+        """The response of clause ``clause`` (0: the default)."""
         return self.default if clause == 0 else self.clauses[clause - 1].response
 
     def layer_of(self, clause: int) -> str | None:
+        """The name of clause ``clause``'s layer; None for the default (the base)."""
         return None if clause == 0 else self.clauses[clause - 1].layer
 
 
-@dataclass
-class RuleSet:
-    """Everything the runtime needs from a checked specification."""
-
-    spec: A.Specification
-    rules: tuple[CompiledRule, ...]
-    measures: dict[str, MeasureSpec]
-    events: frozenset[str]
-    by_trigger: dict[str, tuple[CompiledRule, ...]]
-    compiler: Compiler
-
-    def rule(self, name: str) -> CompiledRule:
-        for r in self.rules:
-            if r.name == name:
-                return r
-        raise KeyError(name)
-
-
-def _duration(c: Compiler, d: A.Duration, reads: set[str]) -> Seconds:
+def _duration(c: Compiler, d: A.Duration) -> Seconds:
     unit = A.TIME_UNITS[d.unit]
-    src = c.source(d.value, reads)
+    src = c.source(d.value, set())
     fn: Seconds = eval(compile(f"lambda v: ({src}) * {unit}", "<sleec deadline>", "eval"))
     return fn
-
-
-def compile_response(
-    c: Compiler, r: A.Response, owner: str, untimed_otherwise_zero: bool = True
-) -> ResponseSpec:
-    items = []
-    reads_all: set[str] = set()
-    for it in r.items:
-        occ = it.occurrence
-        reads: set[str] = set()
-        lo = hi = None
-        if occ.limit is not None:
-            hi = _duration(c, occ.limit.hi, reads)
-            if occ.limit.lo is not None:
-                lo = _duration(c, occ.limit.lo, reads)
-        elif it.otherwise is not None and not occ.eventually and untimed_otherwise_zero:
-            hi = _zero  # §10: `otherwise` after an untimed occurrence reads it as `within 0 seconds`
-        items.append(
-            ItemSpec(
-                occ.event,
-                occ.negated,
-                lo,
-                hi,
-                occ.eventually,
-                compile_response(c, it.otherwise, owner) if it.otherwise is not None else None,
-                compile_response(c, it.alternative, owner) if it.alternative is not None else None,
-                frozenset(reads),
-            )
-        )
-        reads_all |= reads
-    clauses = tuple(_clause(c, d, f"{owner}~{i}", i) for i, d in enumerate(r.defeaters, start=1))
-    return ResponseSpec(tuple(items), clauses, frozenset(reads_all))
 
 
 def _zero(v: Values) -> float:
     return 0.0
 
 
+def compile_response(c: Compiler, r: A.Response, owner: str) -> ResponseSpec:
+    """Compile a response; ``owner`` names its clauses' layers (``R1~1`` for inner ones)."""
+    items = []
+    for it in r.items:
+        occ = it.occurrence
+        lo = hi = None
+        if occ.limit is not None:
+            hi = _duration(c, occ.limit.hi)
+            if occ.limit.lo is not None:
+                lo = _duration(c, occ.limit.lo)
+        elif it.otherwise is not None and not occ.eventually:
+            hi = _zero  # `otherwise` after an untimed occurrence reads it as `within 0 seconds`
+        items.append(
+            ItemSpec(
+                event=occ.event,
+                negated=occ.negated,
+                lo=lo,
+                hi=hi,
+                eventually=occ.eventually,
+                otherwise=compile_response(c, it.otherwise, owner) if it.otherwise is not None else None,
+                alternative=compile_response(c, it.alternative, owner) if it.alternative is not None else None,
+            )
+        )
+    clauses = tuple(_clause(c, d, f"{owner}~{i}", i) for i, d in enumerate(r.defeaters, start=1))
+    return ResponseSpec(tuple(items), clauses)
+
+
 def _clause(c: Compiler, d: A.Defeater, layer: str, index: int) -> Clause:
     fn, reads, src = c.function(d.condition)
     resp = compile_response(c, d.response, layer) if d.response is not None else None
-    return Clause(index, layer, fn, reads, text(d.condition), resp, src)
+    return Clause(
+        index=index, layer=layer, condition=fn, reads=reads, text=text(d.condition), response=resp, source=src
+    )
 
 
 def _all_clauses(clauses: tuple[Clause, ...]) -> Callable[[Values], tuple[bool, ...]]:
     """One function that evaluates every clause condition of a rule in a single call."""
     body = ", ".join(f"bool({cl.source})" for cl in clauses)
-    fn: Callable[[Values], tuple[bool, ...]] = eval(
-        compile(f"lambda v: ({body},)", "<sleec clauses>", "eval")
-    )
+    fn: Callable[[Values], tuple[bool, ...]] = eval(compile(f"lambda v: ({body},)", "<sleec clauses>", "eval"))
     return fn
 
 
-def compile_rules(
-    spec: A.Specification, symbols: SymbolTable, max_age: dict[str, float] | None = None
-) -> RuleSet:
-    c = Compiler(symbols)
-    ages = max_age or {}
-    measures = {m.name: MeasureSpec.of(m, ages.get(m.name)) for m in spec.measures}
-    rules = []
-    for i, r in enumerate(spec.rules):
-        cond, treads, _ = c.function(r.trigger.condition)
-        default = compile_response(c, A.Response(r.response.items, ()), r.name)
-        clauses = tuple(
-            _clause(c, d, f"{r.name}.{k}", k) for k, d in enumerate(r.response.defeaters, start=1)
-        )
-        hreads = frozenset().union(*(cl.reads for cl in clauses))
-        rules.append(
-            CompiledRule(
-                i,
-                r.name,
-                r.trigger.event,
-                cond,
-                treads,
-                text(r.trigger.condition),
-                default,
-                clauses,
-                r,
-                hreads,
-                tuple(sorted(treads | hreads)),
-                tuple(cl.index for cl in clauses),
-                tuple(cl.text for cl in clauses),
-                _all_clauses(clauses) if clauses else None,
-                tuple((n, measures[n].literals or None) for n in sorted(treads | hreads)),
-            )
-        )
-    by_trigger: dict[str, list[CompiledRule]] = {}
-    for cr in rules:
-        by_trigger.setdefault(cr.trigger, []).append(cr)
-    return RuleSet(
-        spec,
-        tuple(rules),
-        measures,
-        frozenset(e.name for e in spec.events),
-        {k: tuple(v) for k, v in by_trigger.items()},
-        c,
+def compile_rule(
+    c: Compiler, index: int, r: A.Rule, literals: Mapping[str, tuple[str, ...]]
+) -> CompiledRule:
+    """Compile one checked rule; ``literals`` gives each scale measure's literals."""
+    cond, trigger_reads, _ = c.function(r.trigger.condition)
+    default = compile_response(c, A.Response(r.response.items, ()), r.name)
+    clauses = tuple(_clause(c, d, f"{r.name}.{k}", k) for k, d in enumerate(r.response.defeaters, start=1))
+    hedge_reads = frozenset().union(*(cl.reads for cl in clauses))
+    layers = tuple(Layer(cl.layer) for cl in clauses)
+    if layers:
+        LayerGroup(r.name, layers)  # a rule's layers exclude each other (one clause at a time)
+    return CompiledRule(
+        index=index,
+        name=r.name,
+        trigger=r.trigger.event,
+        condition=cond,
+        trigger_text=text(r.trigger.condition),
+        default=default,
+        clauses=clauses,
+        ast=r,
+        layers=layers,
+        compositions=(Snapshot(()), *(Snapshot((la,)) for la in layers)),
+        hedge_reads=hedge_reads,
+        value_specs=tuple((n, literals.get(n) or None) for n in sorted(trigger_reads | hedge_reads)),
+        evaluate_all=_all_clauses(clauses) if clauses else None,
     )

@@ -1,9 +1,14 @@
-"""The lifecycle of obligations: pending -> fulfilled | violated (sleec-language.md §6.4-6.6).
+"""The lifecycle of obligations: pending -> fulfilled | violated, as SLEEC defines it.
+
+The Manager owns one :class:`Tracker` and drives it under its lock: it starts an
+obligation for every item of a decision's response, and reports occurrences and the
+passing of time to it. The rules it applies:
 
 - ``E within T`` is fulfilled by an occurrence of E reported in [t, t+T] (inclusive) and
   violated as soon as the clock passes t+T without one; ``within [a, b]`` ignores earlier
   occurrences. An untimed ``E`` has no deadline (pending, reported as outstanding) unless
-  the runtime is configured otherwise.
+  the runtime is configured otherwise (``Manager(untimed=...)``); an untimed ``not E``
+  holds only at the trigger instant.
 - ``otherwise`` starts only on a real miss, at the deadline; an E that arrives after the
   deadline is recorded as *late* and does not cancel the fallback.
 - ``not E within T`` holds while E is not reported in its window: a request for E is
@@ -27,12 +32,13 @@ from cosleec.runtime.model import Obligation
 PENDING, FULFILLED, VIOLATED, RESPECTED = "pending", "fulfilled", "violated", "respected"
 
 
-@dataclass
+@dataclass(kw_only=True)
 class Tracked:
     """One obligation in force, with its absolute window and outcome."""
 
     id: int
     decision_id: int
+    clause: int | None  # the clause of the decision that created it (kept by its fallbacks)
     rule: str
     obligation: Obligation
     start: float
@@ -48,13 +54,19 @@ class Tracked:
 
     @property
     def event(self) -> str:
+        """The event the obligation names (for a prohibition, the forbidden one)."""
         return self.obligation.event
 
     @property
     def prohibition(self) -> bool:
+        """True for ``not E``: the obligation forbids E in its window instead of requiring it."""
         return self.obligation.negated
 
     def to_json(self) -> dict[str, Any]:
+        """The ``obligation`` record of observers, the audit log and the ``violations`` topic.
+
+        A snapshot: later changes to this obligation (a late event) do not alter it.
+        """
         return {
             "type": "obligation",
             "id": self.id,
@@ -86,6 +98,10 @@ class Tracker:
 
     The cost of an occurrence depends on the obligations waiting for that event, and the
     cost of advancing time on the windows that actually close: never on everything pending.
+
+    ``untimed`` is the deadline of an untimed response: ``"none"``, ``"immediate"``
+    (``immediate_tolerance`` seconds) or a number of seconds. Times are clock times in
+    seconds. Not thread-safe: its owner (the Manager) serialises access.
     """
 
     def __init__(self, untimed: str | float = "none", immediate_tolerance: float = 1.0) -> None:
@@ -100,9 +116,13 @@ class Tracker:
 
     @property
     def active(self) -> list[Tracked]:
+        """Every obligation in force, prohibitions included (a new list)."""
         return list(self._active.values())
 
-    def start(self, decision_id: int, ob: Obligation, now: float, seq: int, depth: int = 0) -> Tracked:
+    def start(
+        self, decision_id: int, clause: int | None, ob: Obligation, now: float, seq: int, depth: int = 0
+    ) -> Tracked:
+        """Start tracking ``ob``, required by decision ``decision_id`` (of ``clause``) at ``now``."""
         hi = ob.within_s
         if hi is None and not ob.eventually:
             if ob.negated:
@@ -112,15 +132,16 @@ class Tracker:
             elif isinstance(self.untimed, int | float) and not isinstance(self.untimed, bool):
                 hi = float(self.untimed)
         t = Tracked(
-            next(self._ids),
-            decision_id,
-            ob.rule,
-            ob,
-            now,
-            now + ob.from_s,
-            None if hi is None else now + hi,
-            seq,
-            depth,
+            id=next(self._ids),
+            decision_id=decision_id,
+            clause=clause,
+            rule=ob.rule,
+            obligation=ob,
+            start=now,
+            lo=now + ob.from_s,
+            hi=None if hi is None else now + hi,
+            seq=seq,
+            depth=depth,
         )
         if t.hi is not None and t.hi < t.lo:
             t.hi = t.lo  # a negative deadline (LEGOS expression): already closed
@@ -142,6 +163,13 @@ class Tracker:
             self._missed.setdefault(t.event, deque(maxlen=64)).append(t)
 
     def occur(self, event: str, now: float, seq: int) -> Outcome:
+        """Apply an occurrence of ``event`` at ``now``: what it fulfils, violates or arrives late for.
+
+        Only obligations started before it (a smaller ``seq``) count. It does not look at
+        deadlines: call :meth:`due` first, so that a window already closed is violated
+        rather than fulfilled. A prohibition it breaks is violated, with its ``otherwise``
+        starting now.
+        """
         out = Outcome()
         for t in list(self._by_event.get(event, {}).values()):
             if t.seq >= seq:
@@ -165,7 +193,11 @@ class Tracker:
         return out
 
     def due(self, now: float) -> Outcome:
-        """Close every window that ended before ``now``."""
+        """Close every window that ended before ``now``.
+
+        A pending obligation is violated (its ``otherwise``, if any, is returned in
+        ``fallbacks``, starting at the deadline); a prohibition is respected.
+        """
         out = Outcome()
         heap = self._heap
         while heap and heap[0][0] < now:
@@ -184,6 +216,10 @@ class Tracker:
         return out
 
     def forbidding(self, event: str, now: float) -> list[Tracked]:
+        """The prohibitions that forbid ``event`` at ``now``; empty means it is allowed.
+
+        Records nothing: the caller counts the refusal.
+        """
         return [
             t
             for t in self._by_event.get(event, {}).values()
@@ -191,10 +227,12 @@ class Tracker:
         ]
 
     def next_deadline(self) -> float | None:
+        """The earliest deadline still pending (clock time, seconds), or None; the timer sleeps until it."""
         heap = self._heap
         while heap and (heap[0][1] not in self._active):
             heapq.heappop(heap)
         return heap[0][0] if heap else None
 
     def outstanding(self) -> list[Tracked]:
+        """Pending obligations that require an event (prohibitions left out): what the robot still owes."""
         return [t for t in self._active.values() if not t.prohibition]

@@ -1,5 +1,9 @@
-"""Task nodes in the paper's style: a task binds to a rule; its ``default`` method implements
+"""Tasks in the paper's style: a task binds to a rule; its ``default`` method implements
 the default obligation and each hedge clause gets its own layer-bound implementation.
+
+Write a task when one rule's behaviour reads best as one class; register capabilities
+(``Manager.capability``) instead when one action serves many rules. The same task runs in
+the embedded Manager and in a ROS task node.
 
     class CurtainTask(Task):
         rule = "R1"
@@ -19,13 +23,24 @@ are judged against reports, never against a method returning.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
-if TYPE_CHECKING:
-    from cosleec.runtime.decision import Decision
-    from cosleec.runtime.manager import Manager
+from cosleec.runtime.decision import Decision
+from cosleec.runtime.errors import BindingError
 
 Impl = Callable[..., Any]
+
+
+class Reporter(Protocol):
+    """What a task needs of whoever runs it: the embedded Manager or a ROS task node."""
+
+    def event(self, name: str) -> object:
+        """The robot did ``name``."""
+        ...
+
+    def request(self, name: str) -> bool:
+        """May the robot do ``name`` now?"""
+        ...
 
 
 def hedge(clause: int | str) -> Callable[[Impl], Impl]:
@@ -39,12 +54,19 @@ def hedge(clause: int | str) -> Callable[[Impl], Impl]:
 
 
 class Task:
-    """Base class of tasks; set ``rule`` to the rule name the task implements."""
+    """Base class of tasks in the paper's style: subclass it to implement one rule.
+
+    Set ``rule`` to the rule's name, implement ``default`` (the default response) and mark
+    one method per hedge clause with :func:`hedge`. Bind it with ``Manager.bind`` (or a
+    task node's ``bind``), which sets ``manager``. An optional ``fallback(decision)``
+    method runs the ``otherwise`` responses no capability handles.
+    """
 
     rule: str = ""
-    manager: Manager | None = None
+    manager: Reporter | None = None
 
     def default(self, decision: Decision) -> Any:
+        """Implement the rule's default response (clause 0)."""
         raise NotImplementedError
 
     def clauses(self) -> dict[int, Callable[[Decision], Any]]:
@@ -58,24 +80,25 @@ class Task:
             if isinstance(mark, str):
                 head, _, num = mark.rpartition(".")
                 if head != self.rule or not num.isdigit():
-                    raise ValueError(
-                        f"{type(self).__name__}.{name}: @hedge({mark!r}) is not a clause of {self.rule}"
+                    raise BindingError(
+                        [f"{type(self).__name__}.{name}: @hedge({mark!r}) is not a clause of {self.rule}"]
                     )
                 mark = int(num)
             out[int(mark)] = getattr(self, name)
         return out
 
     def has_default(self) -> bool:
+        """Does the subclass implement ``default``?"""
         return type(self).default is not Task.default
 
     def report(self, event: str) -> None:
         """The robot did ``event`` (a response the rules may be waiting for)."""
         if self.manager is None:
-            raise RuntimeError(f"task {type(self).__name__} is not bound to a manager")
+            raise BindingError([f"task {type(self).__name__} is not bound: call manager.bind(task) first"])
         self.manager.event(event)
 
     def request(self, event: str) -> bool:
         """May the robot do ``event`` now? False while a prohibition forbids it (the refusal is recorded)."""
         if self.manager is None:
-            raise RuntimeError(f"task {type(self).__name__} is not bound to a manager")
+            raise BindingError([f"task {type(self).__name__} is not bound: call manager.bind(task) first"])
         return self.manager.request(event)

@@ -17,17 +17,19 @@ Value = bool | int | float | str
 
 @dataclass(frozen=True, slots=True)
 class MeasureSpec:
+    """A measure's type as the runtime checks it: ``boolean``, ``numeric`` or ``scale``."""
+
     name: str
     kind: str  # "boolean" | "numeric" | "scale"
     literals: tuple[str, ...] = ()
-    max_age: float | None = None  # seconds after which a value is stale (unknown)
 
     @classmethod
-    def of(cls, decl: A.MeasureDecl, max_age: float | None = None) -> MeasureSpec:
+    def of(cls, decl: A.MeasureDecl) -> MeasureSpec:
+        """The spec of a declared measure."""
         t = decl.type
         if isinstance(t, A.ScaleType):
-            return cls(decl.name, "scale", t.literals, max_age)
-        return cls(decl.name, "boolean" if isinstance(t, A.BooleanType) else "numeric", (), max_age)
+            return cls(decl.name, "scale", t.literals)
+        return cls(decl.name, "boolean" if isinstance(t, A.BooleanType) else "numeric", ())
 
     def coerce(self, value: object) -> bool | int | float:
         """The stored form of ``value``, or ContextError saying why it is not acceptable."""

@@ -1,11 +1,14 @@
-"""Checklist B: activation scope."""
+"""Checklist B: activation scope (tests that dispatch run on both dispatchers)."""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import gc
 import threading
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from typing import Any
 
 import pytest
 
@@ -18,35 +21,37 @@ from cosleec.cop import (
     bind,
     deactivate,
     deactivate_globally,
-    layered,
     layered_generator,
     run_with,
     snapshot,
 )
 
 L1, L2, L3 = Layer("L1"), Layer("L2"), Layer("L3")
+Layered = Callable[..., Any]
 
 
 def names() -> list[str]:
     return [la.name for la in active_layers()]
 
 
-@layered
-def trace() -> str:
-    return "base"
+@pytest.fixture
+def trace(layered: Layered) -> Any:
+    @layered
+    def trace() -> str:
+        return "base"
+
+    for layer in (L1, L2, L3):
+
+        def make(layer: Layer) -> None:
+            @trace.variant(layer)
+            def _(*, proceed):  # type: ignore[no-untyped-def]
+                return f"{layer.name}({proceed()})"
+
+        make(layer)
+    return trace
 
 
-for _layer in (L1, L2, L3):
-
-    def _make(layer: Layer) -> None:
-        @trace.variant(layer)
-        def _(*, proceed):  # type: ignore[no-untyped-def]
-            return f"{layer.name}({proceed()})"
-
-    _make(_layer)
-
-
-def test_b12_nested_blocks_compose_and_restore_exactly() -> None:
+def test_b12_nested_blocks_compose_and_restore_exactly(trace: Any) -> None:
     with activate(L1):
         with activate(L2):
             assert names() == ["L2", "L1"]
@@ -64,7 +69,7 @@ def test_b13_reactivation_inside_deactivation_moves_the_layer_outermost() -> Non
                 assert names() == ["L2", "L3", "L1"]  # activation order l1, l3, l2
 
 
-def test_b14_a_layer_active_through_several_routes_runs_once() -> None:
+def test_b14_a_layer_active_through_several_routes_runs_once(trace: Any) -> None:
     activate_globally(L1)
     with activate(L1), activate(L1):
         assert trace() == "L1(base)"
@@ -76,7 +81,7 @@ def test_b15_reactivation_keeps_the_position() -> None:
         assert names() == ["L2", "L1"]
 
 
-def test_b16_exceptions_restore_the_composition_and_do_not_disturb_proceed() -> None:
+def test_b16_exceptions_restore_the_composition_and_do_not_disturb_proceed(layered: Layered) -> None:
     with pytest.raises(RuntimeError), activate(L1):
         raise RuntimeError
     assert names() == []
@@ -120,7 +125,7 @@ def test_b17_an_activation_object_cannot_be_entered_twice_at_once() -> None:
     assert names() == []
 
 
-def test_b18_global_activation_and_scoped_masking() -> None:
+def test_b18_global_activation_and_scoped_masking(trace: Any) -> None:
     activate_globally(L1)
     seen: list[list[str]] = []
     t = threading.Thread(target=lambda: seen.append(names()))
@@ -236,6 +241,20 @@ def test_b22_layered_generators_do_not_leak() -> None:
     asyncio.run(consume())
 
 
+def test_b22_an_unfinished_layered_generator_dropped_by_its_consumer_leaks_nothing() -> None:
+    @layered_generator
+    def gen():  # type: ignore[no-untyped-def]
+        with activate(L2):
+            yield names()
+
+    with activate(L1):
+        g = gen()
+        assert next(g) == ["L2", "L1"]
+    del g  # closed while suspended inside its block, from the consumer's context
+    gc.collect()
+    assert names() == []
+
+
 def test_b22_undecorated_generator_leaks_as_documented_but_never_raises() -> None:
     import contextvars
 
@@ -254,7 +273,7 @@ def test_b22_undecorated_generator_leaks_as_documented_but_never_raises() -> Non
     assert names() == []
 
 
-def test_b23_capture_and_replay() -> None:
+def test_b23_capture_and_replay(trace: Any) -> None:
     with activate(L1):
         snap = snapshot()
     with activate(L2):

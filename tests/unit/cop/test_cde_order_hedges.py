@@ -1,8 +1,15 @@
-"""Checklists C (composition order), D (predicate layers), E (groups and constraints)."""
+"""Checklists C (composition order), D (predicate layers), E (groups and constraints).
+
+Tests that dispatch run on both dispatchers. The CO-SLEEC paper's ``nested`` formula is
+not a policy of the generic core; it is written here as a custom policy, which is also
+the test that any callable ``Sequence[bool] -> int | None`` works as a policy.
+"""
 
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import pytest
 
@@ -19,39 +26,49 @@ from cosleec.cop import (
     current_layers,
     deactivate_globally,
     explain,
-    layered,
     on_dispatch,
+    policy_first,
     policy_last,
-    policy_nested,
     using_context,
 )
 
 ADD, MUL = Layer("ADD"), Layer("MUL")
+Layered = Callable[..., Any]
 
 
-@layered
-def f(x: int) -> int:
-    return x
+def nested(values: Sequence[bool]) -> int | None:
+    """The CO-SLEEC paper's formula: member i iff predicates 1..i hold and i+1 does not."""
+    k = 0
+    while k < len(values) and values[k]:
+        k += 1
+    return k - 1 if k else None
 
 
-@f.variant(ADD)
-def _add(x, *, proceed):  # type: ignore[no-untyped-def]
-    return proceed(x) + 1
+@pytest.fixture
+def f(layered: Layered) -> Any:
+    @layered
+    def f(x: int) -> int:
+        return x
+
+    @f.variant(ADD)
+    def _add(x, *, proceed):  # type: ignore[no-untyped-def]
+        return proceed(x) + 1
+
+    @f.variant(MUL)
+    def _mul(x, *, proceed):  # type: ignore[no-untyped-def]
+        return proceed(x) * 3
+
+    return f
 
 
-@f.variant(MUL)
-def _mul(x, *, proceed):  # type: ignore[no-untyped-def]
-    return proceed(x) * 3
-
-
-def test_c25_activation_order_sets_chain_order() -> None:
+def test_c25_activation_order_sets_chain_order(f: Any) -> None:
     with activate(ADD), activate(MUL):
         assert f(2) == 9
     with activate(MUL), activate(ADD):
         assert f(2) == 7
 
 
-def test_c26_interleaved_global_deactivation() -> None:
+def test_c26_interleaved_global_deactivation(f: Any) -> None:
     activate_globally(ADD)
     activate_globally(MUL)
     deactivate_globally(ADD)
@@ -59,12 +76,12 @@ def test_c26_interleaved_global_deactivation() -> None:
     deactivate_globally(MUL)
 
 
-def test_c27_a_layer_without_partial_is_transparent() -> None:
+def test_c27_a_layer_without_partial_is_transparent(f: Any) -> None:
     with activate(Layer("Other")):
         assert f(2) == 2
 
 
-def test_c27a_priority_beats_recency_and_hedges_sit_innermost() -> None:
+def test_c27a_priority_beats_recency_and_hedges_sit_innermost(layered: Layered) -> None:
     high = Layer("HIGH", priority=10)
 
     @layered
@@ -105,7 +122,7 @@ def test_c27a_priority_beats_recency_and_hedges_sit_innermost() -> None:
 # ---------------------------------------------------------------- D: predicate layers
 
 
-def make_rule(n: int, policy: str = "last"):  # type: ignore[no-untyped-def]
+def make_rule(layered: Layered, n: int, policy: Any = "last"):  # type: ignore[no-untyped-def]
     members = [Layer(f"R.{i + 1}", when=lambda ctx, i=i: ctx[i]) for i in range(n)]
     group = HedgeGroup("R", members, policy=policy)
 
@@ -124,8 +141,8 @@ def make_rule(n: int, policy: str = "last"):  # type: ignore[no-untyped-def]
     return rule, group, members
 
 
-def test_d28_predicate_layers_follow_their_predicates() -> None:
-    rule, _, _ = make_rule(2)
+def test_d28_predicate_layers_follow_their_predicates(layered: Layered) -> None:
+    rule, _, _ = make_rule(layered, 2)
     ctx = [True, False]
     with using_context(ctx):
         assert rule() == 1
@@ -135,8 +152,8 @@ def test_d28_predicate_layers_follow_their_predicates() -> None:
         assert rule() == 0
 
 
-def test_d29_current_layers_and_explain() -> None:
-    rule, _, members = make_rule(2)
+def test_d29_current_layers_and_explain(layered: Layered) -> None:
+    rule, _, members = make_rule(layered, 2)
     assert current_layers() == ()
     assert set(members) <= set(current_layers(context=[True, True]))
     assert not set(members) & set(current_layers(context=[False, False]))
@@ -144,7 +161,7 @@ def test_d29_current_layers_and_explain() -> None:
     assert e.selected == {"R": "R.1"} and e.chain == ("R.1",)
 
 
-def test_d30_each_predicate_runs_at_most_once_per_dispatch_and_the_chain_is_frozen() -> None:
+def test_d30_each_predicate_runs_at_most_once_per_dispatch_and_the_chain_is_frozen(layered: Layered) -> None:
     calls = {"a": 0, "b": 0}
     state = {"a": True, "b": False}
 
@@ -158,7 +175,7 @@ def test_d30_each_predicate_runs_at_most_once_per_dispatch_and_the_chain_is_froz
 
     a, b = Layer("a", when=pa), Layer("b", when=pb)
 
-    @layered(hedges=HedgeGroup("g", [a, b], policy="nested"))
+    @layered(hedges=HedgeGroup("g", [a, b], policy=nested))
     def h() -> str:
         return "base"
 
@@ -176,7 +193,7 @@ def test_d30_each_predicate_runs_at_most_once_per_dispatch_and_the_chain_is_froz
     assert calls == {"a": 1, "b": 1}
 
 
-def test_d31_raising_predicate_aborts_or_takes_the_declared_choice() -> None:
+def test_d31_raising_predicate_aborts_or_takes_the_declared_choice(layered: Layered) -> None:
     boom = Layer("boom", when=lambda ctx: 1 / 0)
     safe = Layer("safe", when=lambda ctx: False)
     records: list[DispatchRecord] = []
@@ -215,8 +232,8 @@ def test_d31_raising_predicate_aborts_or_takes_the_declared_choice() -> None:
 # ---------------------------------------------------------------- E: groups
 
 
-def test_e32_two_members_never_in_one_chain_even_when_forced() -> None:
-    rule, _, members = make_rule(3)
+def test_e32_two_members_never_in_one_chain_even_when_forced(layered: Layered) -> None:
+    rule, _, members = make_rule(layered, 3)
     with using_context([True, True, True]):
         assert rule() == 3
         with activate(members[0]):
@@ -224,9 +241,10 @@ def test_e32_two_members_never_in_one_chain_even_when_forced() -> None:
 
 
 @pytest.mark.parametrize("n", [1, 2, 3, 4])
-def test_e33_policies_over_every_combination(n: int) -> None:
-    last, _, _ = make_rule(n, "last")
-    nested, _, _ = make_rule(n, "nested")
+def test_e33_policies_over_every_combination(layered: Layered, n: int) -> None:
+    last, _, _ = make_rule(layered, n, "last")
+    nst, _, _ = make_rule(layered, n, nested)
+    first, _, _ = make_rule(layered, n, "first")
     for values in itertools.product([False, True], repeat=n):
         want_last = max((i + 1 for i, v in enumerate(values) if v), default=0)
         k = 0
@@ -234,13 +252,15 @@ def test_e33_policies_over_every_combination(n: int) -> None:
             k += 1
         with using_context(list(values)):
             assert last() == want_last
-            assert nested() == k
+            assert nst() == k
+            assert first() == next((i + 1 for i, v in enumerate(values) if v), 0)
         assert policy_last(values) == (want_last - 1 if want_last else None)
-        assert policy_nested(values) == (k - 1 if k else None)
+        assert nested(values) == (k - 1 if k else None)
+        assert policy_first(values) == next((i for i, v in enumerate(values) if v), None)
 
 
 SLEEC_EXAMPLES = [
-    # sleec-language.md §8, (condition values, last_wins clause, nested clause); 0 = default
+    # the SLEEC language reference §8, (condition values, last_wins clause, nested clause); 0 = default
     ([False, False], 0, 0),
     ([True, False], 1, 1),
     ([False, True], 2, 0),
@@ -255,24 +275,24 @@ SLEEC_EXAMPLES = [
 
 @pytest.mark.parametrize(("values", "last_clause", "nested_clause"), SLEEC_EXAMPLES)
 def test_e33_worked_examples_of_the_language_reference(
-    values: list[bool], last_clause: int, nested_clause: int
+    layered: Layered, values: list[bool], last_clause: int, nested_clause: int
 ) -> None:
-    last, _, _ = make_rule(len(values), "last")
-    nested, _, _ = make_rule(len(values), "nested")
+    last, _, _ = make_rule(layered, len(values), "last")
+    nst, _, _ = make_rule(layered, len(values), nested)
     with using_context(values):
-        assert (last(), nested()) == (last_clause, nested_clause)
+        assert (last(), nst()) == (last_clause, nested_clause)
 
 
-def test_e33_prefix_closed_conditions_make_the_modes_agree() -> None:
-    last, _, _ = make_rule(3, "last")
-    nested, _, _ = make_rule(3, "nested")
+def test_e33_prefix_closed_conditions_make_the_modes_agree(layered: Layered) -> None:
+    last, _, _ = make_rule(layered, 3, "last")
+    nst, _, _ = make_rule(layered, 3, nested)
     for t in (30, 18, 16, 10):  # graded: t < 19, t < 17, t < 12 are prefix-closed
         values = [t < 19, t < 17, t < 12]
         with using_context(values):
-            assert last() == nested()
+            assert last() == nst()
 
 
-def test_e34_weak_forcing_replaces_and_release_returns_to_predicates() -> None:
+def test_e34_weak_forcing_replaces_and_release_returns_to_predicates(layered: Layered) -> None:
     a, b = Layer("a", when=lambda c: False), Layer("b", when=lambda c: False)
     c = Layer("c", when=lambda c: True)
     group = HedgeGroup("W", [a, b, c], exclusion="weak")
@@ -352,3 +372,9 @@ def test_e38_enter_exit_hooks_fire_once_per_effective_change() -> None:
     with activate(la), activate(la):
         pass
     assert log == ["enter", "exit", "enter", "exit"]
+
+
+def test_d29_explain_needs_no_context_when_no_group_selects(f: Any) -> None:
+    with activate(ADD):
+        e = explain(f, 1)  # no using_context: f has no hedge group
+    assert e.chain == ("ADD",) and e.selected == {} and str(e).endswith("f: ADD -> base")

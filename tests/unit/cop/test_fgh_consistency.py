@@ -1,10 +1,16 @@
-"""Checklists F (events and consistency), G45 (thread stress) and H (cosleec additions)."""
+"""Checklists F (events and consistency), G45 (thread stress) and H (cosleec additions).
+
+Tests that dispatch run on both dispatchers.
+"""
 
 from __future__ import annotations
 
 import asyncio
+import itertools
 import json
 import threading
+from collections.abc import Callable
+from typing import Any
 
 import pytest
 
@@ -17,37 +23,40 @@ from cosleec.cop import (
     activate,
     activate_globally,
     active_layers,
+    at_safe_point,
     critical,
     deactivate_globally,
-    layered,
+    global_state,
     on_dispatch,
     using_context,
 )
-from cosleec.cop.state import RT
 
 G, S, OUTER = Layer("G"), Layer("S"), Layer("OUTER")
+Layered = Callable[..., Any]
 
 
-@layered
-def probe() -> str:
-    return "base"
+@pytest.fixture
+def probe(layered: Layered) -> Any:
+    @layered
+    def probe() -> str:
+        return "base"
 
+    for la in (G, S):
 
-for _la in (G, S):
+        def mk(la: Layer) -> None:
+            @probe.variant(la)
+            def _(*, proceed):  # type: ignore[no-untyped-def]
+                return la.name + ">" + proceed()
 
-    def _mk(la: Layer) -> None:
-        @probe.variant(la)
-        def _(*, proceed):  # type: ignore[no-untyped-def]
-            return la.name + ">" + proceed()
-
-    _mk(_la)
+        mk(la)
+    return probe
 
 
 def names() -> list[str]:
     return [la.name for la in active_layers()]
 
 
-def test_f39_changes_inside_a_running_dispatch() -> None:
+def test_f39_changes_inside_a_running_dispatch(layered: Layered, probe: Any) -> None:
     seen: dict[str, object] = {}
 
     @layered
@@ -72,7 +81,7 @@ def test_f39_changes_inside_a_running_dispatch() -> None:
     deactivate_globally(G)
 
 
-def test_f40_requests_are_applied_in_order_when_the_dispatch_or_critical_ends() -> None:
+def test_f40_requests_are_applied_in_order_when_the_dispatch_or_critical_ends(layered: Layered) -> None:
     with critical():
         activate_globally(G)
         activate_globally(S)
@@ -109,7 +118,7 @@ def test_f41_event_transition_swaps_atomically() -> None:
 
     def reader() -> None:
         while not stop.is_set():
-            current = {la.name for la in RT.state.layers and dict(RT.state.layers)}
+            current = {la.name for la, _ in global_state().layers}
             if current not in ({"T1"}, {"T2"}):
                 bad.append(current)
 
@@ -125,7 +134,7 @@ def test_f41_event_transition_swaps_atomically() -> None:
     deactivate_globally(L1)
 
 
-def test_f42_a_decision_is_not_withdrawn_when_the_predicate_changes_later() -> None:
+def test_f42_a_decision_is_not_withdrawn_when_the_predicate_changes_later(layered: Layered) -> None:
     flag = {"on": True}
     hedge = Layer("H", when=lambda ctx: ctx["on"])
 
@@ -144,7 +153,7 @@ def test_f42_a_decision_is_not_withdrawn_when_the_predicate_changes_later() -> N
         assert rule() == {"obligation": "Default"}
 
 
-def test_f43_dispatch_records_reproduce_a_scripted_run(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_f43_dispatch_records_reproduce_a_scripted_run(layered: Layered, tmp_path) -> None:  # type: ignore[no-untyped-def]
     a = Layer("A", when=lambda ctx: ctx["a"])
     b = Layer("B", when=lambda ctx: ctx["b"])
 
@@ -201,7 +210,7 @@ def test_f43_dispatch_records_reproduce_a_scripted_run(tmp_path) -> None:  # typ
     assert rows[2]["predicates"]["rule"] == {"A": True, "B": True}  # every predicate is recorded
 
 
-def test_g45_threads_hammering_global_activation_lose_nothing() -> None:
+def test_g45_threads_hammering_global_activation_lose_nothing(probe: Any) -> None:
     layers = [Layer(f"W{i}") for i in range(8)]
     observed: list[tuple[int, frozenset[str]]] = []
     stop = threading.Event()
@@ -219,7 +228,7 @@ def test_g45_threads_hammering_global_activation_lose_nothing() -> None:
 
     def reader() -> None:
         while not stop.is_set():
-            st = RT.state
+            st = global_state()
             observed.append((st.version, frozenset(la.name for la, _ in st.layers)))
             probe()
 
@@ -233,7 +242,7 @@ def test_g45_threads_hammering_global_activation_lose_nothing() -> None:
     for t in readers:
         t.join()
     assert errors == []
-    assert all(RT.state.counts[la] == 300 for la in layers)
+    assert all(global_state().counts[la] == 300 for la in layers)
     by_version: dict[int, frozenset[str]] = {}
     for version, comp in observed:
         assert by_version.setdefault(version, comp) == comp  # one composition per version: none torn
@@ -243,7 +252,7 @@ def test_g45_threads_hammering_global_activation_lose_nothing() -> None:
     assert active_layers() == ()
 
 
-def test_h46_a_hedge_without_then_returns_no_obligation_and_after_still_sees_it() -> None:
+def test_h46_a_hedge_without_then_returns_no_obligation_and_after_still_sees_it(layered: Layered) -> None:
     exempt = Layer("exempt", when=lambda ctx: True)
     audit = Layer("audit")
     seen: list[object] = []
@@ -266,9 +275,15 @@ def test_h46_a_hedge_without_then_returns_no_obligation_and_after_still_sees_it(
     assert seen == [None]
 
 
-def test_h47_switching_policy_needs_no_reregistration_and_leaves_no_stale_chain() -> None:
+def test_h47_switching_policy_needs_no_reregistration_and_leaves_no_stale_chain(layered: Layered) -> None:
     a, b = Layer("a", when=lambda c: c[0]), Layer("b", when=lambda c: c[1])
     group = HedgeGroup("p", [a, b])
+
+    def nested(values: Any) -> int | None:  # the paper's formula, as a custom policy
+        k = 0
+        while k < len(values) and values[k]:
+            k += 1
+        return k - 1 if k else None
 
     @layered(hedges=group)
     def r() -> str:
@@ -284,13 +299,13 @@ def test_h47_switching_policy_needs_no_reregistration_and_leaves_no_stale_chain(
         mk(la)
     with using_context([False, True]):
         assert r() == "b"
-        group.set_policy("nested")
+        group.set_policy(nested)
         assert r() == "default"
         group.set_policy("last")
         assert r() == "b"
 
 
-def test_h48_chain_cache_stays_bounded() -> None:
+def test_h48_chain_cache_stays_bounded(layered: Layered) -> None:
     layers = [Layer(f"C{i}") for i in range(100)]
 
     @layered(max_chains=32)
@@ -305,7 +320,6 @@ def test_h48_chain_cache_stays_bounded() -> None:
                 return proceed() + 1
 
         mk(la)
-    import itertools
 
     for i, (x, y) in enumerate(itertools.product(layers, layers)):
         if i >= 10_000:
@@ -315,7 +329,7 @@ def test_h48_chain_cache_stays_bounded() -> None:
         assert len(f.layered.cache) <= 32
 
 
-def test_h49_async_partials_await_proceed() -> None:
+def test_h49_async_partials_await_proceed(layered: Layered) -> None:
     la = Layer("async")
 
     @layered
@@ -339,7 +353,7 @@ def test_h49_async_partials_await_proceed() -> None:
             pass
 
 
-def test_asyncio_stress_each_task_sees_only_its_own_layers() -> None:
+def test_asyncio_stress_each_task_sees_only_its_own_layers(layered: Layered) -> None:
     layers = [Layer(f"A{i}") for i in range(20)]
 
     @layered
@@ -377,25 +391,19 @@ def test_asyncio_stress_each_task_sees_only_its_own_layers() -> None:
     assert all(all(r) for r in results) and sum(len(r) for r in results) == 200 * 100
 
 
-@layered
-def _setup_step() -> tuple[str, list[str]]:
-    activate_globally(G)  # requested while this function runs its base (nothing active)
-    return probe(), names()
+def test_sd9_holds_when_the_outer_function_runs_its_base_directly(layered: Layered, probe: Any) -> None:
+    @layered
+    def _setup_step() -> tuple[str, list[str]]:
+        activate_globally(G)  # requested while this function runs its base (nothing active)
+        return probe(), names()
 
-
-def test_sd9_holds_when_the_outer_function_runs_its_base_directly() -> None:
-    from cosleec.cop.state import DISPATCH_CODES
-
-    assert _setup_step.__code__ in DISPATCH_CODES  # the compiled prologue applies here
     inside, seen = _setup_step()
     assert (inside, seen) == ("base", [])  # not visible to nested dispatches of the same call
     assert probe() == "G>base"  # applied when it ended
     deactivate_globally(G)
 
 
-def test_f42_reevaluation_hook_runs_at_the_next_safe_point_never_during_a_step() -> None:
-    from cosleec.cop import at_safe_point
-
+def test_f42_reevaluation_hook_runs_at_the_next_safe_point_never_during_a_step(layered: Layered) -> None:
     flag = {"on": True}
     log: list[str] = []
     hedge = Layer("H42", when=lambda ctx: ctx["on"])

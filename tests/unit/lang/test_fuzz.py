@@ -15,58 +15,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cosleec.lang import SleecError, analyse, parse
-from cosleec.lang.lexer import CONTEXTUAL_KEYWORDS, KEYWORDS
 from tests.conftest import corpus_files
 
-N = int(os.environ.get("COSLEEC_FUZZ", "2000"))
+from .strategies import TOKENS, mutate
 
-# every keyword the lexer knows, plus names, numbers, punctuation and junk
-TOKENS = [
-    *sorted(KEYWORDS | CONTEXTUAL_KEYWORDS),
-    "R1",
-    "E",
-    "F",
-    "a",
-    "b",
-    "x",
-    "low",
-    "high",
-    "0",
-    "5",
-    "-3",
-    "2.5",
-    "(",
-    ")",
-    "{",
-    "}",
-    "[",
-    "]",
-    ",",
-    ":",
-    "=",
-    "->",
-    "<",
-    ">",
-    "<=",
-    ">=",
-    "<>",
-    "+",
-    "-",
-    "*",
-    "/",
-    "//",
-    "/*",
-    "*/",
-    "^",
-    "é",
-    "\\rtf",
-    "WHEN",
-    "THEN",
-    "UNLESS",
-    "IN",
-    "WHICH",
-    "CASE",
-]
+N = int(os.environ.get("COSLEEC_FUZZ", "2000"))
 
 
 def _assert_only_diagnostics(text: str) -> None:
@@ -85,25 +38,6 @@ def test_token_soup_only_yields_diagnostics(text: str) -> None:
     _assert_only_diagnostics(text)
 
 
-def _mutate(rng: random.Random, text: str) -> str:
-    for _ in range(rng.randint(1, 4)):
-        if not text:
-            break
-        i, j = sorted(rng.randrange(len(text) + 1) for _ in range(2))
-        op = rng.randrange(5)
-        if op == 0:
-            text = text[:i] + text[j:]  # delete a span
-        elif op == 1:
-            text = text[:i] + text[i:j] + text[i:]  # duplicate a span
-        elif op == 2:
-            text = text[:i] + " " + rng.choice(TOKENS) + " " + text[i:]  # insert a token
-        elif op == 3:
-            text = text[:i]  # truncate
-        else:
-            text = text[:i] + chr(rng.randrange(1, 0x250)) + text[i:]  # a stray character
-    return text
-
-
 def test_mutated_corpus_files_only_yield_diagnostics() -> None:
     files = corpus_files()
     if not files:
@@ -111,4 +45,4 @@ def test_mutated_corpus_files_only_yield_diagnostics() -> None:
     rng = random.Random(int(os.environ.get("COSLEEC_FUZZ_SEED", "1")))
     texts = [f.read_text(encoding="utf-8", errors="replace") for f in files]
     for _ in range(N):
-        _assert_only_diagnostics(_mutate(rng, rng.choice(texts)))
+        _assert_only_diagnostics(mutate(rng, rng.choice(texts)))

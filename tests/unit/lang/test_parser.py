@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from cosleec.lang import analyse, parse
+from cosleec.lang import analyse, format_spec, parse
 from cosleec.lang import ast as A
+from cosleec.lang.parser import CONTEXTUAL_KEYWORDS, KEYWORDS
 
 DEFS = """def_start
   event E event F event G event H
@@ -185,3 +186,68 @@ def test_rtf_and_block_structure_errors() -> None:
 def test_reserved_keywords_cannot_be_names() -> None:
     result = analyse("def_start event when def_end rule_start R when when then when rule_end")
     assert result.errors
+    (err,) = analyse("def_start event fluent def_end rule_start R when E then F rule_end").errors
+    assert err.code == "syntax" and err.hint == "`fluent` is a reserved keyword and cannot be used as a name"
+
+
+# the language reference §3, plus the words of the fork extensions (§4.6) the grammar parses
+RESERVED = {
+    *("def_start", "def_end", "rule_start", "rule_end", "concern_start", "concern_end"),
+    *("purpose_start", "purpose_end", "relation_start", "relation_end"),
+    *("event", "measure", "constant", "boolean", "numeric", "scale", "when", "then", "and", "or", "not"),
+    *("within", "otherwise", "unless", "else", "eventually", "exists", "while", "meanwhile"),
+    *("true", "false", "seconds", "minutes", "hours", "days", "fluent"),
+}
+RELATION_ONLY = {
+    *("witness", "mutualExclusive", "equal", "happenBefore", "isContradictoryWith", "imply", "iff"),
+    *("opposite", "invariant", "causation", "includes", "forbid", "until", "for", "conflict", "effect"),
+}
+
+
+def test_keywords_read_from_the_grammar_are_the_reference_ones() -> None:
+    assert RESERVED == KEYWORDS
+    assert RELATION_ONLY == CONTEXTUAL_KEYWORDS
+
+
+def test_tk_escape_makes_a_keyword_a_name() -> None:
+    """SLEEC-TK's `^when` is the name `when` (the language reference §3); the printer writes it back."""
+    text = (
+        "def_start event ^when event F measure ^within : boolean def_end\n"
+        "rule_start R when ^when and ^within then F unless not ^within then ^when rule_end"
+    )
+    result = analyse(text)
+    assert result.ok, result.render()
+    assert result.spec is not None
+    (r,) = result.spec.rules
+    assert r.trigger == A.Trigger("when", n("within"))
+    assert {e.name for e in result.spec.events} == {"when", "F"}
+    printed = format_spec(result.spec)
+    assert "event ^when" in printed and "then ^when" in printed
+    assert parse(printed) == result.spec
+    # the escape is TK syntax: LEGOS-SLEEC's grammar has no `^`
+    errs = analyse(text, dialect="legos").errors
+    assert {e.code for e in errs} == {"dialect"}
+    assert any("`^` keyword escape" in e.message for e in errs)
+
+
+def test_relation_keywords_are_reserved_only_in_relation_blocks() -> None:
+    text = (
+        "def_start event witness event until event F measure for : boolean def_end\n"
+        "rule_start R when witness and for then until rule_end\n"
+        "relation_start witness ^witness F when F and ^for then true until ^until relation_end"
+    )
+    result = analyse(text)
+    assert not [e for e in result.errors if e.code == "syntax"], result.render()
+    assert result.spec is not None
+    assert result.spec.relations[0] == A.EventRelation("witness", "witness", "F")
+    # printed back with escapes, which no tool reads next to a relation block (a TK/LEGOS mix)
+    again = analyse(format_spec(result.spec))
+    assert again.spec == result.spec
+    assert {e.code for e in again.errors} == {"mixed-dialect"}
+    bad = analyse(DEFS + "rule_start R when E then F rule_end relation_start witness E until relation_end")
+    assert [e.code for e in bad.errors] == ["syntax"]
+
+
+def test_paper_notation_has_comments_like_the_dsl() -> None:
+    spec = parse("// the paper's rules\nWHEN Fall THEN CallNurse /* soon */ WITHIN 2 minutes\n")
+    assert spec.dialect is A.Dialect.PAPER and len(spec.rules) == 1

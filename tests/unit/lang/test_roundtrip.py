@@ -7,9 +7,8 @@ import os
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from cosleec.lang import analyse
+from cosleec.lang import analyse, format_spec
 from cosleec.lang import ast as A
-from cosleec.lang.printer import format_spec
 
 from .strategies import specifications
 

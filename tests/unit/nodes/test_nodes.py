@@ -11,14 +11,10 @@ from typing import Any
 import pytest
 
 from cosleec.demo.runner import rules_path
-from cosleec.nodes import LayersNode, ListenerNode, ManagerNode, Mapping, MappingError, TaskNode
-from cosleec.runtime.manager import load_rules
-from cosleec.runtime.model import compile_rules
-from cosleec.transport import LocalBus
+from cosleec.nodes import LayersNode, ListenerNode, LocalBus, ManagerNode, Mapping, MappingError, TaskNode
+from cosleec.runtime import Manager, RuleSet
 
-RULES = rules_path()
-spec, symbols = load_rules(RULES)
-RS = compile_rules(spec, symbols)
+RS = RuleSet.from_file(rules_path())
 
 
 @pytest.fixture
@@ -76,12 +72,12 @@ events:
 )
 def test_mapping_errors_name_the_entry(text: str, message: str) -> None:
     with pytest.raises(MappingError) as info:
-        Mapping.parse(text, "mapping.yaml", RS.measures, RS.events)
+        Mapping.parse(text, "mapping.yaml", dict(RS.measures), RS.events)
     assert message in str(info.value) and str(info.value).startswith("mapping.yaml")
 
 
 def test_listener_maps_messages_to_atomic_updates_and_edge_triggered_events(bus: LocalBus) -> None:
-    mapping = Mapping.parse(MAPPING, "m.yaml", RS.measures, RS.events)
+    mapping = Mapping.parse(MAPPING, "m.yaml", dict(RS.measures), RS.events)
     t = bus.transport()
     ListenerNode(t, mapping)
     ctx = collect(bus, "/cosleec/context")
@@ -112,7 +108,7 @@ def test_listener_maps_messages_to_atomic_updates_and_edge_triggered_events(bus:
 
 def test_manager_node_decides_rejects_and_answers_requests(bus: LocalBus) -> None:
     t = bus.transport()
-    node = ManagerNode(t, RULES, sim_time=True, status_each=True)
+    node = ManagerNode(t, RS, sim_time=True, status_each=True)
     decisions = collect(bus, "/cosleec/decisions")
     obligations = collect(bus, "/cosleec/obligations")
     replies = collect(bus, "/cosleec/request_reply")
@@ -135,7 +131,7 @@ def test_manager_node_decides_rejects_and_answers_requests(bus: LocalBus) -> Non
 
 def test_layers_node_is_latched_for_late_joiners(bus: LocalBus) -> None:
     t = bus.transport()
-    LayersNode(t, RULES)
+    LayersNode(t, RS)
     t.publish("/cosleec/context", json.dumps({"values": {"userUndressed": True, "userDistressed": "low"}}))
     bus.wait_idle()
     late = collect(bus, "/cosleec/layers")  # subscribes after the switch
@@ -144,15 +140,13 @@ def test_layers_node_is_latched_for_late_joiners(bus: LocalBus) -> None:
 
 def test_layers_node_reports_the_same_switches_as_the_manager(bus: LocalBus) -> None:
     """Both name switches alike, "?" for a rule still undetermined (its measures unknown)."""
-    from cosleec.runtime import Manager
-
     t = bus.transport()
-    LayersNode(t, RULES)
+    LayersNode(t, RS)
     out = collect(bus, "/cosleec/layers")
     update = {"userUndressed": True, "userDistressed": "low"}
     t.publish("/cosleec/context", json.dumps({"values": update}))
     bus.wait_idle()
-    want = [{"rule": r, "from": a, "to": b} for r, a, b in Manager(RULES).update(update)]
+    want = [{"rule": r, "from": a, "to": b} for r, a, b in Manager(RS).update(update)]
     assert {"rule": "R1", "from": "?", "to": "R1.1"} in want
     assert out[-1]["switches"] == want
 
@@ -161,8 +155,8 @@ def test_task_node_dispatches_the_layer_of_each_decision(bus: LocalBus) -> None:
     from cosleec.demo.assistive_care import tasks
 
     t = bus.transport()
-    ManagerNode(t, RULES, sim_time=True)
-    node = TaskNode(t, RULES, name="task")
+    ManagerNode(t, RS, sim_time=True)
+    node = TaskNode(t, RS, name="task")
     robot = tasks.install(node)
     node.start(["R1"])
     t.publish("/cosleec/context", json.dumps({"values": {"userUndressed": True, "userDistressed": "low"}}))
@@ -180,8 +174,8 @@ def test_the_example_mapping_and_launch_files_are_valid() -> None:
 
     from cosleec.ros.launch import load
 
-    here = Path(RULES).parent
-    mapping = Mapping.load(here / "mapping.yaml", RS.measures, RS.events)
+    here = Path(rules_path()).parent
+    mapping = Mapping.load(here / "mapping.yaml", dict(RS.measures), RS.events)
     assert {e.name for e in mapping.entries if e.kind == "measure"} == set(RS.measures)
     for backend in ("ros1", "ros2"):
         cfg = load(str(here / f"{backend}.launch.yaml"))

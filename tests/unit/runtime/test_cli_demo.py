@@ -40,8 +40,26 @@ def test_decide_json_shape(capsys: pytest.CaptureFixture[str]) -> None:
                 "clause": 1,
                 "layer": "R1.1",
                 "obligations": [
-                    {"event": "Refuse", "negated": False, "within_s": None, "otherwise": None},
-                    {"event": "ExplainWhy", "negated": False, "within_s": None, "otherwise": None},
+                    {
+                            "event": "Refuse",
+                            "negated": False,
+                            "within_s": None,
+                            "from_s": 0.0,
+                            "eventually": False,
+                            "alternatives": [],
+                            "rule": "R1",
+                            "otherwise": None,
+                        },
+                    {
+                            "event": "ExplainWhy",
+                            "negated": False,
+                            "within_s": None,
+                            "from_s": 0.0,
+                            "eventually": False,
+                            "alternatives": [],
+                            "rule": "R1",
+                            "otherwise": None,
+                        },
                 ],
             }
         ],
@@ -59,6 +77,10 @@ def test_decide_otherwise_and_prohibition_objects(capsys: pytest.CaptureFixture[
             "event": "RetryAgreed",
             "negated": False,
             "within_s": 120.0,
+            "from_s": 0.0,
+            "eventually": False,
+            "alternatives": [],
+            "rule": "R3",
             "otherwise": {"event": "SupportCalled", "negated": False, "within_s": 60.0, "otherwise": None},
         }
     ]
@@ -84,6 +106,10 @@ def test_decide_otherwise_and_prohibition_objects(capsys: pytest.CaptureFixture[
         "event": "RecordVideo",
         "negated": True,
         "within_s": 600.0,
+        "from_s": 0.0,
+        "eventually": False,
+        "alternatives": [],
+        "rule": "R6",
         "otherwise": None,
     }
 

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from cosleec.cop import explain
+from cosleec.cop import explain, run_with
 from cosleec.runtime import BindingError, ContextError, Manager, Task, VirtualClock, hedge
-from cosleec.runtime.audit import read
+from cosleec.runtime import read_audit as read
 
 CURTAINS = """
 def_start
@@ -30,7 +30,7 @@ rule_end
 
 def manager(text: str = CURTAINS, **kw: object) -> tuple[Manager, VirtualClock]:
     clock = VirtualClock()
-    return Manager(text, clock=clock, **kw), clock  # type: ignore[arg-type]
+    return Manager.from_text(text, clock=clock, **kw), clock  # type: ignore[arg-type]
 
 
 class Curtains(Task):
@@ -62,14 +62,28 @@ def test_each_rule_is_a_layered_method_with_one_layer_per_clause() -> None:
     m, _ = manager()
     task = Curtains()
     m.bind(task).start()
-    handler = m.dispatcher.handler(m.ruleset.rule("R1"))
-    group = handler.layered.groups[0]  # type: ignore[attr-defined]
-    assert [la.name for la in group.members] == ["R1.1", "R1.2"]
+    rule = m.ruleset.rule("R1")
+    handler = m.implementations.handler(rule)
+    r11, r12 = rule.layers
+    assert (r11.name, r12.name) == ("R1.1", "R1.2")
+    assert r11.group is r12.group and r11.group is not None  # one exclusive group per rule
+    assert set(handler.layered.partials) == {r11, r12}  # type: ignore[attr-defined]
+    # the Layer Manager activates the layer the context selects ...
     m.update(userUndressed=True, userDistressed="low")
+    assert m.active_layers() == ["R1.1"] and m.layers.composition().layers == (r11,)
     (d,) = m.event("CurtainOpenRequest")
     assert (d.clause, d.layer) == (1, "R1.1")
-    assert explain(handler, d, context=d).chain == ("R1.1",)
+    # ... and the trigger runs, through COP, the variant of that layer
+    assert run_with(rule.compositions[d.clause], explain, handler, d).chain == ("R1.1",)
     assert task.calls[0].startswith("refuse:")
+    m.update(userDistressed="high")  # the last clause that holds wins
+    assert m.active_layers() == ["R1.2"] and m.layers.composition().layers == (r12,)
+    m.event("CurtainOpenRequest")
+    assert task.calls[-1] == "warn"
+    m.update(userUndressed=False, userDistressed="low")
+    assert m.active_layers() == [] and m.layers.composition().layers == ()
+    m.event("CurtainOpenRequest")
+    assert task.calls[-1] == "default"
 
 
 # ---------------------------------------------------------------- 2. context
@@ -204,7 +218,7 @@ def test_capability_style_composes_one_handler_per_event() -> None:
         @m.capability(ev)
         def _(ob, d, ev=ev):  # type: ignore[no-untyped-def]
             done.append(ev)
-            m.report(ev)
+            m.event(ev)
 
     m.start()
     m.update(userUndressed=True, userDistressed="high")
@@ -222,7 +236,7 @@ def test_a_failing_task_yields_violations_not_a_stuck_manager() -> None:
     m.bind(Crashing()).start()
     m.update(userUndressed=False, userDistressed="low")
     m.event("CurtainOpenRequest")
-    assert m.dispatcher.failures == 1
+    assert m.implementations.failures == 1
     clock.advance(31)
     m.tick()
     assert m.stats["violations"] == 1 and m.outstanding() == []
@@ -364,7 +378,7 @@ def test_audit_log_loses_nothing_when_the_process_dies(tmp_path: Path) -> None:
     script = f"""
 import os
 from cosleec.runtime import Manager, VirtualClock
-m = Manager({CURTAINS!r}, clock=VirtualClock(), audit={str(log)!r}, dispatch=False)
+m = Manager.from_text({CURTAINS!r}, clock=VirtualClock(), audit={str(log)!r}, dispatch=False)
 m.update(userUndressed=False, userDistressed="low")
 for _ in range(50):
     m.event("CurtainOpenRequest")

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-from cosleec.scenario import Step
+from cosleec.demo.player import Step
 
 STEPS: list[Step] = [
     (

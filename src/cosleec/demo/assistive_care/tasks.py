@@ -14,19 +14,29 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from cosleec.nodes import TaskNode
 from cosleec.runtime import Decision, Manager, Obligation, Task, hedge
+
+Host = Manager | TaskNode  # the embedded Manager, or a task node on ROS
 
 USER_EVENTS = frozenset({"RetryAgreed", "MedicationTaken"})
 
 
 @dataclass
 class Robot:
-    manager: Manager
+    """The demo's robot: performs actions by reporting their events to its host."""
+
+    manager: Host
     failing: set[str] = field(default_factory=set)  # actions the robot cannot complete right now
     log: list[str] = field(default_factory=list)
     said: list[str] = field(default_factory=list)
 
     def do(self, event: str) -> bool:
+        """Try to perform ``event``: ask whether it is allowed, then report it; True if done.
+
+        Reports nothing and returns False for a user event (only asked for), an action in
+        ``failing``, or an action a prohibition forbids.
+        """
         if event in USER_EVENTS:
             self.log.append(f"asks the user for {event}")
             return False
@@ -37,15 +47,20 @@ class Robot:
             self.log.append(f"refrains from {event} (forbidden)")
             return False
         self.log.append(event)
-        self.manager.report(event)
+        self.manager.event(event)
         return True
 
     def say(self, text: str) -> None:
+        """Record what the robot says (its explanations); the runtime is not told."""
         self.said.append(text)
 
 
 class CurtainTask(Task):
-    """R1: WHEN CurtainOpenRequest THEN OpenCurtains UNLESS UserUndressed ... UNLESS UserDistressed ..."""
+    """R1, the paper's curtain rule, as a paper-style task.
+
+    R1: when CurtainOpenRequest then OpenCurtains, unless userUndressed (R1.1), unless
+    userDistressed >= high (R1.2).
+    """
 
     rule = "R1"
 
@@ -53,26 +68,28 @@ class CurtainTask(Task):
         self.robot = robot
 
     def default(self, decision: Decision) -> None:
+        """R1's default response: open the curtains."""
         self.robot.do("OpenCurtains")
 
     @hedge(1)  # R1.1: unless userUndressed then Refuse and ExplainWhy
     def refuse_and_explain(self, decision: Decision) -> None:
+        """R1.1: refuse, say the decision's explanation, and report ExplainWhy."""
         self.robot.do("Refuse")
         self.robot.say(decision.explanation)
         self.robot.do("ExplainWhy")
 
     @hedge(2)  # R1.2: unless userDistressed >= high then WarnUser and OpenCurtains
     def warn_then_open(self, decision: Decision) -> None:
+        """R1.2: warn the distressed user, then open the curtains anyway."""
         self.robot.do("WarnUser")
         self.robot.do("OpenCurtains")
 
 
-def install(manager: Manager) -> Robot:
+def install(manager: Host) -> Robot:
     """Bind the tasks and capabilities of this example to ``manager``; returns the robot."""
     robot = Robot(manager)
     manager.bind(CurtainTask(robot))
-    events = {e.name for e in manager.spec.events}
-    for event in sorted(events):
+    for event in sorted(manager.ruleset.events):
 
         def capability(ob: Obligation, decision: Decision, event: str = event) -> None:
             if event == "ExplainWhy":

@@ -16,42 +16,33 @@ topic                 dir    payload
 ``request_reply``    out    ``{"id": str, "event": name, "allowed": bool}``
 ``clock``            in     ``{"t": seconds}`` (simulated time, with ``--sim-time``)
 ``decisions``        out    a decision record (rule, clause, layer, values, explanation)
-``obligations``      out    what a decision asks of the task nodes (same record)
+``obligations``      out    a decision that chose a clause, for the task nodes (same record)
 ``violations``       out    an obligation that was violated (or a late event)
 ``layers``           out    ``{"active": [...], "switches": [...]}`` -- latched
-``status``           out    counters of a node, after each message it handled, and every 0.5 s
-``rejected``         out    ``{"topic", "reason", "payload"}`` for every bad message
+``status``           out    a node's counters: every 0.5 s, and on change (``Node.status_each``)
+``rejected``         out    ``{"node", "topic", "reason", "payload"}`` for every bad message
 ===================  =====  ==========================================================
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import queue
 import threading
 from collections.abc import Callable
 from typing import Any, Protocol
 
+log = logging.getLogger("cosleec.nodes")
+
 DEFAULT_NAMESPACE = "/cosleec"
-TOPICS = (
-    "context",
-    "events",
-    "request",
-    "request_reply",
-    "clock",
-    "decisions",
-    "obligations",
-    "violations",
-    "layers",
-    "status",
-    "rejected",
-)
 LATCHED = frozenset({"layers"})
 
 Handler = Callable[[str], None]
 
 
 def topic(namespace: str, name: str) -> str:
+    """The topic ``name`` under ``namespace``, with one slash between them (``/cosleec/events``)."""
     return f"{namespace.rstrip('/')}/{name}"
 
 
@@ -59,20 +50,32 @@ class Transport(Protocol):
     """What a node needs from a middleware: publish and subscribe JSON text on topics, and
     subscribe to the robot's own typed topics (delivered as a dict of the message fields)."""
 
-    def publish(self, topic: str, payload: str) -> None: ...
+    def publish(self, topic: str, payload: str) -> None:
+        """Send ``payload``, JSON text, on ``topic``."""
+        ...
 
-    def subscribe(self, topic: str, handler: Handler) -> None: ...
+    def subscribe(self, topic: str, handler: Handler) -> None:
+        """Call ``handler(payload)`` for every message on ``topic``, on a thread of the transport."""
+        ...
 
-    def subscribe_typed(
-        self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None]
-    ) -> None: ...
+    def subscribe_typed(self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None]) -> None:
+        """Call ``handler(fields)`` for every ``type_name`` message (``std_msgs/Float64``) on ``topic``.
 
-    def advertise(self, topic: str, latched: bool = False) -> None: ...
+        For the robot's own topics, which the Context Listener reads.
+        """
+        ...
 
-    def close(self) -> None: ...
+    def advertise(self, topic: str, latched: bool = False) -> None:
+        """Declare a topic this node publishes; ``latched`` keeps the last message for late subscribers."""
+        ...
+
+    def close(self) -> None:
+        """Release the middleware; the transport is not used afterwards."""
+        ...
 
 
 def dumps(message: dict[str, Any]) -> str:
+    """A message as compact JSON text, the form every topic carries; values JSON lacks go as ``str``."""
     return json.dumps(message, default=str, separators=(",", ":"))
 
 
@@ -80,6 +83,8 @@ class LocalBus:
     """An in-process bus: one delivery thread, messages in publication order (tests, embedding).
 
     Latched topics replay their last message to late subscribers, like ROS transient-local.
+    Handlers run one at a time on the bus thread, except that replay: a late subscriber
+    gets the last message at once, on the subscribing thread.
     """
 
     def __init__(self) -> None:
@@ -94,6 +99,7 @@ class LocalBus:
         self._thread.start()
 
     def transport(self) -> LocalTransport:
+        """A :class:`Transport` on this bus, to give to one node; they are cheap and share the bus."""
         return LocalTransport(self)
 
     def _run(self) -> None:
@@ -106,9 +112,7 @@ class LocalBus:
                 try:
                     h(payload)
                 except Exception:  # a subscriber's bug must not stop delivery to others
-                    import logging
-
-                    logging.getLogger("cosleec.transport").exception("handler for %s failed", t)
+                    log.exception("handler for %s failed", t)
             with self._lock:
                 self._pending -= 1
                 if self._pending == 0:
@@ -129,23 +133,34 @@ class LocalBus:
             h(last)
 
     def wait_idle(self, timeout: float = 5.0) -> bool:
-        """Block until every published message has been delivered."""
+        """Block until every published message has been delivered; False if ``timeout`` (s) passed first.
+
+        Messages published by handlers while it waits are waited for too.
+        """
         with self._idle:
             return self._idle.wait_for(lambda: self._pending == 0, timeout)
 
     def close(self) -> None:
+        """Stop the delivery thread once the messages already published are delivered (waits up to 5 s)."""
         self._q.put(None)
         self._thread.join(5)
 
 
 class LocalTransport:
+    """One node's handle on a :class:`LocalBus`: the :class:`Transport` of in-process runs and tests.
+
+    Get one from :meth:`LocalBus.transport`.
+    """
+
     def __init__(self, bus: LocalBus) -> None:
         self.bus = bus
 
     def publish(self, topic: str, payload: str) -> None:
+        """Queue ``payload`` for delivery on the bus thread; returns at once."""
         self.bus._publish(topic, payload)
 
     def subscribe(self, topic: str, handler: Handler) -> None:
+        """Deliver ``topic`` to ``handler``; a latched topic's last message arrives at once."""
         self.bus._subscribe(topic, handler)
 
     def subscribe_typed(self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None]) -> None:
@@ -153,9 +168,11 @@ class LocalTransport:
         self.bus._subscribe(topic, lambda payload: handler(json.loads(payload)))
 
     def advertise(self, topic: str, latched: bool = False) -> None:
+        """On the bus only latching matters: a latched topic keeps its last message from now on."""
         if latched:
             with self.bus._lock:
                 self.bus._latched_topics.add(topic)
 
     def close(self) -> None:
+        """Nothing to release: close the :class:`LocalBus` itself when every node is done."""
         pass

@@ -15,6 +15,13 @@ KINDS = ("context", "layers", "decision", "obligation", "refused", "rejected", "
 
 
 class McapRecorder:
+    """Writes runtime events to an MCAP file, one JSON channel per event kind.
+
+    The Manager node makes one for ``--record FILE.mcap``, to replay a run in Foxglove
+    afterwards. The file is created (or truncated) at once. Writes are not synchronised:
+    calls must not overlap.
+    """
+
     def __init__(self, path: str | Path, namespace: str = "/cosleec") -> None:
         from mcap.writer import Writer
 
@@ -41,6 +48,11 @@ class McapRecorder:
         return ch
 
     def write(self, kind: str, t: float, data: dict[str, Any]) -> None:
+        """Append one runtime event of ``kind`` that happened at clock time ``t`` (seconds).
+
+        A ``t`` below 1e9 (monotonic or virtual time) is stamped relative to the moment the
+        recorder was created; a larger one is taken as Unix time.
+        """
         stamp = self._t0 + int(t * 1e9) if t < 1e9 else int(t * 1e9)
         self._seq += 1
         self._w.add_message(
@@ -52,11 +64,12 @@ class McapRecorder:
         )
 
     def close(self) -> None:
+        """Finish the MCAP file and close it; a recording never closed lacks its summary and footer."""
         self._w.finish()  # type: ignore[no-untyped-call]
         self._fh.close()
 
 
-def read(path: str | Path) -> list[tuple[str, dict[str, Any]]]:
+def read_recording(path: str | Path) -> list[tuple[str, dict[str, Any]]]:
     """(topic, message) pairs of a recording, in order."""
     from mcap.reader import make_reader
 

@@ -1,4 +1,4 @@
-"""Scripted scenarios: one list of steps drives the embedded runtime and a system over ROS.
+"""The scenario player: one list of steps drives the embedded runtime and a system over ROS.
 
 A step is ``(kind, argument, note)``; what each kind does (set measures, send an event,
 advance the clock, ...) is given by whoever plays it, so the same scenario serves the

@@ -1,0 +1,39 @@
+"""The root of every error cosleec raises for SLEEC reasons, and the branch users can fix.
+
+Floor 0 of the house: this module imports nothing of ours, so every package may raise
+these. ``cosleec.cop`` keeps its own root, ``COPError``, because it is a generic COP
+library that knows nothing of SLEEC.
+
+Only the command line turns a :class:`UserError` into a message and an exit code; a
+library module never prints or calls ``sys.exit``.
+"""
+
+from __future__ import annotations
+
+__all__ = ["CosleecError", "UserError"]
+
+
+class CosleecError(Exception):
+    """Base of every error cosleec raises for SLEEC reasons: catch it to catch them all."""
+
+
+class UserError(CosleecError):
+    """A mistake the user can fix: bad input, a wrong option, a missing file.
+
+    The CLI prints ``str(error)``, then ``where`` and ``hint`` when they are set, and exits
+    with status 1 -- never a traceback. Raise it (or a subclass named after the situation)
+    whenever the cause is something the user wrote or chose, not a bug of ours.
+
+    ``hint`` says how to fix it ("did you mean `userUndressed`?"); ``where`` says where
+    the problem is ("rules.sleec:3:14", "mapping.yaml", a topic name).
+    """
+
+    def __init__(self, message: str, *, hint: str = "", where: str = "") -> None:
+        super().__init__(message)
+        self.hint = hint
+        self.where = where
+
+    def render(self) -> str:
+        """The message as the CLI prints it: ``where: message`` and the hint on its own line."""
+        head = f"{self.where}: {self}" if self.where else str(self)
+        return f"{head}\n  hint: {self.hint}" if self.hint else head

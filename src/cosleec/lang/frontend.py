@@ -1,0 +1,175 @@
+"""The front end as one straight pass: text -> parse -> assemble -> dialect facts -> checks.
+
+``analyse`` is the pipeline; ``analyse_file``, ``parse`` and ``load`` wrap it for files and
+for callers that want an exception. Each stage reads the text or the AST once: the parser
+builds the AST as it parses (transformer.py), :func:`cosleec.lang.dialect.collect` walks it
+once for everything dialect detection and the dialect checks need, the checker walks it once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from cosleec.lang import ast as A
+from cosleec.lang.checker import Options, SymbolTable, check
+from cosleec.lang.diagnostics import Diagnostic, DiagnosticSink, Severity, SleecError
+from cosleec.lang.dialect import check_mixed, check_strict, collect, detect
+from cosleec.lang.infer import infer_definitions
+from cosleec.lang.parser import assemble, looks_like_paper, parse_blocks, parse_paper_rules
+
+DIALECTS = ("auto", "tk", "legos", "paper")
+"""The values of ``analyse(dialect=...)`` (and of the CLI's ``--dialect``)."""
+
+
+@dataclass
+class CheckResult:
+    """Everything known about one file after parsing and checking it; what :func:`analyse`
+    returns. ``spec`` is None when the file does not parse."""
+
+    path: str
+    source: str
+    spec: A.Specification | None
+    dialect: A.Dialect | None
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+    symbols: SymbolTable | None = None
+
+    @property
+    def ok(self) -> bool:
+        """No errors (warnings and notes allowed)."""
+        return not any(d.is_error for d in self.diagnostics)
+
+    @property
+    def errors(self) -> list[Diagnostic]:
+        return [d for d in self.diagnostics if d.is_error]
+
+    def render(self) -> str:
+        """Every diagnostic, compiler style, with the offending source lines."""
+        return "\n".join(d.render(self.source) for d in self.diagnostics)
+
+    def to_json(self) -> dict[str, object]:
+        spec = self.spec
+        return {
+            "path": self.path,
+            "ok": self.ok,
+            "dialect": str(self.dialect) if self.dialect else None,
+            "rules": len(spec.rules) if spec else 0,
+            "events": len(spec.events) if spec else 0,
+            "measures": len(spec.measures) if spec else 0,
+            "diagnostics": [d.to_json() for d in self.diagnostics],
+        }
+
+
+def analyse(
+    text: str,
+    path: str = "<string>",
+    *,
+    dialect: str = "auto",
+    strict: bool = False,
+    infer_defs: bool = False,
+    options: Options | None = None,
+) -> CheckResult:
+    """Parse and check SLEEC text. Never raises for bad input: problems are diagnostics.
+
+    Use it when you want every finding (an editor, ``cosleec check``); use :func:`parse` or
+    :func:`load` when a bad file should stop you. ``dialect`` is one of :data:`DIALECTS`:
+    ``auto`` detects it, ``tk``/``legos`` also report what that tool would reject, ``paper``
+    reads the CO-SLEEC paper's notation. ``strict`` rejects cosleec's extensions;
+    ``infer_defs`` infers the declarations of a file without a def block.
+    """
+    if dialect not in DIALECTS:
+        raise ValueError(f"unknown dialect {dialect!r}; expected one of {', '.join(DIALECTS)}")
+    opts = options or Options()
+    if strict:
+        opts = replace(opts, strict_extensions=True)
+    if dialect == "tk":
+        opts = replace(opts, tk_names=True)
+    sink = DiagnosticSink(path)
+    spec: A.Specification | None
+    if dialect == "paper" or (dialect == "auto" and looks_like_paper(text)):
+        rules = parse_paper_rules(text, sink)
+        if rules is None:
+            return CheckResult(path, text, None, A.Dialect.PAPER, sink.sorted())
+        spec = A.Specification((), tuple(rules), dialect=A.Dialect.PAPER, path=path)
+        spec = infer_definitions(spec, sink)
+        detected = A.Dialect.PAPER
+    else:
+        blocks = parse_blocks(text, sink)
+        if blocks is None:
+            return CheckResult(path, text, None, None, sink.sorted())
+        spec = assemble(blocks, path, sink)
+        if infer_defs and not spec.definitions:
+            spec = infer_definitions(spec, sink)
+        facts = collect(spec, text)
+        detected, evidence = detect(facts)
+        if dialect in ("tk", "legos"):
+            check_strict(facts, A.Dialect(dialect), sink)
+        elif evidence is not None:
+            check_mixed(facts, evidence, sink)
+        spec = replace(spec, dialect=detected)
+    symbols = check(spec, sink, opts)
+    return CheckResult(path, text, spec, detected, sink.sorted(), symbols)
+
+
+def read_source(path: str | Path) -> tuple[str | None, Diagnostic | None]:
+    """Read a rule file as UTF-8; a problem comes back as a diagnostic, not an exception."""
+    p = str(path)
+    try:
+        data = Path(path).read_bytes()
+    except OSError as e:
+        return None, Diagnostic(Severity.ERROR, "io", f"cannot read file: {e.strerror or e}", path=p)
+    try:
+        return data.decode("utf-8"), None
+    except UnicodeDecodeError as e:
+        line = data.count(b"\n", 0, e.start) + 1
+        col = e.start - (data.rfind(b"\n", 0, e.start) + 1) + 1
+        return None, Diagnostic(
+            Severity.ERROR, "encoding", "file is not UTF-8 text", A.Span(line, col, line, col + 1), p
+        )
+
+
+def analyse_file(
+    path: str | Path,
+    *,
+    dialect: str = "auto",
+    strict: bool = False,
+    infer_defs: bool = False,
+    options: Options | None = None,
+) -> CheckResult:
+    """:func:`analyse` a rule file; an unreadable file is a diagnostic too."""
+    text, problem = read_source(path)
+    if text is None:
+        assert problem is not None
+        return CheckResult(str(path), "", None, None, [problem])
+    return analyse(text, str(path), dialect=dialect, strict=strict, infer_defs=infer_defs, options=options)
+
+
+def parse(
+    text: str,
+    path: str = "<string>",
+    *,
+    dialect: str = "auto",
+    strict: bool = False,
+    infer_defs: bool = False,
+    options: Options | None = None,
+) -> A.Specification:
+    """Parse and check; raise :class:`SleecError` carrying every diagnostic on any error."""
+    result = analyse(text, path, dialect=dialect, strict=strict, infer_defs=infer_defs, options=options)
+    if not result.ok or result.spec is None:
+        raise SleecError(result.diagnostics, text)
+    return result.spec
+
+
+def load(
+    path: str | Path,
+    *,
+    dialect: str = "auto",
+    strict: bool = False,
+    infer_defs: bool = False,
+    options: Options | None = None,
+) -> A.Specification:
+    """Read, parse and check a rule file; raise :class:`SleecError` on any error."""
+    result = analyse_file(path, dialect=dialect, strict=strict, infer_defs=infer_defs, options=options)
+    if not result.ok or result.spec is None:
+        raise SleecError(result.diagnostics, result.source)
+    return result.spec

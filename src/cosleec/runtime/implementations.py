@@ -1,0 +1,196 @@
+"""The implementations of the rules: each rule's handler is a COP layered method.
+
+For every rule this module builds a layered function (``cosleec.cop.layered``) whose base
+implements the default response and which has one variant per clause, registered on the
+clause's COP layer (``R1.1``, ``R1.2``, ...; the layers belong to the compiled rule).
+
+How a trigger reaches its variant: the Manager decides the trigger against the Layer
+Manager's state, which records the clause active for the rule; :meth:`Implementations.dispatch`
+then calls the rule's layered method under ``cosleec.cop.run_with(composition, ...)``,
+the composition holding exactly that clause's layer (or none for the default). COP's own
+dispatcher builds the chain from the active layer and runs its variant. The composition
+is fixed when the decision is made, so a context change after the trigger never swaps
+the variant of a decision already taken; a ROS task node dispatches a decision it
+received in the same way, from the decision's clause.
+
+Implementations come from tasks (the paper's style, one class per rule) or from
+capabilities (one handler per response event, composed here). The same class serves the
+embedded Manager and remote task nodes.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Iterable
+from typing import Any
+
+from cosleec.cop import layered, run_with
+from cosleec.runtime.decision import Decision
+from cosleec.runtime.errors import BindingError
+from cosleec.runtime.model import CompiledRule, Obligation, ResponseSpec
+from cosleec.runtime.ruleset import RuleSet
+from cosleec.runtime.tasks import Task
+
+log = logging.getLogger("cosleec.runtime")
+
+Capability = Callable[[Obligation, Decision], Any]
+Handler = Callable[[Decision], Any]
+
+
+def _events(spec: ResponseSpec | None, out: set[str]) -> None:
+    if spec is None:
+        return
+    for it in spec.items:
+        if not it.negated:
+            out.add(it.event)
+        _events(it.otherwise, out)
+        _events(it.alternative, out)
+    for c in spec.clauses:
+        _events(c.response, out)
+
+
+class Implementations:
+    """Tasks and capabilities bound to a rule set, and each rule's layered handler."""
+
+    def __init__(self, ruleset: RuleSet) -> None:
+        self.ruleset = ruleset
+        self.tasks: dict[str, Task] = {}
+        self.capabilities: dict[str, Capability] = {}
+        self._handlers: dict[str, Handler] = {}
+        self.failures = 0
+
+    # ------------------------------------------------------------------ binding
+    def bind(self, task: Task) -> None:
+        """Bind a task to the rule it names; BindingError if the rule or a clause does not exist."""
+        if not task.rule:
+            raise BindingError([f"task {type(task).__name__} names no rule (set `rule = ...`)"])
+        rule = self.ruleset.by_name.get(task.rule)
+        if rule is None:
+            raise BindingError([f"task {type(task).__name__}: no rule named {task.rule!r}"])
+        extra = [i for i in task.clauses() if not 1 <= i <= len(rule.clauses)]
+        if extra:
+            raise BindingError([f"task {type(task).__name__}: rule {rule.name} has no clause {i}" for i in extra])
+        self.tasks[task.rule] = task
+        self._handlers.pop(task.rule, None)
+
+    def capability(self, event: str) -> Callable[[Capability], Capability]:
+        """Decorator: ``fn(obligation, decision)`` performs ``event`` whenever a rule obliges it."""
+
+        def register(fn: Capability) -> Capability:
+            self.capabilities[event] = fn
+            return fn
+
+        return register
+
+    def missing(self, rules: Iterable[CompiledRule] | None = None) -> list[str]:
+        """What the completeness check reports: clauses and events without an implementation."""
+        out: list[str] = []
+        for r in rules if rules is not None else self.ruleset.rules:
+            task = self.tasks.get(r.name)
+            out += self._missing_task(r, task) if task is not None else self._missing_capabilities(r)
+        return out
+
+    def _missing_task(self, r: CompiledRule, task: Task) -> list[str]:
+        out = []
+        impls = task.clauses()
+        name = type(task).__name__
+        if r.default.items and not task.has_default():
+            out.append(f"{r.name}: task {name} does not implement the default response")
+        for c in r.clauses:
+            if c.response is not None and c.index not in impls:
+                out.append(f"{c.layer}: task {name} has no @hedge({c.index}) implementation (unless {c.text})")
+        fallbacks: set[str] = set()
+        for spec in (r.default, *(c.response for c in r.clauses)):
+            if spec is not None:
+                for it in spec.items:
+                    _events(it.otherwise, fallbacks)
+        if not hasattr(task, "fallback"):
+            for ev in sorted(fallbacks - set(self.capabilities)):
+                out.append(f"{r.name}: no capability or {name}.fallback for `otherwise` event {ev}")
+        return out
+
+    def _missing_capabilities(self, r: CompiledRule) -> list[str]:
+        needed: set[str] = set()
+        _events(r.default, needed)
+        for c in r.clauses:
+            _events(c.response, needed)
+        return [f"{r.name}: no task and no capability for response event {ev}" for ev in sorted(needed - set(self.capabilities))]
+
+    def check(self, rules: Iterable[CompiledRule] | None = None) -> None:
+        """Raise BindingError listing everything :meth:`missing` finds."""
+        missing = self.missing(rules)
+        if missing:
+            raise BindingError(missing)
+
+    # ------------------------------------------------------------------ dispatch
+    def handler(self, rule: CompiledRule) -> Handler:
+        """The rule's layered method (built on first use, rebuilt after a new bind)."""
+        h = self._handlers.get(rule.name)
+        if h is None:
+            h = self._build(rule)
+            self._handlers[rule.name] = h
+        return h
+
+    def _build(self, rule: CompiledRule) -> Handler:
+        task = self.tasks.get(rule.name)
+        compose = self.compose
+        default_impl: Handler = task.default if task is not None else compose
+
+        @layered(method=False)  # type: ignore[untyped-decorator]
+        def handle(decision: Decision) -> Any:
+            return default_impl(decision)
+
+        impls = task.clauses() if task is not None else {}
+        for c, layer in zip(rule.clauses, rule.layers):
+            impl = impls.get(c.index, compose)
+
+            def variant(decision: Decision, *, proceed: Any, impl: Handler = impl) -> Any:
+                return impl(decision)  # a clause replaces the default: proceed is not called
+
+            handle.variant(layer)(variant)
+        handle.__qualname__ = handle.__name__ = f"rule_{rule.name}"
+        return handle  # type: ignore[no-any-return]
+
+    def compose(self, decision: Decision) -> None:
+        """Capability style: run the handler of every event the decision obliges."""
+        for ob in decision.obligations:
+            if ob.negated:
+                continue
+            cap = self.capabilities.get(ob.event)
+            if cap is not None:
+                cap(ob, decision)
+
+    def dispatch(self, rule: CompiledRule, decision: Decision) -> bool:
+        """Run the implementation of the decision's clause; a failing task never stops the caller.
+
+        Returns False (and counts a failure) when the implementation raised. A decision
+        without a clause (undetermined) runs nothing and returns True.
+        """
+        if decision.clause is None:
+            return True
+        try:
+            run_with(rule.compositions[decision.clause], self.handler(rule), decision)
+            return True
+        except Exception:
+            self.failures += 1
+            log.exception("task for %s failed on decision %s", rule.name, decision.id)
+            return False
+
+    def dispatch_fallback(self, rule: CompiledRule, decision: Decision) -> bool:
+        """Run an ``otherwise`` decision: capabilities for its events, else the task's ``fallback``."""
+        task = self.tasks.get(rule.name)
+        try:
+            handled = set()
+            for ob in decision.obligations:
+                cap = self.capabilities.get(ob.event)
+                if cap is not None and not ob.negated:
+                    cap(ob, decision)
+                    handled.add(ob.event)
+            fb = getattr(task, "fallback", None)
+            if fb is not None and any(not o.negated and o.event not in handled for o in decision.obligations):
+                fb(decision)
+            return True
+        except Exception:
+            self.failures += 1
+            log.exception("fallback for %s failed on decision %s", rule.name, decision.id)
+            return False
