@@ -97,7 +97,8 @@ def runtime_pattern(number: int, repeat: int) -> dict[str, float]:
 
 def main() -> int:
     a = args(__doc__ or "")
-    number, repeat = (50_000, 5) if a.quick else (200_000, 7)
+    # many short runs rather than a few long ones: the best of them finds the machine's quiet moments
+    number, repeat = (20_000, 12) if a.quick else (100_000, 15)
     through_lambda = ratios(False, number, repeat)
     direct = ratios(True, number, repeat)
     runtime = runtime_pattern(number // 5, repeat)

@@ -17,7 +17,7 @@ def install_hanging(node: Any) -> None:
     def hang(ob: Any, decision: Any) -> None:
         _forever.wait()
 
-    for event in list(node.dispatcher.capabilities):
+    for event in list(node.implementations.capabilities):
         node.capability(event)(hang)
     del robot
 
@@ -28,7 +28,7 @@ def install_crashing(node: Any) -> None:
     def crash(ob: Any, decision: Any) -> None:
         raise RuntimeError(f"actuator fault while doing {ob.event}")
 
-    for event in list(node.dispatcher.capabilities):
+    for event in list(node.implementations.capabilities):
         node.capability(event)(crash)
 
 

@@ -16,8 +16,9 @@ What is generated, and why it is the same:
   them, as in the reference. Parameter names never appear in the generated code, so no
   name of the base can clash with it.
 - When the chain's outermost step is a lone ``around`` partial (its ``head``), the
-  usual call runs it here, saving the step's frame, with a ``proceed`` that does what
-  ``dispatch.proceed_body`` does, specialised to the call's arguments.
+  usual call runs it here, saving the step's frame. Its ``proceed`` does what
+  ``dispatch.proceed_body`` does, specialised to *k* arguments and bound at C level
+  (``MethodType`` over a tuple: cheaper to make per call than a closure).
 
 Templates are compiled once per (k, sync/async, receiver) and shared by every layered
 function of that shape: one code object each, registered as a dispatch (SD9).
@@ -30,20 +31,18 @@ from __future__ import annotations
 import inspect
 import threading
 from collections.abc import Callable
+from types import MethodType
 from typing import Any
 
 from cosleec.cop.dispatch import LayeredFunction
 from cosleec.cop.state import RT, dyn_get, flush_if_outermost, register_dispatch_code
 
 _TEMPLATE = """
-def make(lf, RT, get, flush, M):
-    def run_head(around, nxt{comma_args}):
-        def proceed(*a, **k):  # dispatch.proceed_body, specialised to this call
-            if a or k:
-                return nxt({receiver}*a, **k)
-            return nxt({args})
-
-        return around({args}{comma}proceed=proceed)
+def make(lf, RT, get, flush, M, MT):
+    def proceed(st, /, *a, **k):  # dispatch.proceed_body for st = (next, the call's arguments)
+        if a or k:
+            return st[0]({receiver}*a, **k)
+        return st[0]({st_args})
 
     {async_}def dispatch({slots}*_r, **_k):
         try:
@@ -57,7 +56,7 @@ def make(lf, RT, get, flush, M):
                 if head is None:
                     return {await_}call({args})
                 around, nxt = head
-                return {await_}run_head(around, nxt{comma_args})
+                return {await_}around({args}{comma}proceed=MT(proceed, (nxt, {args})))
             return {await_}call(*[a for a in ({args}{tuple_comma}) if a is not M], *_r, **_k)
         finally:
             if RT.queued:
@@ -86,9 +85,9 @@ def _factory(k: int, is_async: bool, receiver: bool) -> Callable[..., Callable[.
                 usual=" and ".join([f"{s} is not M" for s in slots[-1:]] + ["not _r", "not _k"]),
                 args=args,
                 comma=", " if k else "",
-                comma_args=", " + args if k else "",
                 tuple_comma="," if k == 1 else "",
-                receiver="_a0, " if receiver and k else "",
+                receiver="st[1], " if receiver and k else "",
+                st_args=", ".join(f"st[{i + 1}]" for i in range(k)),
             )
             ns: dict[str, Any] = {}
             exec(compile(src, f"<cosleec.cop fast dispatcher, {k} slots>", "exec"), ns)
@@ -120,4 +119,4 @@ def required_positionals(fn: Callable[..., Any]) -> int:
 def fast_dispatcher(lf: LayeredFunction) -> Callable[..., Any]:
     """The generated dispatcher of ``lf``: same behaviour as ``reference_dispatcher(lf)``."""
     make = _factory(required_positionals(lf.base), lf.is_async, bool(lf.receiver))
-    return make(lf, RT, dyn_get, flush_if_outermost, _MISSING)
+    return make(lf, RT, dyn_get, flush_if_outermost, _MISSING, MethodType)

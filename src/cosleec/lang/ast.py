@@ -53,12 +53,16 @@ class Dialect(StrEnum):
 
 @dataclass(frozen=True, slots=True)
 class BoolLit:
+    """A boolean literal in a condition: ``true`` or ``false``."""
+
     value: bool
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
 class IntLit:
+    """An integer literal, e.g. ``30`` in ``within 30 seconds``; a written ``-3`` is one literal."""
+
     value: int
     span: Span = _span()
 
@@ -89,6 +93,8 @@ class Name:
 
 @dataclass(frozen=True, slots=True)
 class Not:
+    """Boolean negation of a condition: ``not userUndressed``."""
+
     operand: Expr
     parenthesized: bool = field(default=False, compare=False, kw_only=True)
     span: Span = _span()
@@ -107,6 +113,8 @@ class BinOp:
 
 @dataclass(frozen=True, slots=True)
 class Compare:
+    """A comparison, ``op`` one of ``< <= > >= = <>``: ``temperature > 30``."""
+
     op: str
     left: Expr
     right: Expr
@@ -192,6 +200,8 @@ class Response:
 
 @dataclass(frozen=True, slots=True)
 class Trigger:
+    """What a rule reacts to, an event and an optional condition: ``CurtainOpenRequest and userDistressed``."""
+
     event: str
     condition: Expr | None = None
     span: Span = _span()
@@ -199,6 +209,8 @@ class Trigger:
 
 @dataclass(frozen=True, slots=True)
 class Rule:
+    """A named rule of the rule block: ``R1 when CurtainOpenRequest then OpenCurtains``."""
+
     name: str
     trigger: Trigger
     response: Response
@@ -210,12 +222,16 @@ class Rule:
 
 @dataclass(frozen=True, slots=True)
 class BooleanType:
+    """The type of a boolean measure: ``measure userUndressed : boolean``."""
+
     def __str__(self) -> str:
         return "boolean"
 
 
 @dataclass(frozen=True, slots=True)
 class NumericType:
+    """The type of a numeric measure: ``measure temperature : numeric``."""
+
     def __str__(self) -> str:
         return "numeric"
 
@@ -236,12 +252,16 @@ MeasureType: TypeAlias = BooleanType | NumericType | ScaleType
 
 @dataclass(frozen=True, slots=True)
 class EventDecl:
+    """An event declaration in the def block: ``event OpenCurtains``."""
+
     name: str
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
 class MeasureDecl:
+    """A measure declaration in the def block: ``measure userUndressed : boolean``."""
+
     name: str
     type: MeasureType
     span: Span = _span()
@@ -363,21 +383,26 @@ class Specification:
 
     @property
     def has_def_block(self) -> bool:
+        """Whether the file opened a def block (even an empty one) or has any definitions."""
         return any(b.kind == "def" for b in self.blocks) or bool(self.definitions)
 
     @property
     def events(self) -> tuple[EventDecl, ...]:
+        """The event declarations, in file order."""
         return tuple(d for d in self.definitions if isinstance(d, EventDecl))
 
     @property
     def measures(self) -> tuple[MeasureDecl, ...]:
+        """The measure declarations, in file order."""
         return tuple(d for d in self.definitions if isinstance(d, MeasureDecl))
 
     @property
     def constants(self) -> tuple[ConstantDecl, ...]:
+        """The constant declarations, in file order."""
         return tuple(d for d in self.definitions if isinstance(d, ConstantDecl))
 
     def rule(self, name: str) -> Rule:
+        """The (first) rule called ``name``; raises KeyError if there is none."""
         for r in self.rules:
             if r.name == name:
                 return r

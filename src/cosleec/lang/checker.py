@@ -1,4 +1,4 @@
-"""Static semantics of SLEEC (sleec-language.md §5): names, kinds, types, constants.
+"""Static semantics of SLEEC (the language reference §5): names, kinds, types, constants.
 
 Every problem of a file is reported in one pass, as a diagnostic with a stable code. The
 checker also resolves the information later stages need (constant values, each scale
@@ -43,6 +43,7 @@ class SymbolTable:
     constant_values: dict[str, int] = field(default_factory=dict)
 
     def kind(self, name: str) -> str | None:
+        """What ``name`` is declared as: ``"event"``, ``"measure"``, ``"constant"``, else None."""
         if name in self.events:
             return "event"
         if name in self.measures:

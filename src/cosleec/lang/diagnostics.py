@@ -16,6 +16,8 @@ from cosleec.lang.ast import NO_SPAN, Span
 
 
 class Severity(StrEnum):
+    """How serious a :class:`Diagnostic` is; only ``ERROR`` makes a file unusable."""
+
     ERROR = "error"
     WARNING = "warning"
     NOTE = "note"
@@ -38,9 +40,11 @@ class Diagnostic:
 
     @property
     def is_error(self) -> bool:
+        """Whether this is an error (not a warning or note): one error makes the file fail."""
         return self.severity is Severity.ERROR
 
     def header(self) -> str:
+        """The first line, ``path:line:col: severity: message`` (``path: ...`` when there is no span)."""
         if self.span.line:
             return f"{self.path}:{self.span.line}:{self.span.col}: {self.severity}: {self.message}"
         return f"{self.path}: {self.severity}: {self.message}"
@@ -67,6 +71,7 @@ class Diagnostic:
         return "\n".join(out)
 
     def to_json(self) -> dict[str, object]:
+        """A JSON-ready dict: span, severity, code, message and hint (not the path or notes)."""
         return {
             "line": self.span.line,
             "col": self.span.col,
@@ -109,16 +114,21 @@ class DiagnosticSink:
         self.items: list[Diagnostic] = []
 
     def error(self, code: str, message: str, span: Span = NO_SPAN, **kw: object) -> None:
+        """Record an error; ``kw`` (``hint``, ``related``) goes to the :class:`Diagnostic`."""
         self.items.append(Diagnostic(Severity.ERROR, code, message, span, self.path, **kw))  # type: ignore[arg-type]
 
     def warning(self, code: str, message: str, span: Span = NO_SPAN, **kw: object) -> None:
+        """Record a warning; ``kw`` (``hint``, ``related``) goes to the :class:`Diagnostic`."""
         self.items.append(Diagnostic(Severity.WARNING, code, message, span, self.path, **kw))  # type: ignore[arg-type]
 
     def note(self, code: str, message: str, span: Span = NO_SPAN) -> None:
+        """Record a note: information that never makes the file fail."""
         self.items.append(Diagnostic(Severity.NOTE, code, message, span, self.path))
 
     def extend(self, diags: Iterable[Diagnostic]) -> None:
+        """Add diagnostics built elsewhere, unchanged (their own path is kept)."""
         self.items.extend(diags)
 
     def sorted(self) -> list[Diagnostic]:
+        """The diagnostics in source order (line, then column; span-less ones first)."""
         return sorted(self.items, key=lambda d: (d.span.line, d.span.col))

@@ -41,6 +41,7 @@ class CheckResult:
 
     @property
     def errors(self) -> list[Diagnostic]:
+        """Only the error diagnostics (no warnings or notes), in report order."""
         return [d for d in self.diagnostics if d.is_error]
 
     def render(self) -> str:
@@ -48,6 +49,7 @@ class CheckResult:
         return "\n".join(d.render(self.source) for d in self.diagnostics)
 
     def to_json(self) -> dict[str, object]:
+        """A JSON-ready summary (``cosleec check --json``): ok, dialect, counts, diagnostics."""
         spec = self.spec
         return {
             "path": self.path,

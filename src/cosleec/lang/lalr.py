@@ -135,6 +135,9 @@ def direct_callback(rule: RuleShape, transformer: Any) -> Callable[[list[Any]], 
     parts += ["None"] * rule.placeholders[len(rule.kept)]
     if rule.expand1 and not rule.aliased and len(parts) == 1:
         src = f"lambda s: {parts[0]}"  # a `?rule` with one child returns it unchanged
+    elif parts == [f"s[{i}]" for i in range(len(rule.symbols))]:
+        as_is: Callable[[list[Any]], Any] = method  # the children as they are: no wrapper at all
+        return as_is
     else:
         src = f"lambda s: m([{', '.join(parts)}])"
     fn: Callable[[list[Any]], Any] = eval(

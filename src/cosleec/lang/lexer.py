@@ -204,6 +204,7 @@ class ContextualKeywords(PostLex):
         self.lexicon = lexicon
 
     def process(self, stream: Iterator[LarkToken]) -> Iterator[LarkToken]:
+        """Yield ``stream`` with relation keywords outside a relation block retyped as names."""
         relaxed = self.lexicon.relaxed if self.lexicon is not None else {}
         if not relaxed:
             yield from stream

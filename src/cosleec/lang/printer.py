@@ -33,6 +33,7 @@ class Printer:
 
     # ------------------------------------------------------------------ whole file
     def specification(self) -> str:
+        """The whole file: def and rule blocks (always), then non-empty concern, purpose, relation blocks."""
         spec = self.spec
         out = ["def_start"]
         for d in spec.definitions:
@@ -57,6 +58,7 @@ class Printer:
         return "\n".join(out) + "\n"
 
     def definition(self, d: A.Definition) -> str:
+        """One def-block line: ``event E``, ``measure m : type``, ``constant N = v`` or ``fluent F``."""
         name = self.name(d.name)
         if isinstance(d, A.EventDecl):
             return f"event {name}"
@@ -73,16 +75,19 @@ class Printer:
         return f"fluent {name} <{{{starts}}}, {{{ends}}}>"
 
     def rule(self, r: A.Rule) -> str:
+        """One rule line, ``R when trigger then response``, the top-level response unbraced."""
         response = self.response(r.response, braced=False)
         return f"{self.name(r.name)} when {self.trigger(r.trigger)} then {response}"
 
     def trigger(self, t: A.Trigger) -> str:
+        """A trigger: ``E`` or ``E and condition``."""
         if t.condition is None:
             return self.name(t.event)
         return f"{self.name(t.event)} and {self.expr(t.condition)}"
 
     # ------------------------------------------------------------------ responses
     def response(self, r: A.Response, braced: bool) -> str:
+        """A response: its items joined by ``and``, then its ``unless`` clauses; in braces if ``braced``."""
         parts = []
         n = len(r.items)
         for i, item in enumerate(r.items):
@@ -97,6 +102,7 @@ class Printer:
         return f"{{{text}}}" if braced else text
 
     def item(self, item: A.ResponseItem, followed: bool) -> str:
+        """One response item with its ``otherwise``/``else``; ``followed``: more text comes after it."""
         text = self.occurrence(item.occurrence)
         if item.otherwise is not None:
             text += " otherwise " + self.inner(item.otherwise, followed or item.alternative is not None)
@@ -109,6 +115,7 @@ class Printer:
         return self.response(r, braced=bool(r.defeaters) or followed)
 
     def occurrence(self, o: A.Occurrence) -> str:
+        """An occurrence: ``[not] E [within d | within [lo, hi]] [eventually]``."""
         text = ("not " if o.negated else "") + self.name(o.event)
         if o.limit is not None:
             if o.limit.lo is None:
@@ -120,6 +127,7 @@ class Printer:
         return text
 
     def duration(self, d: A.Duration) -> str:
+        """A duration ``value unit``; a unit that is no time unit is printed as a name."""
         unit = d.unit if d.unit in A.TIME_UNITS else self.name(d.unit)
         return f"{self.expr(d.value)} {unit}"
 
@@ -154,6 +162,7 @@ class Printer:
 
     # ------------------------------------------------------------------ LEGOS blocks
     def situation_body(self, s: A.Situation) -> str:
+        """A concern or purpose after its name: ``when|exists trigger [then|while R ...] [meanwhile (...)]``."""
         text = f"{s.kind} {self.trigger(s.trigger)}"
         if s.responses:
             joiner = " then " if s.kind == "when" else " while "
@@ -163,6 +172,7 @@ class Printer:
         return text
 
     def relation(self, r: A.Relation) -> str:
+        """One relation-block line, e.g. ``mutualExclusive A B`` or ``when A then p until B``."""
         if isinstance(r, A.EventRelation):
             return f"{r.kind} {self.name(r.first)} {self.name(r.second)}"
         if isinstance(r, A.MeasureRelation):

@@ -155,10 +155,6 @@ class Ros2Transport:
         pub = self._pubs.get(topic)
         return pub.get_subscription_count() if pub is not None else 0
 
-    def publishers(self, topic: str) -> int:
-        """Publishers on ``topic`` in the whole ROS graph, as this node sees it."""
-        return int(self.node.count_publishers(topic))
-
     def ok(self) -> bool:
         """False once rclpy has shut down: :func:`cosleec.ros.serve` then stops the node."""
         return bool(self._rclpy.ok())

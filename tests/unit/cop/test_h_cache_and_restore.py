@@ -178,3 +178,29 @@ def test_isolated_cop_undoes_what_the_block_did() -> None:
         activate_globally(a)
         raise RuntimeError
     assert global_count(a) == 0
+
+
+def test_equal_snapshots_share_a_frame_and_a_layer_listed_twice_runs_once(layered: Layered) -> None:
+    a, b = Layer("a"), Layer("b")
+
+    @layered
+    def f() -> str:
+        return "base"
+
+    for la in (a, b):
+
+        def mk(la: Layer) -> None:
+            @f.variant(la)
+            def _(*, proceed):  # type: ignore[no-untyped-def]
+                return la.name + "(" + proceed() + ")"
+
+        mk(la)
+    assert Snapshot((a, b)).frame is Snapshot((a, b)).frame  # a memo recognises a rebuilt snapshot
+    assert run_with(Snapshot((a, b)), f) == "a(b(base))"
+    assert run_with(Snapshot((b, a)), f) == "b(a(base))"
+    assert run_with(Snapshot((a, b, a)), f) == "a(b(base))"
+    assert run_with(Snapshot(()), f) == "base"
+    builds = f.layered.builds
+    for _ in range(10):
+        assert run_with(Snapshot((a, b)), f) == "a(b(base))"
+    assert f.layered.builds == builds
