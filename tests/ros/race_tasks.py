@@ -11,15 +11,15 @@ class Judge(Task):
     rule = "R"
 
     def default(self, decision: Any) -> None:
-        self.report("Same")
+        self.event("Same")
 
     @hedge(1)
     def a_bigger(self, decision: Any) -> None:
-        self.report("ABigger")
+        self.event("ABigger")
 
     @hedge(2)
     def b_bigger(self, decision: Any) -> None:
-        self.report("BBigger")
+        self.event("BBigger")
 
 
 def install(node: Any) -> None:

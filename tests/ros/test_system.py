@@ -182,7 +182,7 @@ def test_layers_are_latched_for_late_joiners(
         driver = Driver(transport, namespace)
         driver.ready()
         driver.set({"userUndressed": True, "userDistressed": "low"})
-        driver.wait(lambda: "R1.1" in driver.layers.get("active", []), what="the layer switch")
+        driver.wait(lambda: "R1.1" in driver.layers_message.get("active", []), what="the layer switch")
         late = subprocess.run(
             [sys.executable, "-c", LATE.format(backend=backend, topic=f"{namespace}/layers")],
             env=graph,

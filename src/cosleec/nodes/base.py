@@ -12,16 +12,25 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
+from cosleec.errors import UserError
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, LATCHED, Transport, dumps, topic
 
 log = logging.getLogger("cosleec.nodes")
+
+
+class MessageError(UserError, ValueError):
+    """A message on a topic cannot be used (not JSON, a field missing or of the wrong type).
+
+    Raise it from a topic handler: :meth:`Node.on` rejects the message -- logged, counted
+    and published on ``rejected`` -- and the node keeps running.
+    """
 
 
 def context_values(msg: dict[str, Any]) -> dict[str, Any]:
     """The ``values`` of a ``context`` message (Manager and Layer Manager read the same stream)."""
     values = msg.get("values")
     if not isinstance(values, dict) or not values:
-        raise ValueError("context message needs a non-empty object `values`")
+        raise MessageError("context message needs a non-empty object `values`")
     return values
 
 
@@ -81,7 +90,7 @@ class Node:
             try:
                 message = json.loads(payload)
                 if not isinstance(message, dict):
-                    raise ValueError("expected a JSON object")
+                    raise MessageError("expected a JSON object")
                 handler(message)
             except (ValueError, TypeError, KeyError) as e:
                 self.reject(full, str(e) or type(e).__name__, payload)

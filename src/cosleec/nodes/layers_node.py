@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from cosleec.nodes.base import Node, context_values
+from cosleec.nodes.base import MessageError, Node, context_values
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
 from cosleec.runtime import Context, ContextError, HedgeSemantics, LayerManager, RuleSet
 
@@ -34,7 +34,7 @@ class LayersNode(Node):
         super().__init__(transport, namespace)
         self.ruleset = rules
         self.context = Context(rules.measures)
-        self.layers = LayerManager(rules, semantics)
+        self.layer_manager = LayerManager(rules, semantics)
         self.version = 0
         self.advertise("layers")
         self.on("context", self._context)
@@ -44,9 +44,9 @@ class LayersNode(Node):
         try:
             stored = self.context.validate(context_values(msg))
         except ContextError as e:
-            raise ValueError(str(e)) from e
+            raise MessageError(str(e)) from e
         changed = self.context.apply(stored, 0.0)
-        switches = self.layers.update(changed, self.context.values)
+        switches = self.layer_manager.update(changed, self.context.values)
         if switches:
             self._publish([sw.to_json() for sw in switches])
 
@@ -55,9 +55,9 @@ class LayersNode(Node):
         self.publish(
             "layers",
             {
-                "active": self.layers.active_layers(),
+                "active": self.layer_manager.active_layers(),
                 "switches": switches,
                 "version": self.version,
-                "semantics": self.layers.semantics,
+                "semantics": self.layer_manager.semantics,
             },
         )

@@ -30,7 +30,7 @@ from typing import Any
 import yaml
 
 from cosleec.errors import UserError
-from cosleec.nodes.base import Node
+from cosleec.nodes.base import MessageError, Node
 from cosleec.runtime import MeasureSpec
 
 COMPARISONS = {
@@ -48,7 +48,7 @@ class MappingError(UserError, ValueError):
     """A mapping file is wrong; the message names the file and the entry."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Entry:
     """One checked mapping entry: where a measure or event is read, and how its value is made."""
 
@@ -67,24 +67,24 @@ class Entry:
         if self.json:
             raw = message.get("data")
             if not isinstance(raw, str):
-                raise ValueError(f"{self.topic}: expected JSON text in `data`")
+                raise MessageError(f"{self.topic}: expected JSON text in `data`")
             x = json.loads(raw)
         for part in self.field:
             if not isinstance(x, dict) or part not in x:
-                raise ValueError(f"{self.topic}: message has no field {'.'.join(self.field)!r}")
+                raise MessageError(f"{self.topic}: message has no field {'.'.join(self.field)!r}")
             x = x[part]
         if self.comparison is not None:
             op, target = self.comparison
             if isinstance(target, bool) != isinstance(x, bool) or (
                 isinstance(target, int | float) and not isinstance(x, int | float)
             ):
-                raise ValueError(
+                raise MessageError(
                     f"{self.topic}: {'.'.join(self.field)} is {x!r}, not comparable with {target!r}"
                 )
             return bool(COMPARISONS[op](x, target))
         if self.bands is not None:
             if isinstance(x, bool) or not isinstance(x, int | float) or math.isnan(x):
-                raise ValueError(f"{self.topic}: {'.'.join(self.field)} is {x!r}, not a number")
+                raise MessageError(f"{self.topic}: {'.'.join(self.field)} is {x!r}, not a number")
             for bound, literal in self.bands:
                 if x < bound:
                     return literal
@@ -205,7 +205,16 @@ def _entry(
     # a plain message's value is its `data`; a JSON payload is read from its root
     default_field = "" if spec.get("json") else "data"
     field_path = tuple(p for p in str(spec.get("field", default_field)).split(".") if p)
-    e = Entry(name, kind, spec["topic"], spec["type"], field_path, bool(spec.get("json")), comparison, bands)
+    e = Entry(
+        name=name,
+        kind=kind,
+        topic=spec["topic"],
+        type=spec["type"],
+        field=field_path,
+        json=bool(spec.get("json")),
+        comparison=comparison,
+        bands=bands,
+    )
     if kind == "event":
         if events is not None and name not in events:
             raise MappingError(f"{where}: the rules declare no event {name!r}")

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from cosleec.nodes.base import Node, context_values
+from cosleec.nodes.base import MessageError, Node, context_values
 from cosleec.nodes.recording import McapRecorder
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
 from cosleec.runtime import (
@@ -90,7 +90,7 @@ class ManagerNode(Node):
     def _event(self, msg: dict[str, Any]) -> None:
         name = msg.get("event")
         if not isinstance(name, str):
-            raise ValueError("event message needs a string `event`")
+            raise MessageError("event message needs a string `event`")
         self._feed(self.manager.event, name)
 
     def _feed(self, step: Any, arg: Any) -> None:
@@ -98,21 +98,21 @@ class ManagerNode(Node):
         try:
             step(arg)
         except ContextError as e:
-            raise ValueError(str(e)) from e
+            raise MessageError(str(e)) from e
         finally:
             self._after_message()
 
     def _request(self, msg: dict[str, Any]) -> None:
         name, rid = msg.get("event"), msg.get("id")
         if not isinstance(name, str) or rid is None:
-            raise ValueError("request message needs `id` and a string `event`")
+            raise MessageError("request message needs `id` and a string `event`")
         allowed = self.manager.request(name)
         self.publish("request_reply", {"id": rid, "event": name, "allowed": allowed})
 
     def _clock(self, msg: dict[str, Any]) -> None:
         t = msg.get("t")
         if not isinstance(t, int | float) or isinstance(t, bool):
-            raise ValueError("clock message needs a number `t`")
+            raise MessageError("clock message needs a number `t`")
         assert isinstance(self.clock, VirtualClock)
         self.clock.set(max(float(t), self.clock.now()))
         self.manager.tick()

@@ -40,7 +40,7 @@ class Driver:
         self.violations: list[dict[str, Any]] = []
         self.rejected: list[dict[str, Any]] = []
         self.replies: dict[str, dict[str, Any]] = {}
-        self.layers: dict[str, Any] = {}
+        self.layers_message: dict[str, Any] = {}
         self.status: dict[str, dict[str, Any]] = {}
         self._lock = threading.Condition()
         for name in ("context", "events", "clock", "request"):
@@ -74,7 +74,7 @@ class Driver:
 
     def _layers(self, payload: str) -> None:
         with self._lock:
-            self.layers = json.loads(payload)
+            self.layers_message = json.loads(payload)
             self._lock.notify_all()
 
     def _reply(self, payload: str) -> None:

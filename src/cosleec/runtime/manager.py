@@ -100,7 +100,7 @@ class Manager:
         self.spec = rules.spec
         self.clock: Clock = clock or MonotonicClock()
         self.context = Context(rules.measures, max_age)
-        self.layers = LayerManager(
+        self.layer_manager = LayerManager(
             rules, _option(HedgeSemantics, semantics, "semantics"), _option(Unknowns, unknown, "unknown")
         )
         self.tracker = Tracker(untimed)
@@ -135,7 +135,7 @@ class Manager:
     @property
     def semantics(self) -> HedgeSemantics:
         """How clauses combine: last-wins (SLEEC) or nested (the paper's formula)."""
-        return self.layers.semantics
+        return self.layer_manager.semantics
 
     # ------------------------------------------------------------------ wiring
     def bind(self, *tasks: Task) -> Manager:
@@ -222,7 +222,7 @@ class Manager:
             self.stats["updates"] += 1
             self._advance(now, events)
             changed = self.context.apply(stored, now)
-            switches = self.layers.update(changed, self.context.values) if changed else []
+            switches = self.layer_manager.update(changed, self.context.values) if changed else []
             if changed and self._listening:
                 self._emit_later(
                     events,
@@ -245,12 +245,12 @@ class Manager:
     def active_layers(self) -> list[str]:
         """The active clause layers in rule order (``["R1.1", ...]``); a rule at its default has none."""
         with self._lock:
-            return self.layers.active_layers()
+            return self.layer_manager.active_layers()
 
     def set_semantics(self, semantics: HedgeSemantics | str) -> None:
         """Switch clause semantics at run time; every rule's layer is re-evaluated."""
         with self._lock:
-            self.layers.set_semantics(_option(HedgeSemantics, semantics, "semantics"), self.context.values)
+            self.layer_manager.set_semantics(_option(HedgeSemantics, semantics, "semantics"), self.context.values)
 
     # ------------------------------------------------------------------ events
     def event(self, name: str) -> list[Decision]:
@@ -339,7 +339,7 @@ class Manager:
     def _advance(self, now: float, events: list[RuntimeEvent]) -> list[tuple[CompiledRule, Decision]]:
         gone = self.context.expire(now)
         if gone:
-            switches = self.layers.update(gone, self.context.values)
+            switches = self.layer_manager.update(gone, self.context.values)
             self._emit_later(
                 events, "context", {"values": dict.fromkeys(sorted(gone)), "stale": sorted(gone)}
             )
@@ -361,7 +361,7 @@ class Manager:
                 "layers",
                 {
                     "switches": [sw.to_json() for sw in result],
-                    "active": self.layers.active_layers(),
+                    "active": self.layer_manager.active_layers(),
                 },
             )
         return result
@@ -413,7 +413,7 @@ class Manager:
             fired, missing = None, (str(e.args[0]),)
         if fired is False:
             return None
-        status = self.layers.status[rule.index]
+        status = self.layer_manager.status[rule.index]
         clause = status.clause if fired else None
         if clause is None and not missing:
             missing = status.missing
@@ -447,7 +447,7 @@ class Manager:
         v = self.context.values
         if spec.clauses:  # a braced inner response: its own hedges, read when it starts
             vals, _ = evaluate(spec.clauses, v)
-            k = choose(vals, self.semantics, self.layers.unknowns)
+            k = choose(vals, self.semantics, self.layer_manager.unknowns)
             if k:
                 return self._issue(spec.clauses[k - 1].response, rule)
         out = []

@@ -34,7 +34,7 @@ from cosleec.runtime.model import CompiledRule, compile_rule
 from cosleec.runtime.values import MeasureSpec
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class RuleSet:
     """A checked specification compiled for execution; immutable, shareable between Managers.
 

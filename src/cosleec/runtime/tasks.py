@@ -16,7 +16,7 @@ the embedded Manager and in a ROS task node.
             ...
 
 The runtime composes these into a COP layered method whose variants are dispatched by the
-rule's active layer. ``self.report(event)`` tells the runtime an event happened: deadlines
+rule's active layer. ``self.event(name)`` tells the runtime an event happened: deadlines
 are judged against reports, never against a method returning.
 """
 
@@ -91,14 +91,17 @@ class Task:
         """Does the subclass implement ``default``?"""
         return type(self).default is not Task.default
 
-    def report(self, event: str) -> None:
-        """The robot did ``event`` (a response the rules may be waiting for)."""
-        if self.manager is None:
-            raise BindingError([f"task {type(self).__name__} is not bound: call manager.bind(task) first"])
-        self.manager.event(event)
+    def event(self, name: str) -> None:
+        """The robot did ``name`` (a response the rules may be waiting for): tell the Manager.
 
-    def request(self, event: str) -> bool:
-        """May the robot do ``event`` now? False while a prohibition forbids it (the refusal is recorded)."""
+        Deadlines are judged against these reports, never against a method returning.
+        """
         if self.manager is None:
             raise BindingError([f"task {type(self).__name__} is not bound: call manager.bind(task) first"])
-        return self.manager.request(event)
+        self.manager.event(name)
+
+    def request(self, name: str) -> bool:
+        """May the robot do ``name`` now? False while a prohibition forbids it (the refusal is recorded)."""
+        if self.manager is None:
+            raise BindingError([f"task {type(self).__name__} is not bound: call manager.bind(task) first"])
+        return self.manager.request(name)

@@ -41,18 +41,18 @@ class Curtains(Task):
 
     def default(self, d):  # type: ignore[no-untyped-def]
         self.calls.append("default")
-        self.report("OpenCurtains")
+        self.event("OpenCurtains")
 
     @hedge(1)
     def refuse(self, d):  # type: ignore[no-untyped-def]
         self.calls.append("refuse:" + d.explanation)
-        self.report("Refuse")
-        self.report("ExplainWhy")
+        self.event("Refuse")
+        self.event("ExplainWhy")
 
     @hedge("R1.2")
     def warn(self, d):  # type: ignore[no-untyped-def]
         self.calls.append("warn")
-        self.report("WarnUser")
+        self.event("WarnUser")
 
 
 # ---------------------------------------------------------------- 1. mapping
@@ -70,18 +70,18 @@ def test_each_rule_is_a_layered_method_with_one_layer_per_clause() -> None:
     assert set(handler.layered.partials) == {r11, r12}  # type: ignore[attr-defined]
     # the Layer Manager activates the layer the context selects ...
     m.update(userUndressed=True, userDistressed="low")
-    assert m.active_layers() == ["R1.1"] and m.layers.composition().layers == (r11,)
+    assert m.active_layers() == ["R1.1"] and m.layer_manager.composition().layers == (r11,)
     (d,) = m.event("CurtainOpenRequest")
     assert (d.clause, d.layer) == (1, "R1.1")
     # ... and the trigger runs, through COP, the variant of that layer
     assert run_with(rule.compositions[d.clause], explain, handler, d).chain == ("R1.1",)
     assert task.calls[0].startswith("refuse:")
     m.update(userDistressed="high")  # the last clause that holds wins
-    assert m.active_layers() == ["R1.2"] and m.layers.composition().layers == (r12,)
+    assert m.active_layers() == ["R1.2"] and m.layer_manager.composition().layers == (r12,)
     m.event("CurtainOpenRequest")
     assert task.calls[-1] == "warn"
     m.update(userUndressed=False, userDistressed="low")
-    assert m.active_layers() == [] and m.layers.composition().layers == ()
+    assert m.active_layers() == [] and m.layer_manager.composition().layers == ()
     m.event("CurtainOpenRequest")
     assert task.calls[-1] == "default"
 
@@ -136,13 +136,13 @@ def test_only_rules_reading_a_changed_measure_are_reevaluated() -> None:
         f"def_start event E0 event E1 event E2 event F event G {defs} def_end rule_start {rules} rule_end"
     )
     evaluated: list[str] = []
-    original = m.layers._compute
+    original = m.layer_manager._compute
 
     def counting(rule, v):  # type: ignore[no-untyped-def]
         evaluated.append(rule.name)
         return original(rule, v)
 
-    m.layers._compute = counting  # type: ignore[method-assign]
+    m.layer_manager._compute = counting  # type: ignore[method-assign]
     switches = m.update(m7=True)
     assert evaluated == ["R7"] and switches == [("R7", "?", "R7.1")]
     evaluated.clear()
