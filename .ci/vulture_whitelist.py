@@ -11,8 +11,6 @@ snapshot_id  # unused variable (src/cosleec/cop/dispatch.py:74)  -- a field of D
 _.builds  # unused attribute (src/cosleec/cop/dispatch.py:176)  -- how many chains a layered function built: introspection of the chain cache
 _.builds  # unused attribute (src/cosleec/cop/dispatch.py:314)  -- how many chains a layered function built: introspection of the chain cache
 _.fire  # unused method (src/cosleec/cop/events.py:50)  -- Transitions.fire: public COP API (event-triggered switching)
-et  # unused variable (src/cosleec/cop/extent.py:66)  -- __exit__ parameters
-tb  # unused variable (src/cosleec/cop/extent.py:66)  -- __exit__ parameters
 _.__wrapped__  # unused attribute (src/cosleec/cop/extent.py:191)  -- the functools convention for wrappers (inspect.unwrap)
 _.on_enter  # unused method (src/cosleec/cop/layer.py:54)  -- Layer.on_enter/on_exit: public COP API (enter/exit hooks)
 _.on_exit  # unused method (src/cosleec/cop/layer.py:63)  -- Layer.on_enter/on_exit: public COP API (enter/exit hooks)

@@ -13,7 +13,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.table import Table
 
-from cosleec.testing.corpus import corpus_dir
+from cosleec.testing import corpus_dir
 
 ROOT = Path(__file__).resolve().parent.parent
 CORPUS = corpus_dir()

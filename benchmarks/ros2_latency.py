@@ -23,7 +23,7 @@ import threading
 import time
 from pathlib import Path
 
-from cosleec.testing.stats import percentile
+from cosleec.testing import percentile
 
 HERE = Path(__file__).resolve().parent
 RULES = """def_start event Ping event Pong measure toggle : boolean def_end

@@ -20,7 +20,7 @@ import time
 
 from _common import args, report
 from cosleec.runtime import Manager, VirtualClock
-from cosleec.testing.stats import percentile
+from cosleec.testing import percentile
 
 
 def grid_rules(n_rules: int, n_clauses: int) -> str:

@@ -1,6 +1,6 @@
 """The one conftest: COP isolation for every test, the corpus location, Hypothesis settings.
 
-- COP: the public ``cosleec.testing.cop`` plugin gives each test a clean global COP
+- COP: the public ``cosleec.testing.plugin`` gives each test a clean global COP
   configuration and restores it afterwards.
 - Corpus: ``../shared/sleec-corpus`` (or ``$COSLEEC_CORPUS``); under CI (``$CI`` set) a
   missing corpus fails the run instead of skipping the corpus tests.
@@ -16,10 +16,10 @@ import pytest
 from hypothesis import settings
 from hypothesis.database import DirectoryBasedExampleDatabase
 
-from cosleec.testing.corpus import corpus_dir
-from cosleec.testing.corpus import corpus_files as _corpus_files
+from cosleec.testing import corpus_dir
+from cosleec.testing import corpus_files as _corpus_files
 
-pytest_plugins = ["cosleec.testing.cop"]
+pytest_plugins = ["cosleec.testing.plugin"]
 
 ROOT = Path(__file__).resolve().parent.parent
 CORPUS = corpus_dir()

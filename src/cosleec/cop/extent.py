@@ -14,7 +14,6 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 from contextvars import Token
-from types import TracebackType
 from typing import Any, TypeVar
 
 from cosleec.cop.errors import ActivationError
@@ -62,9 +61,7 @@ class _Scope:
             fire_hooks(exited=self._exited, entered=self._entered)
         return self
 
-    def __exit__(
-        self, et: type[BaseException] | None, ev: BaseException | None, tb: TracebackType | None
-    ) -> None:
+    def __exit__(self, *exc: object) -> None:
         token, self._token = self._token, None
         self._active = False
         if token is not None:

@@ -1,7 +1,7 @@
 """The COP checklist runs against every dispatcher: the reference and the generated fast path.
 
 A test that asks for the ``layered`` fixture runs once per dispatcher. Isolation comes from
-the public ``cosleec.testing.cop`` plugin, which the root ``conftest.py`` loads: each test
+the public ``cosleec.testing.plugin``, which the root ``conftest.py`` loads: each test
 leaves the global configuration as it found it.
 """
 
