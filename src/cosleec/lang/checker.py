@@ -12,7 +12,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 from cosleec.lang import ast as A
-from cosleec.lang import hedges, visit
+from cosleec.lang import hedges
 from cosleec.lang.diagnostics import DiagnosticSink
 
 # Names SLEEC-TK rejects because they clash with its CSP encoding (§3).
@@ -659,4 +659,4 @@ def check(spec: A.Specification, sink: DiagnosticSink, options: Options | None =
     return Checker(spec, sink, options or Options()).run()
 
 
-__all__ = ["Options", "SymbolTable", "check", "visit"]
+__all__ = ["Options", "SymbolTable", "check"]
