@@ -97,6 +97,7 @@ class TaskNode(Node):
         """
         chosen = [r for r in self.ruleset.rules if rules is None or r.name in rules]
         self.implementations.check(chosen)
+        self.implementations.prepare(chosen)
         self.rules = {r.name for r in chosen}
         self.on("obligations", self._obligation)
         self.status()

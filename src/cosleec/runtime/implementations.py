@@ -151,6 +151,11 @@ class Implementations:
         handle.__qualname__ = handle.__name__ = f"rule_{rule.name}"
         return handle  # type: ignore[no-any-return]
 
+    def prepare(self, rules: Iterable[CompiledRule] | None = None) -> None:
+        """Build the layered handler of every rule now (call after binding, before triggers)."""
+        for rule in rules if rules is not None else self.ruleset.rules:
+            self.handler(rule)
+
     def compose(self, decision: Decision) -> None:
         """Capability style: run the handler of every event the decision obliges."""
         for ob in decision.obligations:

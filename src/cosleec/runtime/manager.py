@@ -180,6 +180,8 @@ class Manager:
         """
         if check and self.dispatch_locally:
             self.implementations.check()
+        if self.dispatch_locally:
+            self.implementations.prepare()  # start-up work, not the first trigger's latency
         if timer and self._timer is None:
             self._timer = threading.Thread(target=self._run_timer, name="cosleec-deadlines", daemon=True)
             self._timer.start()
@@ -418,7 +420,7 @@ class Manager:
         if clause is None and not missing:
             missing = status.missing
         obligations = self._issue(rule.response_of(clause), rule.name) if clause is not None else ()
-        conds = ((0, rule.trigger_text, fired), *((c.index, c.text, x) for c, x in zip(rule.clauses, status.values)))
+        conds = ((0, rule.trigger_text, fired), *zip(rule.clause_ids, rule.clause_texts, status.values))
         values = {
             n: (lits[x] if lits is not None and x is not None else x)
             for n, lits in rule.value_specs

@@ -164,6 +164,8 @@ class CompiledRule:
     layers: tuple[Layer, ...]  # clause i's COP layer is layers[i - 1]
     compositions: tuple[Snapshot, ...]  # [0]: no layer (default); [i]: (layers[i - 1],)
     hedge_reads: frozenset[str]  # every measure a clause condition reads
+    clause_ids: tuple[int, ...]  # 1..n, and each clause's condition text: zipped into decisions
+    clause_texts: tuple[str, ...]
     value_specs: tuple[tuple[str, tuple[str, ...] | None], ...]  # measures read, scale literals
     evaluate_all: Callable[[Values], tuple[bool, ...]] | None  # every clause condition at once
 
@@ -252,6 +254,8 @@ def compile_rule(
         layers=layers,
         compositions=(Snapshot(()), *(Snapshot((la,)) for la in layers)),
         hedge_reads=hedge_reads,
+        clause_ids=tuple(cl.index for cl in clauses),
+        clause_texts=tuple(cl.text for cl in clauses),
         value_specs=tuple((n, literals.get(n) or None) for n in sorted(trigger_reads | hedge_reads)),
         evaluate_all=_all_clauses(clauses) if clauses else None,
     )
