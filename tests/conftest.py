@@ -14,25 +14,20 @@ from pathlib import Path
 
 import pytest
 from hypothesis import settings
+from hypothesis.configuration import set_hypothesis_home_dir
 from hypothesis.database import DirectoryBasedExampleDatabase
 
-from cosleec.testing import corpus_dir
-from cosleec.testing import corpus_files as _corpus_files
+from cosleec.testing import corpus_dir, corpus_files
 
 pytest_plugins = ["cosleec.testing.plugin"]
 
 ROOT = Path(__file__).resolve().parent.parent
 CORPUS = corpus_dir()
 
-settings.register_profile(
-    "cosleec", database=DirectoryBasedExampleDatabase(Path(tempfile.gettempdir()) / "cosleec-hypothesis")
-)
+HYPOTHESIS_HOME = Path(tempfile.gettempdir()) / "cosleec-hypothesis"
+set_hypothesis_home_dir(str(HYPOTHESIS_HOME))  # everything Hypothesis stores, out of the work tree
+settings.register_profile("cosleec", database=DirectoryBasedExampleDatabase(HYPOTHESIS_HOME / "examples"))
 settings.load_profile("cosleec")
-
-
-def corpus_files() -> list[Path]:
-    """The corpus files; [] when absent locally, an error when absent under CI."""
-    return _corpus_files()
 
 
 @pytest.fixture

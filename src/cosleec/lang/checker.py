@@ -316,50 +316,41 @@ class Checker:
     def _unreachable(
         self, ds: tuple[A.Defeater, ...], i: int, fixed: dict[int, bool], implies: Callable[[int, int], bool]
     ) -> None:
-        """Report clause ``i`` as never chosen, with the clause that makes it so."""
+        """Report clause ``i`` as never chosen, naming the clause that blocks it (found by
+        :func:`hedges.blockers`, so that no semantics is restated here)."""
         span = ds[i - 1].span
         if fixed.get(i) is False:
             self.sink.warning("unreachable-hedge", f"clause {i}: condition is `false`, it never applies", span)
             return
-        nested = self.opt.semantics is hedges.HedgeSemantics.NESTED
-        later = [i + 1] if nested and i < len(ds) else [] if nested else range(i + 1, len(ds) + 1)
-        for j in later:
-            if fixed.get(j) is True or implies(i, j):
-                why = (
-                    "and under nested semantics a clause applies only while the next one does not"
-                    if nested
-                    else "and the last clause that holds wins"
-                )
-                if ds[j - 1].condition == ds[i - 1].condition:
-                    self.sink.warning(
-                        "duplicate-hedge",
-                        f"clause {i} has the same condition as clause {j}, which wins; clause {i} never applies",
-                        span,
-                        related=(("the later clause", ds[j - 1].span),),
-                    )
-                else:
-                    self.sink.warning(
-                        "unreachable-hedge",
-                        f"clause {i} never applies: whenever it holds, clause {j} holds too {why}",
-                        span,
-                        related=(("the later clause", ds[j - 1].span),),
-                    )
-                return
-        if nested:
-            for k in range(1, i):
-                if fixed.get(k) is False:
-                    self.sink.warning(
-                        "unreachable-hedge",
-                        f"clause {i} never applies: under nested semantics it needs clause {k} to hold, "
-                        "whose condition is `false`",
-                        span,
-                        related=(("the earlier clause", ds[k - 1].span),),
-                    )
-                    return
+        semantics = self.opt.semantics
+        culprits = hedges.blockers(i, len(ds), semantics, fixed=fixed, implies=implies)
+        if not culprits:
+            self.sink.warning(
+                "unreachable-hedge", f"clause {i} never applies under {semantics} semantics", span
+            )
+            return
+        j = culprits[0]
+        related = (("the clause that blocks it", ds[j - 1].span),)
+        if ds[j - 1].condition == ds[i - 1].condition:
+            self.sink.warning(
+                "duplicate-hedge",
+                f"clause {i} has the same condition as clause {j}; under {semantics} semantics "
+                f"clause {i} never applies",
+                span,
+                related=related,
+            )
+            return
+        if fixed.get(j) is not None:
+            why = f"clause {j}'s condition is `{'true' if fixed[j] else 'false'}`"
+        elif implies(i, j):
+            why = f"whenever clause {i} holds, clause {j} holds too"
+        else:
+            why = f"what is known of clause {j}'s condition rules it out"
         self.sink.warning(
             "unreachable-hedge",
-            f"clause {i} never applies under {self.opt.semantics} semantics: no situation selects it",
+            f"clause {i} never applies under {semantics} semantics: {why}",
             span,
+            related=related,
         )
 
     def _time_limit(self, lim: A.TimeLimit) -> None:

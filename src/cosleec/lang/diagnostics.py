@@ -96,9 +96,13 @@ class SleecError(UserError):
         self.source = source
         errors = [d for d in self.diagnostics if d.is_error] or list(self.diagnostics)
         first = errors[0] if errors else None
+        where = ""
+        if first is not None:
+            where = f"{first.path}:{first.span.line}:{first.span.col}" if first.span.line else first.path
         super().__init__(
             first.header() if first is not None else "invalid SLEEC specification",
             hint=(first.hint or "") if first is not None else "",
+            where=where,
         )
 
     def render(self) -> str:

@@ -28,7 +28,7 @@ import itertools
 from collections.abc import Callable, Sequence
 from enum import StrEnum
 
-__all__ = ["HedgeSemantics", "Unknowns", "choose", "decisive", "reachable"]
+__all__ = ["HedgeSemantics", "Unknowns", "blockers", "choose", "decisive", "reachable"]
 
 
 class HedgeSemantics(StrEnum):
@@ -139,3 +139,36 @@ def reachable(
         if chosen is not None:
             out.add(chosen)
     return frozenset(out)
+
+
+def blockers(
+    clause: int,
+    n: int,
+    semantics: HedgeSemantics = HedgeSemantics.LAST_WINS,
+    *,
+    fixed: dict[int, bool] | None = None,
+    implies: Callable[[int, int], bool] | None = None,
+) -> tuple[int, ...]:
+    """The other clauses whose static facts keep ``clause`` from ever being chosen.
+
+    Clause j is a blocker when forgetting every fact that involves j (its constant value,
+    and the implications to or from it) makes ``clause`` reachable (:func:`reachable`).
+    Used to say *why* a clause is dead without restating the semantics.
+    """
+    fixed = fixed or {}
+    now = reachable(n, semantics, fixed=fixed, implies=implies)
+    if now is None or clause in now:
+        return ()  # not dead (or too many conditions to tell): nothing blocks it
+    out = []
+    for j in range(1, n + 1):
+        if j == clause:
+            continue
+        without = {k: v for k, v in fixed.items() if k != j}
+
+        def implies_without(a: int, b: int, j: int = j) -> bool:
+            return j not in (a, b) and implies is not None and implies(a, b)
+
+        chosen = reachable(n, semantics, fixed=without, implies=implies_without)
+        if chosen is not None and clause in chosen:
+            out.append(j)
+    return tuple(out)

@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cosleec.lang import SleecError, analyse, parse
-from tests.conftest import corpus_files
+from cosleec.testing import corpus_files
 
 from .strategies import TOKENS, mutate
 

@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from cosleec.lang.hedges import HedgeSemantics, Unknowns, choose, decisive, reachable
+from cosleec.lang.hedges import HedgeSemantics, Unknowns, blockers, choose, decisive, reachable
 
 LAST, NESTED = HedgeSemantics.LAST_WINS, HedgeSemantics.NESTED
 
@@ -143,4 +143,13 @@ def test_lint_follows_the_semantics() -> None:
     assert codes(["false", "n"], LAST) == ["unreachable-hedge"]
     nested = lint(["false", "n"], NESTED)
     assert [c for c, _ in nested] == ["unreachable-hedge", "unreachable-hedge"]
-    assert "needs clause 1" in nested[1][1]
+    assert "clause 1's condition is `false`" in nested[1][1]
+
+
+def test_blockers_name_the_clause_that_keeps_another_dead() -> None:
+    one_implies_two = lambda i, j: (i, j) == (1, 2)  # noqa: E731
+    assert blockers(1, 2, LAST, implies=one_implies_two) == (2,)
+    assert blockers(2, 2, NESTED, fixed={1: False}) == (1,)
+    one_implies_three = lambda i, j: (i, j) == (1, 3)  # noqa: E731
+    assert blockers(2, 3, NESTED, implies=one_implies_three) == (1, 3)
+    assert blockers(1, 3, NESTED, implies=one_implies_three) == ()  # clause 1 is alive there

@@ -30,7 +30,7 @@ from cosleec.lang.lalr import SyntaxProblem
 from cosleec.lang.parser import PAPER, SLEEC, Grammar
 from cosleec.lang.printer import format_spec
 from cosleec.lang.transformer import Block
-from tests.conftest import corpus_files
+from cosleec.testing import corpus_files
 
 from .strategies import mutate, mutate_words, paper_text, specifications, token_soup
 

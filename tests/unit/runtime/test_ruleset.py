@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from cosleec.errors import UserError
 from cosleec.lang import SleecError, parse
 from cosleec.lang.hedges import HedgeSemantics
 from cosleec.runtime import ConfigurationError, Decision, Manager, Obligation, RuleSet, VirtualClock
@@ -125,3 +126,15 @@ def test_decisions_round_trip_through_their_wire_format(d: Decision) -> None:
     back = Decision.from_json(d.to_json())
     assert back == d
     assert back.explanation == d.explanation
+
+
+def test_a_rule_file_error_says_where_and_how_to_fix(tmp_path: Path) -> None:
+    path = tmp_path / "bad.sleec"
+    text = "def_start event A def_end rule_start R1 when A then B rule_end"
+    path.write_text(text)
+    with pytest.raises(SleecError) as info:
+        RuleSet.from_file(path)
+    error = info.value
+    assert isinstance(error, UserError)
+    assert error.where == f"{path}:1:{text.index(' B ') + 2}"  # the undeclared response `B`
+    assert "B" in str(error)
