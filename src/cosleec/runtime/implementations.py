@@ -4,14 +4,14 @@ For every rule this module builds a layered function (``cosleec.cop.layered``) w
 implements the default response and which has one variant per clause, registered on the
 clause's COP layer (``R1.1``, ``R1.2``, ...; the layers belong to the compiled rule).
 
-How a trigger reaches its variant: the Manager decides the trigger against the Layer
-Manager's state, which records the clause active for the rule; :meth:`Implementations.dispatch`
-then calls the rule's layered method under ``cosleec.cop.run_with(composition, ...)``,
-the composition holding exactly that clause's layer (or none for the default). COP's own
-dispatcher builds the chain from the active layer and runs its variant. The composition
-is fixed when the decision is made, so a context change after the trigger never swaps
-the variant of a decision already taken; a ROS task node dispatches a decision it
-received in the same way, from the decision's clause.
+How a trigger reaches its variant: the Layer Manager (:mod:`cosleec.runtime.layers`) keeps
+each rule's COP composition -- the layer of the clause the context selects, none at the
+default -- and replaces it whenever the choice changes. The Manager takes the rule's
+composition together with the decision, under its lock; :meth:`Implementations.dispatch`
+then calls the rule's layered method under ``cosleec.cop.run_with(composition, ...)`` and
+COP's own dispatcher runs the variant of the active layer. A context change after the
+trigger never swaps the variant of a decision already taken. A ROS task node has no Layer
+Manager: it dispatches under the composition of the layer the Manager's decision names.
 
 Implementations come from tasks (the paper's style, one class per rule) or from
 capabilities (one handler per response event, composed here). The same class serves the
@@ -24,7 +24,7 @@ import logging
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from cosleec.cop import layered, run_with
+from cosleec.cop import Snapshot, layered, run_with
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.errors import BindingError
 from cosleec.runtime.model import CompiledRule, Obligation, ResponseSpec
@@ -69,7 +69,9 @@ class Implementations:
             raise BindingError([f"task {type(task).__name__}: no rule named {task.rule!r}"])
         extra = [i for i in task.clauses() if not 1 <= i <= len(rule.clauses)]
         if extra:
-            raise BindingError([f"task {type(task).__name__}: rule {rule.name} has no clause {i}" for i in extra])
+            raise BindingError(
+                [f"task {type(task).__name__}: rule {rule.name} has no clause {i}" for i in extra]
+            )
         self.tasks[task.rule] = task
         self._handlers.pop(task.rule, None)
 
@@ -98,7 +100,9 @@ class Implementations:
             out.append(f"{r.name}: task {name} does not implement the default response")
         for c in r.clauses:
             if c.response is not None and c.index not in impls:
-                out.append(f"{c.layer}: task {name} has no @hedge({c.index}) implementation (unless {c.text})")
+                out.append(
+                    f"{c.layer}: task {name} has no @hedge({c.index}) implementation (unless {c.text})"
+                )
         fallbacks: set[str] = set()
         for spec in (r.default, *(c.response for c in r.clauses)):
             if spec is not None:
@@ -114,7 +118,10 @@ class Implementations:
         _events(r.default, needed)
         for c in r.clauses:
             _events(c.response, needed)
-        return [f"{r.name}: no task and no capability for response event {ev}" for ev in sorted(needed - set(self.capabilities))]
+        return [
+            f"{r.name}: no task and no capability for response event {ev}"
+            for ev in sorted(needed - set(self.capabilities))
+        ]
 
     def check(self, rules: Iterable[CompiledRule] | None = None) -> None:
         """Raise BindingError listing everything :meth:`missing` finds."""
@@ -165,16 +172,35 @@ class Implementations:
             if cap is not None:
                 cap(ob, decision)
 
-    def dispatch(self, rule: CompiledRule, decision: Decision) -> bool:
-        """Run the implementation of the decision's clause; a failing task never stops the caller.
+    def dispatch(self, rule: CompiledRule, decision: Decision, composition: Snapshot | None = None) -> bool:
+        """Run the rule's layered method for ``decision`` under ``composition``; a failing task
+        never stops the caller.
 
-        Returns False (and counts a failure) when the implementation raised. A decision
-        without a clause (undetermined) runs nothing and returns True.
+        ``composition`` is the rule's COP composition as the Layer Manager had it when the
+        decision was made (the embedded Manager passes it). Without one -- a task node,
+        which has no Layer Manager of its own -- it is the composition of the layer the
+        decision names, as the Manager chose it. Returns False (and counts a failure) when
+        the implementation raised; a decision without a clause (undetermined) runs nothing.
         """
         if decision.clause is None:
             return True
+        if composition is None:
+            if (
+                not 0 <= decision.clause <= len(rule.clauses)
+                or rule.layer_of(decision.clause) != decision.layer
+            ):
+                self.failures += 1  # a decision from elsewhere that contradicts itself: run nothing
+                log.error(
+                    "decision %s of %s: clause %s and layer %s disagree",
+                    decision.id,
+                    rule.name,
+                    decision.clause,
+                    decision.layer,
+                )
+                return False
+            composition = rule.compositions[decision.clause]
         try:
-            run_with(rule.compositions[decision.clause], self.handler(rule), decision)
+            run_with(composition, self.handler(rule), decision)
             return True
         except Exception:
             self.failures += 1

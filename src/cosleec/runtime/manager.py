@@ -19,6 +19,7 @@ from enum import StrEnum
 from pathlib import Path
 from typing import Any, TypeVar
 
+from cosleec.cop import Snapshot
 from cosleec.lang import HedgeSemantics, Specification, Unknowns, choose
 from cosleec.runtime.audit import AuditLog
 from cosleec.runtime.clock import Clock, MonotonicClock
@@ -274,12 +275,14 @@ class Manager:
             followups += self._advance(now, events)
             out = self.tracker.occur(name, now, seq)
             followups += self._settle(out, now, seq, events)
-            decisions = []
+            decisions: list[tuple[CompiledRule, Decision, Snapshot | None]] = []
             for rule in self.ruleset.by_trigger.get(name, ()):
                 d = self._decide(rule, name, now)
                 if d is None:
                     continue
-                decisions.append((rule, d))
+                # the rule's composition as the Layer Manager has it at this trigger: the
+                # dispatch runs under it, whatever the context does in the meantime
+                decisions.append((rule, d, self.layer_manager.composition_of(rule) if d.clause is not None else None))
                 self._record(d, events)
                 for ob in d.obligations:
                     t = self.tracker.start(d.id, d.clause, ob, now, seq)
@@ -288,12 +291,12 @@ class Manager:
         self._flush(events)
         self._notify_timer()
         if self.dispatch_locally:
-            for rule, d in decisions:
-                if d.clause is not None and not self.implementations.dispatch(rule, d):
+            for rule, d, composition in decisions:
+                if composition is not None and not self.implementations.dispatch(rule, d, composition):
                     self._flush([RuntimeEvent("task-failed", now, {"rule": rule.name, "decision": d.id})])
             for rule, d in followups:
                 self.implementations.dispatch_fallback(rule, d)
-        return [d for _, d in decisions]
+        return [d for _, d, _ in decisions]
 
     def request(self, name: str) -> bool:
         """May ``name`` happen now? False (and the attempt recorded) while a prohibition holds."""

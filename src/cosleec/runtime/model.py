@@ -5,11 +5,13 @@ Table 1 of the CO-SLEEC paper, made concrete. A rule becomes:
 - a *default response* (clause 0): the base implementation of the rule's layered method;
 - one *clause* per ``unless`` (clause i, a COP layer named ``R1.i``) with its compiled
   condition and the measures it reads (for the Layer Manager's dependency index);
-- one exclusive COP :class:`~cosleec.cop.LayerGroup` holding the rule's layers, and one
-  composition per clause (:attr:`CompiledRule.compositions`): the empty composition for
-  the default, ``(R1.i,)`` for clause i. A decision dispatches the rule's layered method
-  under the composition of the clause the Layer Manager had active at the trigger, so the
-  COP runtime runs that clause's variant.
+- one composition per clause (:attr:`CompiledRule.compositions`): the empty composition
+  for the default, ``(R1.i,)`` for clause i -- the Layer Manager activates a layer by
+  making its composition the rule's current one (built once here, so a dispatch under
+  it finds its chain in COP's memo);
+- one exclusive COP :class:`~cosleec.cop.LayerGroup` holding the rule's layers, so that
+  whoever composes them by hand (a test, a simulation, an operator forcing a clause with
+  ``cosleec.cop.activate``) can never have two clauses of one rule active at once.
 
 These records are immutable and hold no runtime state: one :class:`~cosleec.runtime.RuleSet`
 may serve several Managers.

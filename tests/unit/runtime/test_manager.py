@@ -388,3 +388,33 @@ os._exit(1)  # no close, no flush at exit
     records = read(log)
     assert sum(r["kind"] == "decision" for r in records) == 50
     assert all(json.dumps(r) for r in records)
+
+
+def test_a_decision_runs_its_own_clause_even_if_the_context_moves_before_dispatch() -> None:
+    """The composition is taken with the decision, under the lock: an update that lands
+    between the decision and its dispatch (here, from an observer) cannot swap the variant."""
+    m, _ = manager()
+    task = Curtains()
+    m.bind(task).start()
+    m.update(userUndressed=True, userDistressed="low")
+    moved = []
+
+    def move_on_decision(ev):  # type: ignore[no-untyped-def]
+        if ev.kind == "decision" and not moved:
+            moved.append(True)
+            m.update(userUndressed=False)  # R1 is back at its default before the dispatch
+
+    m.subscribe(move_on_decision)
+    (d,) = m.event("CurtainOpenRequest")
+    assert moved and d.clause == 1
+    assert task.calls[-1].startswith("refuse:")  # the variant of clause 1, not the default
+    assert m.active_layers() == []
+
+
+def test_a_rules_layers_exclude_each_other_when_composed_by_hand() -> None:
+    from cosleec.cop import ExclusionError, activate
+
+    m, _ = manager()
+    r11, r12 = m.ruleset.rule("R1").layers
+    with pytest.raises(ExclusionError), activate(r11, r12):
+        pass

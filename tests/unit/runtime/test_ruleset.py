@@ -98,7 +98,9 @@ obligations = st.builds(
     alternatives=st.lists(st.sampled_from(["A", "B"]), max_size=2).map(tuple),
     rule=st.sampled_from(["R1", "R2"]),
 )
-values = st.dictionaries(st.sampled_from(["m", "n"]), st.none() | st.booleans() | st.integers() | st.sampled_from(["low"]))
+values = st.dictionaries(
+    st.sampled_from(["m", "n"]), st.none() | st.booleans() | st.integers() | st.sampled_from(["low"])
+)
 decisions = st.builds(
     Decision,
     id=st.integers(1, 10**6),
@@ -138,3 +140,29 @@ def test_a_rule_file_error_says_where_and_how_to_fix(tmp_path: Path) -> None:
     assert isinstance(error, UserError)
     assert error.where == f"{path}:1:{text.index(' B ') + 2}"  # the undeclared response `B`
     assert "B" in str(error)
+
+
+def test_a_received_decision_whose_clause_and_layer_disagree_runs_nothing() -> None:
+    from cosleec.runtime import Implementations
+
+    rules = RuleSet.from_text(RULES)
+    impl = Implementations(rules)
+    ran: list[str] = []
+    impl.capability("Refuse")(lambda ob, d: ran.append("Refuse"))
+    impl.capability("OpenCurtains")(lambda ob, d: ran.append("OpenCurtains"))
+    rule = rules.rule("R1")
+    good = Decision(
+        id=1,
+        time=0.0,
+        event="CurtainOpenRequest",
+        rule="R1",
+        clause=1,
+        layer="R1.1",
+        semantics=HedgeSemantics.LAST_WINS,
+        values={},
+        conditions=(),
+        obligations=(Obligation(event="Refuse", rule="R1"),),
+    )
+    assert impl.dispatch(rule, good) and ran == ["Refuse"]
+    bad = dataclasses.replace(good, id=2, layer=None)  # says clause 1 but names the default
+    assert not impl.dispatch(rule, bad) and ran == ["Refuse"] and impl.failures == 1
