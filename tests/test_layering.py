@@ -98,27 +98,77 @@ def test_imports_point_down() -> None:
         if pkg not in ALLOWED:
             problems.append(f"{module}: a module outside every package (the house has no room for it)")
             continue
-        for name, node, _ in imports(path, module):
+        for line, name in references(path, module):
             other = package(name)
             if other != pkg and other not in ALLOWED[pkg]:
-                problems.append(f"{module}:{node.lineno} imports {name} ({pkg} -> {other} points up or sideways)")
+                problems.append(f"{module}:{line} imports {name} ({pkg} -> {other} points up or sideways)")
     assert not problems, "\n".join(problems)
 
 
 def test_other_packages_use_only_the_face() -> None:
-    """`from cosleec.runtime import Manager`, never `from cosleec.runtime.manager import ...`."""
+    """`from cosleec.runtime import Manager`, never `from cosleec.runtime.manager import ...`,
+    `import cosleec.runtime.manager`, `cosleec.runtime.manager.X` through an attribute chain,
+    or `importlib.import_module("cosleec.runtime.manager")`."""
     mods = dict(modules())
-    known = set(mods)
     problems = []
     for module, path in mods.items():
-        for name, node, _ in imports(path, module):
-            target = resolve(name, known)
-            pkg = package(module)
-            if package(target) != pkg and target.count(".") > 1 and target != "cosleec.lang.ast":
-                problems.append(f"{module}:{node.lineno} reaches into {target}")
-            leaf = name.rsplit(".", 1)[-1]
-            if package(target) != pkg and leaf.startswith("_"):
-                problems.append(f"{module}:{node.lineno} takes the private name {name}")
+        pkg = package(module)
+        for where, name in references(path, module):
+            parts = name.split(".")
+            other = parts[1] if len(parts) > 1 else ""
+            if other == pkg or not other:
+                continue
+            face = f"cosleec.{other}"
+            if name == face or (name.startswith(face + ".") and name[len(face) + 1 :].count(".") == 0):
+                leaf = parts[-1]
+                if f"{face}.{leaf}" in mods and not _exported(face, leaf, mods):
+                    problems.append(f"{module}:{where} takes the module {name}, which its face does not export")
+                elif leaf.startswith("_"):
+                    problems.append(f"{module}:{where} takes the private name {name}")
+                continue
+            problems.append(f"{module}:{where} reaches past the face of {face}: {name}")
+    assert not problems, "\n".join(problems)
+
+
+def _exported(face: str, leaf: str, mods: dict[str, Path]) -> bool:
+    """Does the package face list ``leaf`` (a submodule such as ``lang.ast``) in its ``__all__``?"""
+    tree = ast.parse(mods[face].read_text(encoding="utf-8"))
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and any(getattr(t, "id", "") == "__all__" for t in node.targets):
+            return leaf in ast.literal_eval(node.value)
+    return False
+
+
+def references(path: Path, module: str) -> Iterator[tuple[int, str]]:
+    """Every name of ours a module uses: imports (``from X import y`` gives ``X.y``), dotted
+    attribute chains starting at ``cosleec``, and literal ``importlib.import_module`` /
+    ``__import__`` targets."""
+    for name, node, _ in imports(path, module):
+        if isinstance(node, ast.ImportFrom):
+            yield node.lineno, name  # `from cosleec.lang.ast import Span` stays cosleec.lang.ast.Span
+        else:
+            yield node.lineno, name
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Attribute) and not isinstance(getattr(node, "ctx", None), ast.Store):
+            text = ast.unparse(node)
+            if text.startswith("cosleec.") and text.count(".") >= 2:
+                yield node.lineno, ".".join(text.split(".")[:3])
+        if isinstance(node, ast.Call) and node.args and isinstance(node.args[0], ast.Constant):
+            fn = ast.unparse(node.func)
+            target = node.args[0].value
+            if fn in ("importlib.import_module", "import_module", "__import__") and str(target).startswith("cosleec"):
+                yield node.lineno, str(target)
+
+
+def test_no_module_takes_another_modules_private_names() -> None:
+    problems = [
+        f"{module}:{node.lineno} takes the private name {name}"
+        for module, path in modules()
+        for name, node, _ in imports(path, module)
+        if isinstance(node, ast.ImportFrom)
+        and name.rsplit(".", 1)[-1].startswith("_")
+        and not name.rsplit(".", 1)[-1].startswith("__")
+    ]
     assert not problems, "\n".join(problems)
 
 
@@ -177,8 +227,14 @@ def test_only_the_cli_exits() -> None:
         if package(module) == "cli":
             continue
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            if isinstance(node, ast.Name) and node.id == "SystemExit":
-                problems.append(f"{module}:{node.lineno} uses SystemExit (raise a UserError instead)")
-            if isinstance(node, ast.Attribute) and node.attr == "exit" and getattr(node.value, "id", "") == "sys":
-                problems.append(f"{module}:{node.lineno} calls sys.exit")
+            if isinstance(node, ast.Name) and node.id in ("SystemExit", "exit", "quit"):
+                problems.append(f"{module}:{node.lineno} uses {node.id} (raise a UserError instead)")
+            if isinstance(node, ast.Attribute) and node.attr in ("exit", "_exit") and getattr(node.value, "id", "") in (
+                "sys",
+                "os",
+            ):
+                problems.append(f"{module}:{node.lineno} calls {ast.unparse(node)}")
+            if isinstance(node, ast.ImportFrom) and node.module in ("sys", "os"):
+                if any(a.name in ("exit", "_exit") for a in node.names):
+                    problems.append(f"{module}:{node.lineno} imports exit from {node.module}")
     assert not problems, "\n".join(problems)

@@ -8,6 +8,8 @@ closure, defaults and decorators. The dispatcher carries ``.layered`` (the
 ``.before`` and ``.after``.
 
 Imports ``layer.py``, ``state.py``, ``dispatch.py`` and ``fastpath.py``.
+
+Codes such as SD7 (semantic decisions) and A8, E38, H48 (checklist items) refer to docs/reference/cop-runtime.md.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Layered functions and the reference dispatcher (the COP semantics, "Dispatch, step by step").
+"""Layered functions and the reference dispatcher (docs/reference/cop-runtime.md §4, "Dispatch, step by step").
 
 One dispatch:
 
@@ -23,6 +23,8 @@ One dispatch:
 generates a quicker one from it that must behave exactly the same.
 
 Imports ``layer.py`` and ``state.py``.
+
+Codes such as SD7 (semantic decisions) and A8, E38, H48 (checklist items) refer to docs/reference/cop-runtime.md.
 """
 
 from __future__ import annotations

@@ -1,4 +1,7 @@
-"""Errors of the COP runtime: constraints reject explicitly, they never heal silently (SD11)."""
+"""Errors of the COP runtime: constraints reject explicitly, they never heal silently (SD11).
+
+Codes such as SD7 (semantic decisions) and A8, E38, H48 (checklist items) refer to docs/reference/cop-runtime.md.
+"""
 
 from __future__ import annotations
 

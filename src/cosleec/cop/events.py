@@ -1,4 +1,7 @@
-"""Event-triggered switching (SD10): a declarative transition table over global layers."""
+"""Event-triggered switching (SD10): a declarative transition table over global layers.
+
+Codes such as SD7 (semantic decisions) and A8, E38, H48 (checklist items) refer to docs/reference/cop-runtime.md.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The dynamic extent: scoped (de)activation and capture/replay (the COP semantics SD4, SD13, SD17).
+"""The dynamic extent: scoped (de)activation and capture/replay (docs/reference/cop-runtime.md SD4, SD13, SD17).
 
 ``with activate(L):`` and ``with deactivate(L):`` replace the dynamic :class:`Frame` of
 this thread/task for the block; ``run_with(snapshot, fn)`` does so for one call. Frames
@@ -7,6 +7,8 @@ same block again rebuilds nothing -- and a layered function recognises the frame
 last time (its memo).
 
 Imports ``layer.py`` and ``state.py`` only.
+
+Codes such as SD7 (semantic decisions) and A8, E38, H48 (checklist items) refer to docs/reference/cop-runtime.md.
 """
 
 from __future__ import annotations

@@ -24,6 +24,8 @@ Templates are compiled once per (k, sync/async, receiver) and shared by every la
 function of that shape: one code object each, registered as a dispatch (SD9).
 
 Imports ``dispatch.py`` and ``state.py``.
+
+Codes such as SD7 (semantic decisions) and A8, E38, H48 (checklist items) refer to docs/reference/cop-runtime.md.
 """
 
 from __future__ import annotations

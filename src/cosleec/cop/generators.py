@@ -3,6 +3,8 @@
 A plain generator that enters ``with activate(L):`` and yields inside it leaks L to its
 consumer while suspended (PEP 568 was never adopted). ``@layered_generator`` runs every
 resumption of the generator, sync or async, in the generator's own ``contextvars.Context``.
+
+Codes such as SD7 (semantic decisions) and A8, E38, H48 (checklist items) refer to docs/reference/cop-runtime.md.
 """
 
 from __future__ import annotations

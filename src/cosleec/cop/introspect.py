@@ -1,6 +1,8 @@
-"""Introspection (the COP semantics SD16): the composition, the chain a call would run, and why.
+"""Introspection (docs/reference/cop-runtime.md SD16): the composition, the chain a call would run, and why.
 
 Imports ``layer.py``, ``state.py`` and ``dispatch.py``; runs nothing of the user's but predicates.
+
+Codes such as SD7 (semantic decisions) and A8, E38, H48 (checklist items) refer to docs/reference/cop-runtime.md.
 """
 
 from __future__ import annotations

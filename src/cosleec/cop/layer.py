@@ -12,6 +12,8 @@ the members' predicates -- ``last`` (the last one that holds), ``first``, or any
 This module is the bottom of ``cosleec.cop``: it imports only :mod:`cosleec.cop.errors`.
 Enter/exit hooks are kept here, on the layer they observe, and so is the exclusion check:
 ``state.py`` and ``extent.py`` call :func:`displaced` and :func:`fire_hooks`.
+
+Codes such as SD7 (semantic decisions) and A8, E38, H48 (checklist items) refer to docs/reference/cop-runtime.md.
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ class Layer:
 
     Identity matters, not the name: two layers may share a name. ``when`` makes it a
     predicate layer (a hedge group member); ``priority`` moves it outward in every chain
-    (the COP semantics SD7).
+    (docs/reference/cop-runtime.md SD7).
     """
 
     __slots__ = ("__weakref__", "enter_hooks", "exit_hooks", "group", "id", "name", "predicate", "priority")

@@ -1,4 +1,4 @@
-"""Where the composition lives, and its global changes (the COP semantics SD1, SD6-SD9).
+"""Where the composition lives, and its global changes (docs/reference/cop-runtime.md SD1, SD6-SD9).
 
 - The *dynamic* composition is an immutable :class:`Frame` in a ``ContextVar``: correct
   across threads, asyncio tasks and (with ``layered_generator``) generators. ``extent.py``
@@ -12,6 +12,8 @@
 
 This module knows layers (``layer.py``), not layered functions: the dispatchers tell it
 which code objects mean "a dispatch is running" through :func:`register_dispatch_code`.
+
+Codes such as SD7 (semantic decisions) and A8, E38, H48 (checklist items) refer to docs/reference/cop-runtime.md.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Static semantics of SLEEC (the language reference §5): names, kinds, types, constants.
+"""Static semantics of SLEEC (docs/reference/sleec-language.md §5): names, kinds, types, constants.
 
 Every problem of a file is reported in one pass, as a diagnostic with a stable code. The
 checker also resolves the information later stages need (constant values, each scale
@@ -160,7 +160,7 @@ class Checker:
 
     def _check_name(self, name: str, span: A.Span) -> None:
         # A keyword reaches the AST as a name only through SLEEC-TK's `^when` escape, which
-        # makes it a name (the language reference §3), or from the paper notation, which does
+        # makes it a name (docs/reference/sleec-language.md §3), or from the paper notation, which does
         # not reserve the DSL's words: either way it is a name. The printer escapes it.
         if self.opt.tk_names and name in TK_RESERVED:
             self.sink.warning(

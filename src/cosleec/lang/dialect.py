@@ -1,6 +1,6 @@
 """Which dialect a file is written in, and strict checking against one tool's grammar.
 
-cosleec reads the union of both dialects (the language reference §2). One walk over the AST
+cosleec reads the union of both dialects (docs/reference/sleec-language.md §2). One walk over the AST
 (:func:`collect`) gathers the *dialect facts*: every construct that only one dialect has,
 with where it is. Detection (:func:`detect`), the mixed-dialect check (:func:`check_mixed`)
 and the strict modes (:func:`check_strict`, ``--dialect tk|legos``: what that tool's grammar

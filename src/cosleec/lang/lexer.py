@@ -13,7 +13,7 @@ tests/unit/lang/test_parser_crosscheck.py, holds the two equal):
 - terminals are tried in Lark's order (priority, then longest possible match, ...);
 - a string terminal that the name pattern matches entirely (``"when"``) is a *keyword*:
   a word scanned as a name becomes that keyword -- case-insensitively for ``"when"i``;
-- keyword reservation (the language reference §3): keywords are reserved everywhere, except
+- keyword reservation (docs/reference/sleec-language.md §3): keywords are reserved everywhere, except
   the *contextual* ones, which only the rules inside a relation block use (``witness``,
   ``until``, ...): those are reserved only between ``relation_start`` and ``relation_end``.
 
@@ -190,7 +190,7 @@ class Lexicon:
 
 class ContextualKeywords(PostLex):
     """Lark's own lexer reserves every keyword everywhere; SLEEC reserves the relation
-    keywords only inside a relation block (the language reference §3). Outside one, this
+    keywords only inside a relation block (docs/reference/sleec-language.md §3). Outside one, this
     post-lexer turns them back into names.
 
     Give it to ``Lark(..., lexer="basic", postlex=...)``: that is SLEEC as plain Lark reads

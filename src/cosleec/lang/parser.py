@@ -50,7 +50,7 @@ class Grammar:
     @classmethod
     def load(cls, name: str, transformer: ToAst, contextual_block: str | None = None) -> Grammar:
         """Build ``grammar/<name>.lark``; the keywords used only inside ``contextual_block``
-        are reserved only there (the language reference §3)."""
+        are reserved only there (docs/reference/sleec-language.md §3)."""
         text = resources.files("cosleec.lang").joinpath(f"grammar/{name}.lark").read_text("utf-8")
         postlex = ContextualKeywords()
         lark = Lark(
@@ -82,7 +82,7 @@ SLEEC = Grammar.load("sleec", ToAst(), contextual_block="relation_block")
 PAPER = Grammar.load("paper", PaperToAst())
 
 KEYWORDS = frozenset(SLEEC.lexicon.keywords)
-"""The DSL's reserved words (the language reference §3), read from ``grammar/sleec.lark``."""
+"""The DSL's reserved words (docs/reference/sleec-language.md §3), read from ``grammar/sleec.lark``."""
 CONTEXTUAL_KEYWORDS = frozenset(SLEEC.lexicon.contextual)
 """The DSL's words reserved only inside a relation block, read from ``grammar/sleec.lark``."""
 
@@ -198,7 +198,7 @@ def _report(p: SyntaxProblem, g: Grammar, text: str, sink: DiagnosticSink) -> No
 def _special_message(
     g: Grammar, tok: Token, expected: frozenset[str], values: set[str], text: str
 ) -> tuple[str, str, str | None] | None:
-    """Messages for the mistakes real files make (the language reference §11 item 17)."""
+    """Messages for the mistakes real files make (docs/reference/sleec-language.md §11 item 17)."""
     ttype, value = tok.type, tok.value
     if tok.start_pos == 0 and text.lstrip().startswith("{\\rtf"):
         return ("rtf", "this file is RTF, not plain text", "save it as plain text (UTF-8)")

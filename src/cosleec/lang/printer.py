@@ -3,7 +3,7 @@
 The printer's contract is round-tripping: for every AST, ``parse(print(ast)) == ast``
 (spans and syntactic hints aside). It therefore adds exactly the parentheses and braces
 needed to keep the tree's shape under TK precedence and the greedy attachment rules of
-the language reference §4.5, and in the LEGOS dialect it writes LEGOS' mandatory forms
+docs/reference/sleec-language.md §4.5, and in the LEGOS dialect it writes LEGOS' mandatory forms
 (``{m}``, every operator in its own parentheses, ``(not X)``, ``-> C``).
 """
 
