@@ -234,7 +234,10 @@ def test_only_the_cli_exits() -> None:
                 "os",
             ):
                 problems.append(f"{module}:{node.lineno} calls {ast.unparse(node)}")
-            if isinstance(node, ast.ImportFrom) and node.module in ("sys", "os"):
-                if any(a.name in ("exit", "_exit") for a in node.names):
-                    problems.append(f"{module}:{node.lineno} imports exit from {node.module}")
+            if (
+                isinstance(node, ast.ImportFrom)
+                and node.module in ("sys", "os")
+                and any(a.name in ("exit", "_exit") for a in node.names)
+            ):
+                problems.append(f"{module}:{node.lineno} imports exit from {node.module}")
     assert not problems, "\n".join(problems)
