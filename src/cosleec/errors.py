@@ -10,7 +10,7 @@ library module never prints or calls ``sys.exit``.
 
 from __future__ import annotations
 
-__all__ = ["CosleecError", "UserError"]
+__all__ = ["ConfigurationError", "CosleecError", "UserError"]
 
 
 class CosleecError(Exception):
@@ -37,3 +37,10 @@ class UserError(CosleecError):
         """The message as the CLI prints it: ``where: message`` and the hint on its own line."""
         head = f"{self.where}: {self}" if self.where else str(self)
         return f"{head}\n  hint: {self.hint}" if self.hint else head
+
+
+class ConfigurationError(UserError, ValueError):
+    """An option has a value it does not accept (``semantics="nestd"``); the message lists the choices.
+
+    Also a ``ValueError``, for callers who catch that.
+    """

@@ -9,7 +9,7 @@ from typing import Any
 
 from cosleec import ros
 from cosleec.nodes import LayersNode, ListenerNode, ManagerNode, Mapping, TaskNode
-from cosleec.runtime import HedgeSemantics, RuleSet
+from cosleec.runtime import HedgeSemantics, RuleSet, Unknowns
 
 
 def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: ignore[type-arg]
@@ -30,6 +30,12 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     m = nodes.add_parser("manager", help="rules, context, decisions, obligations")
     m.add_argument("rules")
     m.add_argument("--semantics", choices=list(HedgeSemantics), default=HedgeSemantics.LAST_WINS)
+    m.add_argument(
+        "--unknown",
+        choices=list(Unknowns),
+        default=Unknowns.UNDETERMINED,
+        help="how a clause condition over a measure with no value is read (default: undetermined, fail closed)",
+    )
     m.add_argument("--sim-time", action="store_true", help="take time from the clock topic")
     m.add_argument("--audit", metavar="FILE", help="append-only JSON Lines audit trail")
     m.add_argument("--record", metavar="FILE.mcap", help="record the decision stream (Foxglove opens it)")
@@ -40,6 +46,9 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     la = nodes.add_parser("layers", help="the COP Layer Manager: publishes active layers (latched)")
     la.add_argument("rules")
     la.add_argument("--semantics", choices=list(HedgeSemantics), default=HedgeSemantics.LAST_WINS)
+    la.add_argument(
+        "--unknown", choices=list(Unknowns), default=Unknowns.UNDETERMINED, help="as the manager's --unknown"
+    )
     common(la)
     li = nodes.add_parser("listener", help="the Context Listener: robot topics -> measures and events")
     li.add_argument("mapping")
@@ -98,10 +107,13 @@ def run(args: argparse.Namespace) -> int:
                 audit=args.audit,
                 record=args.record,
                 status_each=args.status_each,
+                unknown=args.unknown,
             )
         if node == "layers":
             assert rules is not None
-            return LayersNode(t, rules, namespace=args.namespace, semantics=args.semantics)
+            return LayersNode(
+                t, rules, namespace=args.namespace, semantics=args.semantics, unknowns=Unknowns(args.unknown)
+            )
         if node == "listener":
             assert mapping is not None
             return ListenerNode(t, mapping, namespace=args.namespace)

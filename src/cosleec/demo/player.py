@@ -10,6 +10,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from cosleec.errors import UserError
+
 Step = tuple[str, Any, str]
 
 
@@ -26,7 +28,10 @@ def play(
             on_step(now(), step)
         action = actions.get(kind)
         if action is None:
-            raise ValueError(f"unknown scenario step {kind!r}")
+            raise UserError(
+                f"unknown scenario step {kind!r}",
+                hint=f"the steps this player knows: {', '.join(sorted(actions))}",
+            )
         action(arg)
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from cosleec.errors import ConfigurationError
 from cosleec.lang import ast as A
 from cosleec.lang.checker import Options, SymbolTable, check
 from cosleec.lang.diagnostics import Diagnostic, DiagnosticSink, Severity, SleecError
@@ -80,7 +81,7 @@ def analyse(
     ``infer_defs`` infers the declarations of a file without a def block.
     """
     if dialect not in DIALECTS:
-        raise ValueError(f"unknown dialect {dialect!r}; expected one of {', '.join(DIALECTS)}")
+        raise ConfigurationError(f"unknown dialect {dialect!r}; expected one of {', '.join(DIALECTS)}")
     opts = options or Options()
     if strict:
         opts = replace(opts, strict_extensions=True)

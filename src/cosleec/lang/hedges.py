@@ -28,6 +28,8 @@ import itertools
 from collections.abc import Callable, Sequence
 from enum import StrEnum
 
+from cosleec.errors import ConfigurationError
+
 __all__ = ["HedgeSemantics", "Unknowns", "blockers", "choose", "decisive", "reachable"]
 
 
@@ -82,7 +84,7 @@ def choose(
                 break
             held += 1
         return held
-    raise ValueError(f"unknown hedge semantics {semantics!r}")
+    raise ConfigurationError(f"unknown hedge semantics {semantics!r}; expected one of {', '.join(HedgeSemantics)}")
 
 
 def decisive(

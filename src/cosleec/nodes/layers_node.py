@@ -10,7 +10,7 @@ from typing import Any
 
 from cosleec.nodes.base import MessageError, Node, context_values
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
-from cosleec.runtime import Context, ContextError, HedgeSemantics, LayerManager, RuleSet
+from cosleec.runtime import Context, ContextError, HedgeSemantics, LayerManager, RuleSet, Unknowns
 
 
 class LayersNode(Node):
@@ -30,11 +30,14 @@ class LayersNode(Node):
         *,
         namespace: str = DEFAULT_NAMESPACE,
         semantics: HedgeSemantics = HedgeSemantics.LAST_WINS,
+        unknowns: Unknowns = Unknowns.UNDETERMINED,
     ) -> None:
         super().__init__(transport, namespace)
         self.ruleset = rules
         self.context = Context(rules.measures)
-        self.layer_manager = LayerManager(rules, semantics)
+        self.layer_manager = LayerManager(
+            rules, semantics, unknowns
+        )  # as the Manager node's, or they disagree
         self.version = 0
         self.advertise("layers")
         self.on("context", self._context)

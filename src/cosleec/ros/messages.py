@@ -5,21 +5,33 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from cosleec.errors import UserError
+
+
+class MessageTypeError(UserError, ValueError):
+    """A mapping names a ROS message type that is malformed, unknown or not installed here."""
+
 
 def message_class(type_name: str) -> Any:
     """``std_msgs/Bool`` (or ``std_msgs/msg/Bool``) -> the message class.
 
-    ValueError for a malformed name or a type the package lacks; ImportError when the
-    message package is not installed.
+    :class:`MessageTypeError` for a malformed name, a package that is not installed, or a
+    type the package lacks.
     """
     parts = type_name.replace("/msg/", "/").split("/")
     if len(parts) != 2 or not all(p.isidentifier() for p in parts):
-        raise ValueError(f"message type {type_name!r} is not of the form package/Type")
-    module = importlib.import_module(f"{parts[0]}.msg")
+        raise MessageTypeError(f"message type {type_name!r} is not of the form package/Type")
+    try:
+        module = importlib.import_module(f"{parts[0]}.msg")
+    except ImportError:
+        raise MessageTypeError(
+            f"message package {parts[0]!r} is not installed here (type {type_name!r})",
+            hint="install its ROS package in this environment, or map a type it has",
+        ) from None
     try:
         return getattr(module, parts[1])
     except AttributeError:
-        raise ValueError(f"no message type {type_name!r}") from None
+        raise MessageTypeError(f"no message type {type_name!r} in package {parts[0]!r}") from None
 
 
 def to_dict(msg: Any) -> Any:

@@ -6,9 +6,9 @@ and exits 1. :class:`ContextError` is also a ``ValueError`` for callers who catc
 
 from __future__ import annotations
 
-from cosleec.errors import UserError
+from cosleec.errors import ConfigurationError, UserError
 
-__all__ = ["BindingError", "ConfigurationError", "ContextError"]
+__all__ = ["BindingError", "ConfigurationError", "ContextError"]  # ConfigurationError: from cosleec.errors
 
 
 class ContextError(UserError, ValueError):
@@ -31,6 +31,3 @@ class BindingError(UserError):
             hint="implement each listed clause in its task (@hedge(i)) or register a capability for the event",
         )
 
-
-class ConfigurationError(UserError, ValueError):
-    """An option has a value it does not accept (``semantics="nestd"``); the message lists the choices."""
