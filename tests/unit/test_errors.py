@@ -7,8 +7,8 @@ import pytest
 from cosleec.cli.main import main
 from cosleec.errors import ConfigurationError, CosleecError, UserError
 from cosleec.lang import SleecError, analyse, choose
-from cosleec.runtime import BindingError, ContextError, Manager
 from cosleec.ros.messages import MessageTypeError, message_class
+from cosleec.runtime import BindingError, ContextError, Manager
 
 RULES = "def_start event A event B def_end rule_start R1 when A then B rule_end"
 
