@@ -7,9 +7,10 @@ the language front-end raises, and it carries the diagnostics.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import Any
 
 from cosleec.errors import UserError
 from cosleec.lang.ast import NO_SPAN, Span
@@ -26,9 +27,12 @@ class Severity(StrEnum):
         return self.value
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class Diagnostic:
-    """One finding, with a stable ``code`` that tests and tools can match on."""
+    """One finding, with a stable ``code`` that tests and tools can match on.
+
+    :meth:`to_json` and :meth:`from_json` are its wire format (``cosleec check --json``).
+    """
 
     severity: Severity
     code: str
@@ -71,8 +75,9 @@ class Diagnostic:
         return "\n".join(out)
 
     def to_json(self) -> dict[str, object]:
-        """A JSON-ready dict: span, severity, code, message and hint (not the path or notes)."""
+        """A JSON-ready dict of every field; :meth:`from_json` reads it back."""
         return {
+            "path": self.path,
             "line": self.span.line,
             "col": self.span.col,
             "end_line": self.span.end_line,
@@ -81,7 +86,21 @@ class Diagnostic:
             "code": self.code,
             "message": self.message,
             "hint": self.hint,
+            "related": [{"note": note, "span": list(span)} for note, span in self.related],
         }
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> Diagnostic:
+        """A diagnostic read back from :meth:`to_json`."""
+        return cls(
+            severity=Severity(d["severity"]),
+            code=str(d["code"]),
+            message=str(d["message"]),
+            span=Span(int(d["line"]), int(d["col"]), int(d["end_line"]), int(d["end_col"])),
+            path=str(d.get("path", "<string>")),
+            hint=d.get("hint"),
+            related=tuple((str(r["note"]), Span(*(int(x) for x in r["span"]))) for r in d.get("related", ())),
+        )
 
 
 class SleecError(UserError):
@@ -119,15 +138,21 @@ class DiagnosticSink:
 
     def error(self, code: str, message: str, span: Span = NO_SPAN, **kw: object) -> None:
         """Record an error; ``kw`` (``hint``, ``related``) goes to the :class:`Diagnostic`."""
-        self.items.append(Diagnostic(Severity.ERROR, code, message, span, self.path, **kw))  # type: ignore[arg-type]
+        self.items.append(
+            Diagnostic(severity=Severity.ERROR, code=code, message=message, span=span, path=self.path, **kw)  # type: ignore[arg-type]
+        )
 
     def warning(self, code: str, message: str, span: Span = NO_SPAN, **kw: object) -> None:
         """Record a warning; ``kw`` (``hint``, ``related``) goes to the :class:`Diagnostic`."""
-        self.items.append(Diagnostic(Severity.WARNING, code, message, span, self.path, **kw))  # type: ignore[arg-type]
+        self.items.append(
+            Diagnostic(severity=Severity.WARNING, code=code, message=message, span=span, path=self.path, **kw)  # type: ignore[arg-type]
+        )
 
     def note(self, code: str, message: str, span: Span = NO_SPAN) -> None:
         """Record a note: information that never makes the file fail."""
-        self.items.append(Diagnostic(Severity.NOTE, code, message, span, self.path))
+        self.items.append(
+            Diagnostic(severity=Severity.NOTE, code=code, message=message, span=span, path=self.path)
+        )
 
     def extend(self, diags: Iterable[Diagnostic]) -> None:
         """Add diagnostics built elsewhere, unchanged (their own path is kept)."""

@@ -23,10 +23,14 @@ DIALECTS = ("auto", "tk", "legos", "paper")
 """The values of ``analyse(dialect=...)`` (and of the CLI's ``--dialect``)."""
 
 
-@dataclass
+@dataclass(kw_only=True)
 class CheckResult:
     """Everything known about one file after parsing and checking it; what :func:`analyse`
-    returns. ``spec`` is None when the file does not parse."""
+    returns. ``spec`` is None when the file does not parse.
+
+    Its :meth:`to_json` is a summary for ``cosleec check --json``, not a wire format: the
+    specification stays in the process (there is no ``from_json``).
+    """
 
     path: str
     source: str
@@ -92,14 +96,16 @@ def analyse(
     if dialect == "paper" or (dialect == "auto" and looks_like_paper(text)):
         rules = parse_paper_rules(text, sink)
         if rules is None:
-            return CheckResult(path, text, None, A.Dialect.PAPER, sink.sorted())
+            return CheckResult(
+                path=path, source=text, spec=None, dialect=A.Dialect.PAPER, diagnostics=sink.sorted()
+            )
         spec = A.Specification((), tuple(rules), dialect=A.Dialect.PAPER, path=path)
         spec = infer_definitions(spec, sink)
         detected = A.Dialect.PAPER
     else:
         blocks = parse_blocks(text, sink)
         if blocks is None:
-            return CheckResult(path, text, None, None, sink.sorted())
+            return CheckResult(path=path, source=text, spec=None, dialect=None, diagnostics=sink.sorted())
         spec = assemble(blocks, path, sink)
         if infer_defs and not spec.definitions:
             spec = infer_definitions(spec, sink)
@@ -111,7 +117,9 @@ def analyse(
             check_mixed(facts, evidence, sink)
         spec = replace(spec, dialect=detected)
     symbols = check(spec, sink, opts)
-    return CheckResult(path, text, spec, detected, sink.sorted(), symbols)
+    return CheckResult(
+        path=path, source=text, spec=spec, dialect=detected, diagnostics=sink.sorted(), symbols=symbols
+    )
 
 
 def read_source(path: str | Path) -> tuple[str | None, Diagnostic | None]:
@@ -120,14 +128,20 @@ def read_source(path: str | Path) -> tuple[str | None, Diagnostic | None]:
     try:
         data = Path(path).read_bytes()
     except OSError as e:
-        return None, Diagnostic(Severity.ERROR, "io", f"cannot read file: {e.strerror or e}", path=p)
+        return None, Diagnostic(
+            severity=Severity.ERROR, code="io", message=f"cannot read file: {e.strerror or e}", path=p
+        )
     try:
         return data.decode("utf-8"), None
     except UnicodeDecodeError as e:
         line = data.count(b"\n", 0, e.start) + 1
         col = e.start - (data.rfind(b"\n", 0, e.start) + 1) + 1
         return None, Diagnostic(
-            Severity.ERROR, "encoding", "file is not UTF-8 text", A.Span(line, col, line, col + 1), p
+            severity=Severity.ERROR,
+            code="encoding",
+            message="file is not UTF-8 text",
+            span=A.Span(line, col, line, col + 1),
+            path=p,
         )
 
 
@@ -143,7 +157,7 @@ def analyse_file(
     text, problem = read_source(path)
     if text is None:
         assert problem is not None
-        return CheckResult(str(path), "", None, None, [problem])
+        return CheckResult(path=str(path), source="", spec=None, dialect=None, diagnostics=[problem])
     return analyse(text, str(path), dialect=dialect, strict=strict, infer_defs=infer_defs, options=options)
 
 

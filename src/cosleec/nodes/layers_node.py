@@ -10,7 +10,15 @@ from typing import Any
 
 from cosleec.nodes.base import MessageError, Node, context_values
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
-from cosleec.runtime import Context, ContextError, HedgeSemantics, LayerManager, RuleSet, Unknowns
+from cosleec.runtime import (
+    Context,
+    ContextError,
+    HedgeSemantics,
+    LayerManager,
+    LayerSwitch,
+    RuleSet,
+    Unknowns,
+)
 
 
 class LayersNode(Node):
@@ -38,7 +46,6 @@ class LayersNode(Node):
         self.layer_manager = LayerManager(
             rules, semantics, unknowns
         )  # as the Manager node's, or they disagree
-        self.version = 0
         self.advertise("layers")
         self.on("context", self._context)
         self._publish([])
@@ -51,16 +58,7 @@ class LayersNode(Node):
         changed = self.context.apply(stored, 0.0)
         switches = self.layer_manager.update(changed, self.context.values)
         if switches:
-            self._publish([sw.to_json() for sw in switches])
+            self._publish(switches)
 
-    def _publish(self, switches: list[dict[str, Any]]) -> None:
-        self.version += 1
-        self.publish(
-            "layers",
-            {
-                "active": self.layer_manager.active_layers(),
-                "switches": switches,
-                "version": self.version,
-                "semantics": self.layer_manager.semantics,
-            },
-        )
+    def _publish(self, switches: list[LayerSwitch]) -> None:
+        self.publish("layers", self.layer_manager.state(switches).to_json())

@@ -20,7 +20,7 @@ from cosleec.runtime.context import Context
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.errors import BindingError, ConfigurationError, ContextError
 from cosleec.runtime.implementations import Capability, Implementations
-from cosleec.runtime.layers import LayerManager, LayerSwitch
+from cosleec.runtime.layers import LayerManager, LayerState, LayerSwitch
 from cosleec.runtime.manager import Manager, RuntimeEvent
 from cosleec.runtime.model import CompiledRule, Obligation
 from cosleec.runtime.obligations import Tracked
@@ -41,6 +41,7 @@ __all__ = [
     "HedgeSemantics",
     "Implementations",
     "LayerManager",
+    "LayerState",
     "LayerSwitch",
     "Manager",
     "MeasureSpec",

@@ -15,9 +15,9 @@ that clause's variant (see :mod:`cosleec.runtime.implementations`).
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 from cosleec.cop import Snapshot
 from cosleec.lang import HedgeSemantics, Unknowns, choose
@@ -45,6 +45,39 @@ class LayerSwitch(NamedTuple):
     def to_json(self) -> dict[str, str | None]:
         """The form of one entry of a ``layers`` message's ``switches``."""
         return {"rule": self.rule, "from": self.before, "to": self.after}
+
+
+@dataclass(frozen=True, kw_only=True)
+class LayerState:
+    """The ``layers`` record: the active layers after a change, and the switches that made it.
+
+    The embedded Manager emits it as a ``layers`` runtime event; the Layer Manager node
+    publishes it (latched). ``version`` counts the changes of one Layer Manager.
+    """
+
+    active: tuple[str, ...]
+    switches: tuple[LayerSwitch, ...]
+    semantics: HedgeSemantics
+    version: int
+
+    def to_json(self) -> dict[str, Any]:
+        """The wire form; :meth:`from_json` reads it back."""
+        return {
+            "active": list(self.active),
+            "switches": [sw.to_json() for sw in self.switches],
+            "semantics": str(self.semantics),
+            "version": self.version,
+        }
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> LayerState:
+        """A ``layers`` record read back from :meth:`to_json`."""
+        return cls(
+            active=tuple(d["active"]),
+            switches=tuple(LayerSwitch(s["rule"], s["from"], s["to"]) for s in d["switches"]),
+            semantics=HedgeSemantics(d["semantics"]),
+            version=int(d["version"]),
+        )
 
 
 def evaluate(conds: Iterable[Clause], v: Values) -> tuple[tuple[bool | None, ...], tuple[str, ...]]:
@@ -88,6 +121,7 @@ class LayerManager:
                 self.index.setdefault(m, []).append(r)
         self.status: list[RuleStatus] = [self._compute(r, {}) for r in ruleset.rules]
         self._active: dict[int, str] = {}  # rule index -> active layer (rules at their default absent)
+        self._version = 0  # of the `layers` records (state())
         # each rule's COP composition: its active layer, none at the default, None undetermined
         self._compositions: list[Snapshot | None] = [self._composition(r, st) for r, st in zip(ruleset.rules, self.status)]
 
@@ -140,6 +174,16 @@ class LayerManager:
         self._active = {
             r.index: r.clauses[st.clause - 1].layer for r, st in zip(self.ruleset.rules, self.status) if st.clause
         }
+
+    def state(self, switches: Iterable[LayerSwitch] = ()) -> LayerState:
+        """The ``layers`` record now, after ``switches``; each call is a new version."""
+        self._version += 1
+        return LayerState(
+            active=tuple(self.active_layers()),
+            switches=tuple(switches),
+            semantics=self.semantics,
+            version=self._version,
+        )
 
     def active_layers(self) -> list[str]:
         """The active layers, in rule order (a rule at its default or undetermined has none)."""

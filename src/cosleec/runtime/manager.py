@@ -361,14 +361,7 @@ class Manager:
         """Announce layer switches to observers; returns them."""
         result = switches
         if result and self._listening:
-            self._emit_later(
-                events,
-                "layers",
-                {
-                    "switches": [sw.to_json() for sw in result],
-                    "active": self.layer_manager.active_layers(),
-                },
-            )
+            self._emit_later(events, "layers", self.layer_manager.state(result).to_json())
         return result
 
     def _settle(

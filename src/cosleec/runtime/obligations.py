@@ -24,6 +24,7 @@ from __future__ import annotations
 import heapq
 import itertools
 from collections import deque
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -66,11 +67,15 @@ class Tracked:
         """The ``obligation`` record of observers, the audit log and the ``violations`` topic.
 
         A snapshot: later changes to this obligation (a late event) do not alter it.
+        :meth:`from_json` reads it back (the ``otherwise`` fallback stays in the process).
         """
         return {
             "type": "obligation",
             "id": self.id,
             "decision": self.decision_id,
+            "clause": self.clause,
+            "seq": self.seq,
+            "obligation": self.obligation.to_json(),
             "rule": self.rule,
             "event": self.event,
             "negated": self.prohibition,
@@ -83,6 +88,29 @@ class Tracked:
             "refused": self.refused,
             "depth": self.depth,
         }
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> Tracked:
+        """An obligation record read back from :meth:`to_json`."""
+        lo, hi = d["window"]
+        at, clause = d.get("at"), d.get("clause")
+        return cls(
+            id=int(d["id"]),
+            decision_id=int(d["decision"]),
+            clause=None if clause is None else int(clause),
+            rule=str(d["rule"]),
+            obligation=Obligation.from_json(d["obligation"]),
+            start=float(d["start"]),
+            lo=float(lo),
+            hi=None if hi is None else float(hi),
+            seq=int(d["seq"]),
+            depth=int(d.get("depth", 0)),
+            status=str(d["status"]),
+            outcome_at=None if at is None else float(at),
+            by=d.get("by"),
+            late=[float(x) for x in d.get("late", ())],
+            refused=int(d.get("refused", 0)),
+        )
 
 
 @dataclass

@@ -166,3 +166,36 @@ def test_a_received_decision_whose_clause_and_layer_disagree_runs_nothing() -> N
     assert impl.dispatch(rule, good) and ran == ["Refuse"]
     bad = dataclasses.replace(good, id=2, layer=None)  # says clause 1 but names the default
     assert not impl.dispatch(rule, bad) and ran == ["Refuse"] and impl.failures == 1
+
+
+def test_obligation_records_round_trip_through_their_wire_format() -> None:
+    from cosleec.runtime import Tracked
+
+    clock = VirtualClock()
+    m = Manager.from_text(RULES, clock=clock, dispatch=False)
+    m.update(userUndressed=True)
+    m.event("CurtainOpenRequest")
+    clock.advance(6)
+    m.tick()  # Refuse violated, its otherwise started
+    m.event("Refuse")  # late
+    records = [*m.tracker.closed, *m.tracker.active]
+    assert {t.status for t in records} >= {"violated", "pending"}
+    for t in records:
+        back = Tracked.from_json(t.to_json())
+        assert back == t and back.obligation.otherwise is None  # the compiled fallback stays here
+
+
+def test_the_layers_record_is_one_record_for_the_manager_and_the_node() -> None:
+    from cosleec.runtime import LayerState
+
+    m = Manager.from_text(RULES, dispatch=False)
+    seen = []
+    m.subscribe(lambda ev: seen.append(ev) if ev.kind == "layers" else None)
+    m.update(userUndressed=True)
+    m.update(userUndressed=False)
+    states = [LayerState.from_json(ev.data) for ev in seen]
+    assert [s.active for s in states] == [("R1.1",), ()]
+    assert [s.version for s in states] == [1, 2]
+    assert [(sw.before, sw.after) for s in states for sw in s.switches] == [("?", "R1.1"), ("R1.1", None)]
+    for s in states:
+        assert LayerState.from_json(s.to_json()) == s
