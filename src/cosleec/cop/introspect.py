@@ -58,6 +58,8 @@ def explain(fn: Any, *args: Any, context: Any = None) -> Explanation:
 
     Use it to answer "why did this variant run?": the chain, the selected hedge members
     and the predicate values, evaluated on ``context`` (default: the function's own).
+    ``args`` never change the answer -- COP chooses by composition and context, never by
+    argument values -- they are accepted so that the call reads like the call it explains.
     """
     lf = getattr(fn, "layered", fn)
     if not isinstance(lf, LayeredFunction):
