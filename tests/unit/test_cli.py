@@ -68,3 +68,11 @@ def test_fmt_converts_dialects(files: tuple[Path, Path], capsys: pytest.CaptureF
     out = capsys.readouterr().out
     assert "R1 when E then F unless {a}" in out
     assert main(["fmt", str(files[1])]) == 1
+
+
+def test_a_bad_choice_lists_the_choices_as_the_user_types_them(capsys) -> None:  # type: ignore[no-untyped-def]
+    from cosleec.cli.main import main
+
+    assert main(["decide", "examples/curtains.sleec", "--event", "X", "--semantics", "nestd"]) == 2
+    err = capsys.readouterr().err
+    assert "(choose from 'last-wins', 'nested')" in err and "HedgeSemantics" not in err

@@ -34,8 +34,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument("--lint", action="store_true", help="also warn about naming conventions and style")
     p.add_argument(
         "--semantics",
-        choices=list(HedgeSemantics),
-        default=HedgeSemantics.LAST_WINS,
+        choices=[str(s) for s in HedgeSemantics],
+        default=str(HedgeSemantics.LAST_WINS),
         help="clause semantics the unreachable-clause warnings assume (as the runtime's --semantics)",
     )
     p.set_defaults(run=run)
@@ -47,7 +47,9 @@ def run(args: argparse.Namespace) -> int:
     Returns 0 when no file has an error (warnings do not count), 1 otherwise.
     """
     files = expand(args.files)
-    opts = Options(strict_precedence=args.strict_precedence, lint=args.lint, semantics=HedgeSemantics(args.semantics))
+    opts = Options(
+        strict_precedence=args.strict_precedence, lint=args.lint, semantics=HedgeSemantics(args.semantics)
+    )
     results = [
         analyse_file(f, dialect=args.dialect, strict=args.strict, infer_defs=args.infer_defs, options=opts)
         for f in files

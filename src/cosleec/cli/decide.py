@@ -22,7 +22,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         dest="values",
         help="a measure value: true/false, a number, or a scale literal",
     )
-    p.add_argument("--semantics", choices=list(HedgeSemantics), default=HedgeSemantics.LAST_WINS)
+    p.add_argument(
+        "--semantics", choices=[str(s) for s in HedgeSemantics], default=str(HedgeSemantics.LAST_WINS)
+    )
     p.add_argument("--json", action="store_true")
     p.add_argument("--infer-defs", action="store_true")
     p.set_defaults(run=run)

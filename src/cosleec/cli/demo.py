@@ -12,7 +12,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     """Register ``cosleec demo`` and its options."""
     p = sub.add_parser("demo", help="run the assistive-care example in one process")
     p.add_argument("--json", action="store_true", help="print runtime events as JSON lines")
-    p.add_argument("--semantics", choices=list(HedgeSemantics), default=HedgeSemantics.LAST_WINS)
+    p.add_argument(
+        "--semantics", choices=[str(s) for s in HedgeSemantics], default=str(HedgeSemantics.LAST_WINS)
+    )
     p.add_argument("--audit", metavar="FILE", help="also write the audit trail (JSON Lines)")
     p.set_defaults(run=run)
 

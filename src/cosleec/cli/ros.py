@@ -29,11 +29,13 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
 
     m = nodes.add_parser("manager", help="rules, context, decisions, obligations")
     m.add_argument("rules")
-    m.add_argument("--semantics", choices=list(HedgeSemantics), default=HedgeSemantics.LAST_WINS)
+    m.add_argument(
+        "--semantics", choices=[str(s) for s in HedgeSemantics], default=str(HedgeSemantics.LAST_WINS)
+    )
     m.add_argument(
         "--unknown",
-        choices=list(Unknowns),
-        default=Unknowns.UNDETERMINED,
+        choices=[str(u) for u in Unknowns],
+        default=str(Unknowns.UNDETERMINED),
         help="how a clause condition over a measure with no value is read (default: undetermined, fail closed)",
     )
     m.add_argument("--sim-time", action="store_true", help="take time from the clock topic")
@@ -45,9 +47,14 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     common(m)
     la = nodes.add_parser("layers", help="the COP Layer Manager: publishes active layers (latched)")
     la.add_argument("rules")
-    la.add_argument("--semantics", choices=list(HedgeSemantics), default=HedgeSemantics.LAST_WINS)
     la.add_argument(
-        "--unknown", choices=list(Unknowns), default=Unknowns.UNDETERMINED, help="as the manager's --unknown"
+        "--semantics", choices=[str(s) for s in HedgeSemantics], default=str(HedgeSemantics.LAST_WINS)
+    )
+    la.add_argument(
+        "--unknown",
+        choices=[str(u) for u in Unknowns],
+        default=str(Unknowns.UNDETERMINED),
+        help="as the manager's --unknown",
     )
     common(la)
     li = nodes.add_parser("listener", help="the Context Listener: robot topics -> measures and events")

@@ -174,6 +174,8 @@ class LayeredFunction:
         self.context = context
         self.partials: dict[Layer, dict[str, Callable[..., Any]]] = {}
         self.cache: dict[tuple[Layer, ...], Chain] = {}
+        if max_chains < 1:
+            raise DefinitionError(f"max_chains must be at least 1, not {max_chains}")
         self.max_chains = max_chains
         self.builds = 0
         self.generation = 0

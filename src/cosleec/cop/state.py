@@ -115,8 +115,13 @@ def composition(g: GlobalState, d: Frame) -> tuple[Layer, ...]:
     cached = d.comp
     if cached[0] is g:
         return cached[1]
-    if d.absolute is not None:
-        comp = d.absolute
+    if d.absolute is not None:  # a captured composition (run_with), plus what was activated inside it
+        comp = tuple(la for la in d.absolute if la not in d.masked)
+        if d.added:
+            ages = dict.fromkeys(comp, 0)  # captured layers: older than any activated inside
+            for layer, stamp in d.added:
+                ages[layer] = max(stamp, ages.get(layer, 0))
+            comp = tuple(sorted(ages, key=lambda la: (-la.priority, -ages[la])))  # stable: keeps capture order
     else:
         stamped: dict[Layer, int] = {}
         for layer, stamp in g.layers:

@@ -126,6 +126,7 @@ Expr: TypeAlias = BoolLit | IntLit | DecimalLit | Name | Not | BinOp | Compare
 
 BOOL_OPS = frozenset({"and", "or"})
 ARITH_OPS = frozenset({"+", "-", "*"})
+REL_OPS = frozenset({"<", "<=", ">", ">=", "=", "<>"})  # the grammar's `rel_op` (a parser test holds them equal)
 
 # ---------------------------------------------------------------------------- responses
 

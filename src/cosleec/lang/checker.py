@@ -8,6 +8,7 @@ literal's measure), exposed as a :class:`SymbolTable`.
 from __future__ import annotations
 
 import difflib
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
@@ -159,6 +160,16 @@ class Checker:
                 self.scale_literals |= seen
 
     def _check_name(self, name: str, span: A.Span) -> None:
+        """A declared or rule name: a SLEEC identifier (a Specification built in Python may
+        hold anything), and with ``tk_names`` not one SLEEC-TK rejects."""
+        if not _IDENTIFIER.fullmatch(name):
+            self.sink.error(
+                "malformed-name",
+                f"`{name}` is not a SLEEC name",
+                span,
+                hint="a name is a letter or `_`, then letters, digits or `_`",
+            )
+            return
         # A keyword reaches the AST as a name only through SLEEC-TK's `^when` escape, which
         # makes it a name (docs/reference/sleec-language.md §3), or from the paper notation, which does
         # not reserve the DSL's words: either way it is a name. The printer escapes it.
@@ -320,7 +331,9 @@ class Checker:
         :func:`hedges.blockers`, so that no semantics is restated here)."""
         span = ds[i - 1].span
         if fixed.get(i) is False:
-            self.sink.warning("unreachable-hedge", f"clause {i}: condition is `false`, it never applies", span)
+            self.sink.warning(
+                "unreachable-hedge", f"clause {i}: condition is `false`, it never applies", span
+            )
             return
         semantics = self.opt.semantics
         culprits = hedges.blockers(i, len(ds), semantics, fixed=fixed, implies=implies)
@@ -423,6 +436,13 @@ class Checker:
             if ty is not None and ty != BOOL:
                 self.sink.error("type", f"`not` needs a truth value, not {_type_word(ty)}", e.span)
             return BOOL
+        if isinstance(e, A.BinOp | A.Compare) and e.op not in _OPERATORS[type(e)]:
+            self.sink.error(  # only a Specification built in Python can hold one
+                "malformed-expr",
+                f"`{e.op}` is not a SLEEC operator; expected one of {', '.join(sorted(_OPERATORS[type(e)]))}",
+                e.span,
+            )
+            return None
         if isinstance(e, A.BinOp):
             if e.op in A.BOOL_OPS:
                 self._mixed(e)
@@ -615,6 +635,10 @@ class Checker:
     def _did_you_mean(name: str, pool: Mapping[str, object]) -> str | None:
         close = difflib.get_close_matches(name, list(pool), n=1, cutoff=0.75)
         return f"did you mean `{close[0]}`?" if close else None
+
+
+_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_OPERATORS: dict[type, frozenset[str]] = {A.BinOp: A.BOOL_OPS | A.ARITH_OPS, A.Compare: A.REL_OPS}
 
 
 def _conjuncts(e: A.Expr) -> list[A.Expr]:

@@ -64,10 +64,13 @@ def choose(
         choose([None, True])                       # 2: whatever clause 1 is
         choose([True, True, False], HedgeSemantics.NESTED)  # 2
     """
-    if unknowns is not Unknowns.UNDETERMINED:
-        read = unknowns is Unknowns.TRUE
+    # == rather than `is`: the options are StrEnums, and a plain "nested" must mean the same
+    if unknowns != Unknowns.UNDETERMINED:
+        if unknowns not in _UNKNOWNS:
+            raise ConfigurationError(f"unknown policy {unknowns!r} for unknown values; expected one of {', '.join(Unknowns)}")
+        read = unknowns == Unknowns.TRUE
         values = [read if v is None else v for v in values]
-    if semantics is HedgeSemantics.LAST_WINS:
+    if semantics == HedgeSemantics.LAST_WINS:
         for i in range(len(values) - 1, -1, -1):
             v = values[i]
             if v is None:
@@ -75,7 +78,7 @@ def choose(
             if v:
                 return i + 1
         return 0
-    if semantics is HedgeSemantics.NESTED:
+    if semantics == HedgeSemantics.NESTED:
         held = 0
         for v in values:
             if v is None:
@@ -88,16 +91,24 @@ def choose(
 
 
 def decisive(
-    values: Sequence[bool | None], clause: int | None, semantics: HedgeSemantics = HedgeSemantics.LAST_WINS
+    values: Sequence[bool | None],
+    clause: int | None,
+    semantics: HedgeSemantics = HedgeSemantics.LAST_WINS,
+    unknowns: Unknowns = Unknowns.UNDETERMINED,
 ) -> tuple[int, ...]:
     """The clauses (1-based) whose condition values decided ``clause``, for explanations.
 
-    A value is decisive when forgetting it (reading it as unknown) would leave the choice
-    undetermined; the result is found with :func:`choose` itself, so it follows whatever
-    the semantics are. For an undetermined choice, the clauses whose value is unknown.
+    A value is decisive when forgetting it would leave the choice undetermined; the result
+    is found with :func:`choose` itself, so it follows whatever the semantics are. Under
+    an ``unknowns`` policy that reads unknown values as true or false, an unknown value
+    that decided the choice is decisive like any other. For an undetermined choice: the
+    clauses whose value is unknown.
     """
     if clause is None:
         return tuple(i + 1 for i, v in enumerate(values) if v is None)
+    if unknowns != Unknowns.UNDETERMINED:  # decide on the values as the policy read them
+        read = unknowns == Unknowns.TRUE
+        values = [read if v is None else v for v in values]
     known = list(values)
     for i in range(len(known)):
         kept = known[i]
@@ -106,6 +117,8 @@ def decisive(
             known[i] = kept
     return tuple(i + 1 for i, v in enumerate(known) if v is not None)
 
+
+_UNKNOWNS = frozenset(Unknowns)
 
 # Enumerating every assignment costs 2**n calls of `choose`; past this many free conditions
 # the lint stays silent rather than slow (rules that long are generated, not written).

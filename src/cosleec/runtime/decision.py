@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from cosleec.lang import HedgeSemantics, decisive
+from cosleec.lang import HedgeSemantics, Unknowns, decisive
 from cosleec.runtime.model import Obligation
 from cosleec.runtime.values import Value
 
@@ -47,6 +47,7 @@ class Decision:
     reason: str = ""
     context_version: int = 0
     violated: int | None = None
+    unknowns: Unknowns = Unknowns.UNDETERMINED  # how unknown condition values were read
     _explanation: list[str] = field(default_factory=list, init=False, compare=False, repr=False)
 
     @property
@@ -80,6 +81,7 @@ class Decision:
             "explanation": self.explanation,
             "context_version": self.context_version,
             "violated": self.violated,
+            "unknowns": str(self.unknowns),
         }
 
     @classmethod
@@ -102,6 +104,7 @@ class Decision:
             reason=str(d.get("reason", "")),
             context_version=int(d.get("context_version", 0)),
             violated=None if violated is None else int(violated),
+            unknowns=Unknowns(d.get("unknowns", Unknowns.UNDETERMINED)),
         )
 
 
@@ -122,7 +125,7 @@ def _because(d: Decision) -> str:
     hedges = [(c, t, v) for c, t, v in d.conditions if c > 0]
     if not hedges:
         return f"{rule}: {what}"
-    chosen = set(decisive([v for _, _, v in hedges], clause, d.semantics))
+    chosen = set(decisive([v for _, _, v in hedges], clause, d.semantics, d.unknowns))
 
     def reason(t: str, v: bool | None) -> str:
         if t in d.values:  # a boolean measure: "userUndressed was true"

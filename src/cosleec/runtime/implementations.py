@@ -8,8 +8,9 @@ How a trigger reaches its variant: the Layer Manager (:mod:`cosleec.runtime.laye
 each rule's COP composition -- the layer of the clause the context selects, none at the
 default -- and replaces it whenever the choice changes. The Manager takes the rule's
 composition together with the decision, under its lock; :meth:`Implementations.dispatch`
-then calls the rule's layered method under ``cosleec.cop.run_with(composition, ...)`` and
-COP's own dispatcher runs the variant of the active layer. A context change after the
+then calls the rule's layered method with that composition's layer activated for the
+call (``cosleec.cop.activate``, on top of whatever layers the caller has active), and COP's
+own dispatcher runs the variant of the active layer. A context change after the
 trigger never swaps the variant of a decision already taken. A ROS task node has no Layer
 Manager: it dispatches under the composition of the layer the Manager's decision names.
 
@@ -24,7 +25,7 @@ import logging
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from cosleec.cop import Snapshot, layered, run_with
+from cosleec.cop import Snapshot, activate, layered
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.errors import BindingError
 from cosleec.runtime.model import CompiledRule, Obligation, ResponseSpec
@@ -200,7 +201,12 @@ class Implementations:
                 return False
             composition = rule.compositions[decision.clause]
         try:
-            run_with(composition, self.handler(rule), decision)
+            handler = self.handler(rule)
+            if composition.layers:  # added to whatever the caller has active, never replacing it
+                with activate(*composition.layers):
+                    handler(decision)
+            else:
+                handler(decision)
             return True
         except Exception:
             self.failures += 1

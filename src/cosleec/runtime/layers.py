@@ -154,7 +154,8 @@ class LayerManager:
                 touched[r.index] = r
         switches = []
         status = self.status
-        for i, r in touched.items():
+        for i in sorted(touched):  # rule order: the same switches in the same order on every run
+            r = touched[i]
             new = self._compute(r, v)
             old = status[i]
             status[i] = new

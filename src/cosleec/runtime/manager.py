@@ -436,6 +436,7 @@ class Manager:
             obligations=obligations,
             missing=missing,
             context_version=self.context.version,
+            unknowns=self.layer_manager.unknowns,
         )
 
     def _issue(self, spec: ResponseSpec | None, rule: str) -> tuple[Obligation, ...]:

@@ -153,3 +153,23 @@ def test_blockers_name_the_clause_that_keeps_another_dead() -> None:
     one_implies_three = lambda i, j: (i, j) == (1, 3)  # noqa: E731
     assert blockers(2, 3, NESTED, implies=one_implies_three) == (1, 3)
     assert blockers(1, 3, NESTED, implies=one_implies_three) == ()  # clause 1 is alive there
+
+
+@given(values3, st.sampled_from(list(HedgeSemantics)), st.sampled_from([Unknowns.TRUE, Unknowns.FALSE]))
+def test_decisive_under_a_reading_of_unknowns(
+    values: list[bool | None], semantics: HedgeSemantics, policy: Unknowns
+) -> None:
+    clause = choose(values, semantics, policy)
+    keep = decisive(values, clause, semantics, policy)
+    read = [(policy == Unknowns.TRUE) if v is None else v for v in values]
+    only = [v if i + 1 in keep else None for i, v in enumerate(read)]
+    assert choose(only, semantics) == clause  # the named values, as the policy read them, suffice
+    for k in keep:
+        assert choose([None if i + 1 == k else v for i, v in enumerate(only)], semantics) != clause
+
+
+def test_options_given_as_plain_strings_mean_the_same() -> None:
+    assert choose([None], LAST, "undetermined") is None  # type: ignore[arg-type]  # fails closed
+    assert choose([True, None], "last-wins", "undetermined") is None  # type: ignore[arg-type]
+    assert choose([True, True, False], "nested") == 2  # type: ignore[arg-type]
+    assert choose([None], LAST, "true") == 1  # type: ignore[arg-type]

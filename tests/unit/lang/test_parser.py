@@ -251,3 +251,10 @@ def test_relation_keywords_are_reserved_only_in_relation_blocks() -> None:
 def test_paper_notation_has_comments_like_the_dsl() -> None:
     spec = parse("// the paper's rules\nWHEN Fall THEN CallNurse /* soon */ WITHIN 2 minutes\n")
     assert spec.dialect is A.Dialect.PAPER and len(spec.rules) == 1
+
+
+def test_the_ast_knows_the_grammars_comparison_operators() -> None:
+    from cosleec.lang import ast as A
+    from cosleec.lang.parser import SLEEC
+
+    assert SLEEC.rel_ops == A.REL_OPS

@@ -418,3 +418,88 @@ def test_a_rules_layers_exclude_each_other_when_composed_by_hand() -> None:
     r11, r12 = m.ruleset.rule("R1").layers
     with pytest.raises(ExclusionError), activate(r11, r12):
         pass
+
+
+def test_tasks_keep_the_callers_layers_and_can_activate_their_own() -> None:
+    """A decision adds its clause's layer to what is active; it never replaces it."""
+    from cosleec.cop import Layer, activate, activate_globally, deactivate_globally, layered
+
+    quiet = Layer("Quiet")
+
+    @layered
+    def speak(msg: str) -> str:
+        return msg.upper()
+
+    @speak.variant(quiet)
+    def _(msg: str, *, proceed: object) -> str:
+        return msg.lower()
+
+    heard: list[str] = []
+
+    class Speaker(Curtains):
+        def default(self, d):  # type: ignore[no-untyped-def]
+            heard.append(speak("Hello"))
+            with activate(quiet):
+                heard.append(speak("Hello"))
+            self.event("OpenCurtains")
+
+    m, _ = manager()
+    m.bind(Speaker()).start()
+    m.update(userUndressed=False, userDistressed="low")
+    m.event("CurtainOpenRequest")
+    assert heard == ["HELLO", "hello"]  # the task's own activation takes effect
+    activate_globally(quiet)
+    try:
+        m.event("CurtainOpenRequest")
+    finally:
+        deactivate_globally(quiet)
+    assert heard[2:] == ["hello", "hello"]  # a layer active around the trigger stays active in the task
+
+
+@pytest.mark.parametrize(
+    ("unknown", "semantics", "values", "rule", "why"),
+    [
+        ("true", "last-wins", {"x": False}, 0, "because y was unknown"),
+        ("true", "last-wins", {}, 0, "because y was unknown"),
+        ("false", "nested", {"x": True}, 0, "because x was true; y was unknown"),
+        ("false", "nested", {"x": True, "z": False}, 1, "because x was true; y was unknown"),
+    ],
+)
+def test_explanations_name_the_unknown_values_the_policy_read(
+    unknown: str, semantics: str, values: dict[str, bool], rule: int, why: str
+) -> None:
+    text = """def_start event T event A event B event C
+      measure x : boolean measure y : boolean measure z : boolean def_end
+    rule_start
+      R1 when T then A unless x then B unless y then C
+      R2 when T then A unless x then B unless y then C unless z then A
+    rule_end"""
+    m = Manager.from_text(text, dispatch=False, unknown=unknown, semantics=semantics)
+    if values:
+        m.update(values)
+    assert m.event("T")[rule].explanation.endswith(why)
+
+
+def test_layer_switches_come_in_rule_order_whatever_the_hash_seed() -> None:
+    import os
+    import subprocess
+    import sys
+
+    script = (
+        "from cosleec.runtime import Manager\n"
+        "defs = ' '.join(f'measure m{i} : boolean' for i in range(12))\n"
+        "rules = ' '.join(f'R{i} when E then F unless m{i} then G' for i in range(12))\n"
+        "m = Manager.from_text(f'def_start event E event F event G {defs} def_end rule_start {rules} rule_end')\n"
+        "print([s.rule for s in m.update({f'm{i}': True for i in range(12)})])\n"
+    )
+    outs = {
+        subprocess.run(
+            [sys.executable, "-c", script],
+            capture_output=True,
+            text=True,
+            check=True,
+            env={**os.environ, "PYTHONHASHSEED": seed},
+        ).stdout
+        for seed in ("1", "2", "3")
+    }
+    assert outs == {str([f"R{i}" for i in range(12)]) + "\n"}

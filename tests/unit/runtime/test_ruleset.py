@@ -199,3 +199,24 @@ def test_the_layers_record_is_one_record_for_the_manager_and_the_node() -> None:
     assert [(sw.before, sw.after) for s in states for sw in s.switches] == [("?", "R1.1"), ("R1.1", None)]
     for s in states:
         assert LayerState.from_json(s.to_json()) == s
+
+
+@pytest.mark.parametrize(
+    ("rule", "message"),
+    [
+        ("op", "`=>` is not a SLEEC operator"),
+        ("name", "`R 1` is not a SLEEC name"),
+    ],
+)
+def test_a_specification_built_in_python_is_held_to_the_syntax(rule: str, message: str) -> None:
+    """What the parser would never produce is still rejected when a Specification comes from code."""
+    from cosleec.lang import ast as A
+
+    defs = (A.EventDecl("T"), A.EventDecl("A"), A.MeasureDecl("n", A.NumericType()))
+    occ = A.ResponseItem(A.Occurrence("A"))
+    if rule == "op":
+        built = A.Rule("R1", A.Trigger("T", A.Compare("=>", A.Name("n"), A.IntLit(1))), A.Response((occ,)))
+    else:
+        built = A.Rule("R 1", A.Trigger("T"), A.Response((occ,)))
+    with pytest.raises(SleecError, match=message):
+        RuleSet.from_spec(A.Specification(defs, (built,)))
