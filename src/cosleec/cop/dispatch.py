@@ -29,6 +29,7 @@ Codes such as SD7 (semantic decisions) and A8, E38, H48 (checklist items) refer 
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import inspect
 import threading
@@ -180,6 +181,10 @@ class LayeredFunction:
         self.builds = 0
         self.generation = 0
         self.memo: Memo = _NO_MEMO
+        # settled chains by dynamic frame (bounded like the cache): a function called under a
+        # few recurring compositions -- one per rule clause, say -- finds its chain again
+        # without recomputing its view when the one-slot memo held another
+        self._by_frame: dict[Frame, tuple[GlobalState, Chain, View]] = {}
         self._lock = threading.Lock()
         _registry.add(self)
 
@@ -209,6 +214,7 @@ class LayeredFunction:
             self.generation += 1
             self.cache.clear()  # a registration invalidates every chain (A8)
             self.memo = _NO_MEMO
+            self._by_frame = {}
         bump_version()  # and every memo that may still be filled from an older view
 
     def decorator(self, kind: str, layer: Layer) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
@@ -223,11 +229,21 @@ class LayeredFunction:
     # ------------------------------------------------------------------ steps 1-3 and 5
     def resolve(self, g: GlobalState, d: Frame) -> Chain:
         """Everything a dispatch does before running its chain, for global state ``g`` and frame ``d``."""
+        hit = self._by_frame.get(d)
+        if hit is not None and hit[0] is g:  # the same global state: the same settled chain
+            self.memo = (g, d, hit[1], hit[2])
+            return hit[1]
         view = self.view(g, d)
         hooks = g.dispatch_hooks
         if view.settled and not hooks:  # nothing to select, nobody to tell: remember the chain
             chain = self.chain_for(view, view.forced)
             self.memo = (g, d, chain, view)
+            by_frame = self._by_frame
+            if len(by_frame) >= self.max_chains:
+                # the oldest goes (bounded); another thread may be doing the same: then it went
+                with contextlib.suppress(StopIteration, KeyError, RuntimeError):
+                    del by_frame[next(iter(by_frame))]
+            by_frame[d] = (g, chain, view)
             return chain
         sel = self.select(view, record=bool(hooks))
         for hook in hooks:

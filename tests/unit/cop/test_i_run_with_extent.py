@@ -49,3 +49,18 @@ def test_a_chain_cache_needs_room_for_one_chain() -> None:
 
         @layered(max_chains=0)
         def f() -> None: ...
+
+
+def test_recurring_compositions_find_their_chain_without_a_rebuild(layered: Callable[..., Any]) -> None:
+    layers = [Layer(f"L{i}") for i in range(4)]
+
+    @layered
+    def f() -> str:
+        return "base"
+
+    for la in layers:
+        f.variant(la)(lambda *, proceed, name=la.name: name)
+    snaps = [Snapshot((la,)) for la in layers]
+    for _ in range(3):  # round robin: the one-slot memo always holds another composition
+        assert [run_with(s, f) for s in snaps] == ["L0", "L1", "L2", "L3"]
+    assert f.layered.builds == 4  # one chain per composition, built once
