@@ -24,6 +24,7 @@ purpose: a property test holds the two equal.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Callable, Sequence
 from enum import StrEnum
@@ -144,6 +145,20 @@ def reachable(
     if len(free) > MAX_FREE_CONDITIONS:
         return None
     pairs = [(i, j) for i in range(1, n + 1) for j in range(1, n + 1) if i != j and implies and implies(i, j)]
+    if not fixed and not pairs:
+        return _unconstrained(n, semantics)  # most rules: nothing known, the same answer for every n
+    return _enumerate(n, semantics, fixed, free, pairs)
+
+
+@functools.lru_cache(maxsize=64)
+def _unconstrained(n: int, semantics: HedgeSemantics) -> frozenset[int]:
+    return _enumerate(n, semantics, {}, list(range(1, n + 1)), [])
+
+
+def _enumerate(
+    n: int, semantics: HedgeSemantics, fixed: dict[int, bool], free: list[int], pairs: list[tuple[int, int]]
+) -> frozenset[int]:
+    """Every clause :func:`choose` selects over the assignments consistent with the facts."""
     out: set[int] = set()
     for bits in itertools.product((False, True), repeat=len(free)):
         value = dict(fixed)
