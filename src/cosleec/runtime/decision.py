@@ -89,6 +89,8 @@ class Decision:
         """A decision read back from :meth:`to_json`; raises KeyError/ValueError/TypeError when malformed."""
         clause = d.get("clause")
         violated = d.get("violated")
+        if isinstance(clause, bool) or not (clause is None or isinstance(clause, int)):
+            raise ValueError(f"decision clause must be a whole number or null, not {clause!r}")
         return cls(
             id=int(d["id"]),
             time=float(d.get("time", 0.0)),

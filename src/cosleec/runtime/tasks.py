@@ -72,6 +72,7 @@ class Task:
     def clauses(self) -> dict[int, Callable[[Decision], Any]]:
         """clause number -> bound implementation, from the @hedge marks."""
         out: dict[int, Callable[[Decision], Any]] = {}
+        by: dict[int, str] = {}
         for name in dir(type(self)):
             fn = getattr(type(self), name, None)
             mark = getattr(fn, "_cosleec_clause", None)
@@ -84,7 +85,13 @@ class Task:
                         [f"{type(self).__name__}.{name}: @hedge({mark!r}) is not a clause of {self.rule}"]
                     )
                 mark = int(num)
-            out[int(mark)] = getattr(self, name)
+            clause = int(mark)
+            if clause in by:  # two implementations of one clause: neither may silently win
+                raise BindingError(
+                    [f"{type(self).__name__}: clause {clause} is implemented twice ({by[clause]} and {name})"]
+                )
+            by[clause] = name
+            out[clause] = getattr(self, name)
         return out
 
     def has_default(self) -> bool:

@@ -220,3 +220,40 @@ def test_a_specification_built_in_python_is_held_to_the_syntax(rule: str, messag
         built = A.Rule("R 1", A.Trigger("T"), A.Response((occ,)))
     with pytest.raises(SleecError, match=message):
         RuleSet.from_spec(A.Specification(defs, (built,)))
+
+
+def test_a_clause_implemented_twice_is_refused() -> None:
+    from cosleec.runtime import BindingError, Task, hedge
+
+    class Twice(Task):
+        rule = "R1"
+
+        def default(self, d: Decision) -> None: ...
+
+        @hedge(1)
+        def a(self, d: Decision) -> None: ...
+
+        @hedge("R1.1")
+        def b(self, d: Decision) -> None: ...
+
+    m = Manager.from_text(RULES)
+    with pytest.raises(BindingError, match="clause 1 is implemented twice"):
+        m.bind(Twice())
+
+
+@pytest.mark.parametrize("clause", [True, "1", 1.5])
+def test_a_decision_from_the_wire_needs_a_whole_clause(clause: object) -> None:
+    d = Decision(
+        id=1,
+        time=0.0,
+        event="E",
+        rule="R1",
+        clause=1,
+        layer="R1.1",
+        semantics=HedgeSemantics.LAST_WINS,
+        values={},
+        conditions=(),
+        obligations=(),
+    ).to_json()
+    with pytest.raises(ValueError, match="whole number"):
+        Decision.from_json({**d, "clause": clause})
