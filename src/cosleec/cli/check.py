@@ -7,7 +7,7 @@ import json
 
 from rich.text import Text
 
-from cosleec.cli.common import console, expand
+from cosleec.cli.common import add_clause_options, console, expand
 from cosleec.lang import HedgeSemantics, Options, analyse_file
 
 
@@ -32,11 +32,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "--strict-precedence", action="store_true", help="mixed and/or without parentheses is an error"
     )
     p.add_argument("--lint", action="store_true", help="also warn about naming conventions and style")
-    p.add_argument(
-        "--semantics",
-        choices=[str(s) for s in HedgeSemantics],
-        default=str(HedgeSemantics.LAST_WINS),
-        help="clause semantics the unreachable-clause warnings assume (as the runtime's --semantics)",
+    add_clause_options(
+        p,
+        unknown=False,
+        semantics_help="clause semantics the unreachable-clause warnings assume (as the runtime's)",
     )
     p.set_defaults(run=run)
 

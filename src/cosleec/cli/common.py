@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
 from rich.console import Console
+
+from cosleec.lang import HedgeSemantics, Unknowns
 
 
 def expand(paths: list[str]) -> list[Path]:
@@ -22,3 +25,22 @@ def expand(paths: list[str]) -> list[Path]:
 def console(stderr: bool = False) -> Console:
     """A rich console on stdout (or stderr) without highlighting or hard wraps, so output pipes cleanly."""
     return Console(stderr=stderr, highlight=False, soft_wrap=True, file=sys.stderr if stderr else sys.stdout)
+
+
+def add_clause_options(
+    p: argparse.ArgumentParser, *, unknown: bool = True, semantics_help: str | None = None
+) -> None:
+    """``--semantics`` (and ``--unknown``): how a rule's clauses are chosen, as the user types them."""
+    p.add_argument(
+        "--semantics",
+        choices=[str(s) for s in HedgeSemantics],
+        default=str(HedgeSemantics.LAST_WINS),
+        help=semantics_help or "how the unless clauses of a rule combine (default: last-wins, as SLEEC)",
+    )
+    if unknown:
+        p.add_argument(
+            "--unknown",
+            choices=[str(u) for u in Unknowns],
+            default=str(Unknowns.UNDETERMINED),
+            help="how a clause condition over a measure with no value is read (default: undetermined, fail closed)",
+        )

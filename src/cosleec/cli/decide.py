@@ -6,7 +6,8 @@ import argparse
 import json
 import sys
 
-from cosleec.runtime import ContextError, HedgeSemantics, Manager, RuleSet, VirtualClock
+from cosleec.cli.common import add_clause_options
+from cosleec.runtime import ContextError, Manager, RuleSet, VirtualClock
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -22,9 +23,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         dest="values",
         help="a measure value: true/false, a number, or a scale literal",
     )
-    p.add_argument(
-        "--semantics", choices=[str(s) for s in HedgeSemantics], default=str(HedgeSemantics.LAST_WINS)
-    )
+    add_clause_options(p, unknown=False)
     p.add_argument("--json", action="store_true")
     p.add_argument("--infer-defs", action="store_true")
     p.set_defaults(run=run)

@@ -5,16 +5,14 @@ from __future__ import annotations
 import argparse
 
 from cosleec import demo
-from cosleec.lang import HedgeSemantics
+from cosleec.cli.common import add_clause_options
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Register ``cosleec demo`` and its options."""
     p = sub.add_parser("demo", help="run the assistive-care example in one process")
     p.add_argument("--json", action="store_true", help="print runtime events as JSON lines")
-    p.add_argument(
-        "--semantics", choices=[str(s) for s in HedgeSemantics], default=str(HedgeSemantics.LAST_WINS)
-    )
+    add_clause_options(p, unknown=False)
     p.add_argument("--audit", metavar="FILE", help="also write the audit trail (JSON Lines)")
     p.set_defaults(run=run)
 

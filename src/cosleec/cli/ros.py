@@ -8,8 +8,9 @@ import sys
 from typing import Any
 
 from cosleec import ros
+from cosleec.cli.common import add_clause_options
 from cosleec.nodes import LayersNode, ListenerNode, ManagerNode, Mapping, TaskNode
-from cosleec.runtime import HedgeSemantics, RuleSet, Unknowns
+from cosleec.runtime import RuleSet, Unknowns
 
 
 def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: ignore[type-arg]
@@ -29,15 +30,7 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
 
     m = nodes.add_parser("manager", help="rules, context, decisions, obligations")
     m.add_argument("rules")
-    m.add_argument(
-        "--semantics", choices=[str(s) for s in HedgeSemantics], default=str(HedgeSemantics.LAST_WINS)
-    )
-    m.add_argument(
-        "--unknown",
-        choices=[str(u) for u in Unknowns],
-        default=str(Unknowns.UNDETERMINED),
-        help="how a clause condition over a measure with no value is read (default: undetermined, fail closed)",
-    )
+    add_clause_options(m)
     m.add_argument("--sim-time", action="store_true", help="take time from the clock topic")
     m.add_argument("--audit", metavar="FILE", help="append-only JSON Lines audit trail")
     m.add_argument("--record", metavar="FILE.mcap", help="record the decision stream (Foxglove opens it)")
@@ -47,15 +40,7 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     common(m)
     la = nodes.add_parser("layers", help="the COP Layer Manager: publishes active layers (latched)")
     la.add_argument("rules")
-    la.add_argument(
-        "--semantics", choices=[str(s) for s in HedgeSemantics], default=str(HedgeSemantics.LAST_WINS)
-    )
-    la.add_argument(
-        "--unknown",
-        choices=[str(u) for u in Unknowns],
-        default=str(Unknowns.UNDETERMINED),
-        help="as the manager's --unknown",
-    )
+    add_clause_options(la)  # as the manager's, or the two choose different layers
     common(la)
     li = nodes.add_parser("listener", help="the Context Listener: robot topics -> measures and events")
     li.add_argument("mapping")

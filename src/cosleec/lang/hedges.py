@@ -66,11 +66,7 @@ def choose(
         choose([True, True, False], HedgeSemantics.NESTED)  # 2
     """
     # == rather than `is`: the options are StrEnums, and a plain "nested" must mean the same
-    if unknowns != Unknowns.UNDETERMINED:
-        if unknowns not in _UNKNOWNS:
-            raise ConfigurationError(f"unknown policy {unknowns!r} for unknown values; expected one of {', '.join(Unknowns)}")
-        read = unknowns == Unknowns.TRUE
-        values = [read if v is None else v for v in values]
+    values = _read(values, unknowns)
     if semantics == HedgeSemantics.LAST_WINS:
         for i in range(len(values) - 1, -1, -1):
             v = values[i]
@@ -88,7 +84,9 @@ def choose(
                 break
             held += 1
         return held
-    raise ConfigurationError(f"unknown hedge semantics {semantics!r}; expected one of {', '.join(HedgeSemantics)}")
+    raise ConfigurationError(
+        f"unknown hedge semantics {semantics!r}; expected one of {', '.join(HedgeSemantics)}"
+    )
 
 
 def decisive(
@@ -107,10 +105,7 @@ def decisive(
     """
     if clause is None:
         return tuple(i + 1 for i, v in enumerate(values) if v is None)
-    if unknowns != Unknowns.UNDETERMINED:  # decide on the values as the policy read them
-        read = unknowns == Unknowns.TRUE
-        values = [read if v is None else v for v in values]
-    known = list(values)
+    known = list(_read(values, unknowns))  # decide on the values as the policy read them
     for i in range(len(known)):
         kept = known[i]
         known[i] = None
@@ -120,6 +115,19 @@ def decisive(
 
 
 _UNKNOWNS = frozenset(Unknowns)
+
+
+def _read(values: Sequence[bool | None], unknowns: Unknowns) -> Sequence[bool | None]:
+    """The values as the ``unknowns`` policy reads them (unchanged under UNDETERMINED)."""
+    if unknowns == Unknowns.UNDETERMINED:
+        return values
+    if unknowns not in _UNKNOWNS:
+        raise ConfigurationError(
+            f"unknown policy {unknowns!r} for unknown values; expected one of {', '.join(Unknowns)}"
+        )
+    read = unknowns == Unknowns.TRUE
+    return [read if v is None else v for v in values]
+
 
 # Enumerating every assignment costs 2**n calls of `choose`; past this many free conditions
 # the lint stays silent rather than slow (rules that long are generated, not written).

@@ -200,34 +200,42 @@ class Implementations:
                 )
                 return False
             composition = rule.compositions[decision.clause]
-        try:
+        layers = composition.layers
+
+        def run() -> None:
             handler = self.handler(rule)
-            if composition.layers:  # added to whatever the caller has active, never replacing it
-                with activate(*composition.layers):
+            if layers:  # added to whatever the caller has active, never replacing it
+                with activate(*layers):
                     handler(decision)
             else:
                 handler(decision)
-            return True
-        except Exception:
-            self.failures += 1
-            log.exception("task for %s failed on decision %s", rule.name, decision.id)
-            return False
+
+        return self._guarded("task", rule, decision, run)
 
     def dispatch_fallback(self, rule: CompiledRule, decision: Decision) -> bool:
         """Run an ``otherwise`` decision: capabilities for its events, else the task's ``fallback``."""
-        task = self.tasks.get(rule.name)
-        try:
+        fallback = getattr(self.tasks.get(rule.name), "fallback", None)
+
+        def run() -> None:
             handled = set()
             for ob in decision.obligations:
                 cap = self.capabilities.get(ob.event)
                 if cap is not None and not ob.negated:
                     cap(ob, decision)
                     handled.add(ob.event)
-            fb = getattr(task, "fallback", None)
-            if fb is not None and any(not o.negated and o.event not in handled for o in decision.obligations):
-                fb(decision)
+            if fallback is not None and any(
+                not o.negated and o.event not in handled for o in decision.obligations
+            ):
+                fallback(decision)
+
+        return self._guarded("fallback", rule, decision, run)
+
+    def _guarded(self, what: str, rule: CompiledRule, decision: Decision, run: Callable[[], None]) -> bool:
+        """Run a task's code; a failure is logged and counted, never raised into the caller."""
+        try:
+            run()
             return True
         except Exception:
             self.failures += 1
-            log.exception("fallback for %s failed on decision %s", rule.name, decision.id)
+            log.exception("%s for %s failed on decision %s", what, rule.name, decision.id)
             return False

@@ -123,16 +123,12 @@ class LayerManager:
         self._active: dict[int, str] = {}  # rule index -> active layer (rules at their default absent)
         self._version = 0  # of the `layers` records (state())
         # each rule's COP composition: its active layer, none at the default, None undetermined
-        self._compositions: list[Snapshot | None] = [self._composition(r, st) for r, st in zip(ruleset.rules, self.status)]
-
-    @staticmethod
-    def _composition(rule: CompiledRule, status: RuleStatus) -> Snapshot | None:
-        return None if status.clause is None else rule.compositions[status.clause]
 
     def composition_of(self, rule: CompiledRule) -> Snapshot | None:
         """The rule's COP composition now: its active layer (empty at the default); None when
         the choice is undetermined. A trigger dispatches the rule's layered method under it."""
-        return self._compositions[rule.index]
+        clause = self.status[rule.index].clause
+        return None if clause is None else rule.compositions[clause]
 
     def _compute(self, r: CompiledRule, v: Values) -> RuleStatus:
         if r.evaluate_all is None:
@@ -160,7 +156,6 @@ class LayerManager:
             old = status[i]
             status[i] = new
             if new.clause != old.clause:
-                self._compositions[i] = self._composition(r, new)  # activate the chosen layer
                 switches.append(LayerSwitch(r.name, _layer_name(r, old.clause), _layer_name(r, new.clause)))
                 if new.clause:
                     self._active[i] = r.clauses[new.clause - 1].layer
@@ -171,9 +166,10 @@ class LayerManager:
     def recompute_all(self, v: Values) -> None:
         """Re-evaluate every rule (after a change of semantics)."""
         self.status = [self._compute(r, v) for r in self.ruleset.rules]
-        self._compositions = [self._composition(r, st) for r, st in zip(self.ruleset.rules, self.status)]
         self._active = {
-            r.index: r.clauses[st.clause - 1].layer for r, st in zip(self.ruleset.rules, self.status) if st.clause
+            r.index: r.clauses[st.clause - 1].layer
+            for r, st in zip(self.ruleset.rules, self.status)
+            if st.clause
         }
 
     def state(self, switches: Iterable[LayerSwitch] = ()) -> LayerState:
@@ -192,7 +188,10 @@ class LayerManager:
 
     def composition(self) -> Snapshot:
         """Every rule's active layer as one COP composition (for introspection with ``cosleec.cop``)."""
-        return Snapshot(tuple(la for comp in self._compositions if comp is not None for la in comp.layers))
+        rules = self.ruleset.rules
+        return Snapshot(
+            tuple(rules[i].layers[c - 1] for i in sorted(self._active) if (c := self.status[i].clause))
+        )
 
     def set_semantics(self, semantics: HedgeSemantics, v: Values) -> None:
         """Switch between last-wins and nested clause choice, re-evaluating every rule."""
