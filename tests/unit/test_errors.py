@@ -46,3 +46,23 @@ def test_the_cli_prints_a_user_error_and_exits_1(tmp_path, capsys) -> None:  # t
     assert main(["ros2", "launch", str(launch)]) == 1
     err = capsys.readouterr().err
     assert err.startswith(f"cosleec: {launch}: expected `backend: ros1|ros2`") and "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["ros2", "launch", "/nonexistent/cosleec.launch.yaml"], "cannot read the launch file"),
+        (["demo", "--audit", "/proc/nonexistent/audit.jsonl"], "cannot open the audit log"),
+    ],
+)
+def test_unreadable_and_unwritable_paths_are_user_errors(argv: list[str], message: str, capsys) -> None:  # type: ignore[no-untyped-def]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert message in err and "internal error" not in err
+
+
+def test_a_launch_file_that_is_not_yaml_is_a_user_error(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    bad = tmp_path / "bad.launch.yaml"
+    bad.write_text("backend: [ros2\n")
+    assert main(["ros2", "launch", str(bad)]) == 1
+    assert "not valid YAML" in capsys.readouterr().err

@@ -78,7 +78,14 @@ def load(path: str) -> dict[str, Any]:
     UserError naming the file when ``backend`` or ``nodes`` is wrong. A node argument that
     names a file next to the launch file becomes that file's absolute path.
     """
-    doc = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    try:
+        doc = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as e:
+        raise UserError(
+            f"cannot read the launch file: {getattr(e, 'strerror', None) or e}", where=path
+        ) from None
+    except yaml.YAMLError as e:
+        raise UserError(f"the launch file is not valid YAML: {e}", where=path) from None
     if (
         not isinstance(doc, dict)
         or doc.get("backend") not in ("ros1", "ros2")
@@ -128,4 +135,3 @@ def launch(path: str) -> int:
         assert p.poll() is not None
     time.sleep(0)
     return 1 if failed else (0 if all(c in (0, -signal.SIGTERM) for c in codes) else 1)
-

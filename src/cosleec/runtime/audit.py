@@ -13,6 +13,8 @@ import threading
 from pathlib import Path
 from typing import Any, TextIO
 
+from cosleec.errors import UserError
+
 
 class AuditLog:
     """An append-only JSON Lines file of runtime events; pass one (or a path) as ``Manager(audit=...)``.
@@ -24,8 +26,13 @@ class AuditLog:
 
     def __init__(self, path: str | Path, *, fsync: bool = False) -> None:
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._fh: TextIO = self.path.open("a", encoding="utf-8")
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._fh: TextIO = self.path.open("a", encoding="utf-8")
+        except OSError as e:
+            raise UserError(
+                f"cannot open the audit log: {e.strerror or e}", where=str(path), hint="give a writable path"
+            ) from None
         self._fsync = fsync
         self._lock = threading.Lock()
         self.count = 0
