@@ -37,6 +37,17 @@ class Run:
         """The decision records (JSON form), in order, for ``scenario.outcomes``."""
         return [e.data for e in self.events if e.kind == "decision"]
 
+    def records(self) -> list[dict[str, Any]]:
+        """Every runtime event as a line of the Manager's audit log has it, for :func:`cosleec.demo.outcomes`.
+
+        Written and read back as JSON, as the audit log does, so a record of this run and
+        one of a Manager node's ``--audit`` file compare as equals.
+        """
+        return [
+            json.loads(json.dumps({"kind": e.kind, "time": e.time, **e.data}, default=str))
+            for e in self.events
+        ]
+
 
 def run(
     steps: list[Step] | None = None,
@@ -55,7 +66,9 @@ def run(
     before returning.
     """
     clock = VirtualClock()
-    manager = Manager.from_file(rules_path(), clock=clock, semantics=semantics, audit=AuditLog(audit) if audit else None)
+    manager = Manager.from_file(
+        rules_path(), clock=clock, semantics=semantics, audit=AuditLog(audit) if audit else None
+    )
     robot = tasks.install(manager)
     manager.start()
     result = Run(manager, robot)

@@ -18,7 +18,7 @@ from cosleec.lang.ast import Dialect, Specification
 from cosleec.lang.checker import Options, SymbolTable, check
 from cosleec.lang.diagnostics import Diagnostic, DiagnosticSink, Severity, SleecError
 from cosleec.lang.frontend import DIALECTS, CheckResult, analyse, analyse_file, load, parse, read_source
-from cosleec.lang.hedges import HedgeSemantics, Unknowns, choose, decisive
+from cosleec.lang.hedges import HedgeSemantics, Unknowns, candidates, choose, decisive
 from cosleec.lang.infer import infer_definitions
 from cosleec.lang.printer import Printer, format_spec
 
@@ -39,6 +39,7 @@ __all__ = [
     "analyse",
     "analyse_file",
     "ast",
+    "candidates",
     "check",
     "choose",
     "decisive",

@@ -31,7 +31,7 @@ from enum import StrEnum
 
 from cosleec.errors import ConfigurationError
 
-__all__ = ["HedgeSemantics", "Unknowns", "blockers", "choose", "decisive", "reachable"]
+__all__ = ["HedgeSemantics", "Unknowns", "blockers", "candidates", "choose", "decisive", "reachable"]
 
 
 class HedgeSemantics(StrEnum):
@@ -87,6 +87,29 @@ def choose(
     raise ConfigurationError(
         f"unknown hedge semantics {semantics!r}; expected one of {', '.join(HedgeSemantics)}"
     )
+
+
+def candidates(
+    values: Sequence[bool | None], semantics: HedgeSemantics = HedgeSemantics.LAST_WINS
+) -> frozenset[int]:
+    """Every clause that :func:`choose` could select once the unknown values (``None``) are known.
+
+    What an undetermined decision must allow for: the runtime enforces the prohibitions of
+    every candidate, so not knowing a value never allows what one of its readings forbids.
+    With more than :data:`MAX_FREE_CONDITIONS` unknown values every clause is a candidate.
+    """
+    free = [i for i, v in enumerate(values) if v is None]
+    if len(free) > MAX_FREE_CONDITIONS:
+        return frozenset(range(len(values) + 1))
+    out: set[int] = set()
+    filled = list(values)
+    for bits in itertools.product((False, True), repeat=len(free)):
+        for i, b in zip(free, bits):
+            filled[i] = b
+        chosen = choose(filled, semantics)
+        assert chosen is not None
+        out.add(chosen)
+    return frozenset(out)
 
 
 def decisive(

@@ -140,7 +140,11 @@ class Driver:
         """Wait until the Manager has received every message sent to it and the tasks ran every obligation.
 
         Messages to the Manager come from this driver and from the task nodes (reports and
-        requests); TimeoutError if that does not happen within ``timeout`` seconds.
+        requests); every decision the Manager counted must have reached this driver too.
+        Each step waits for it before the next is sent, so a task's report is never
+        overtaken by the next clock message or context update: with the Manager in
+        simulated time, the run then has the outcome of the embedded one, whatever the
+        timing. TimeoutError if that does not happen within ``timeout`` seconds.
         """
 
         def settled() -> bool:
@@ -157,7 +161,10 @@ class Driver:
             # every message to the Manager handled, and every obligation it sent handled by a task
             received: int = m["counters"]["received"]
             published: int = m["counters"].get("obligations", 0)
-            return received == self.sent + task_msgs and handled == published
+            # ...and every decision it counted published (obligations go out just before): a
+            # report whose decision is still on its way is not yet in `published`
+            delivered = len(self.decisions) >= m.get("stats", {}).get("decisions", 0)
+            return received == self.sent + task_msgs and handled == published and delivered
 
         self.wait(settled, timeout, "the system to settle")
 

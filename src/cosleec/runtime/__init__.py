@@ -19,16 +19,18 @@ from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
 from cosleec.runtime.context import Context
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.errors import BindingError, ConfigurationError, ContextError
-from cosleec.runtime.implementations import Capability, Implementations
+from cosleec.runtime.implementations import Capability, Implementations, Ran
+from cosleec.runtime.journal import Journal, JournalError
 from cosleec.runtime.layers import LayerManager, LayerState, LayerSwitch
-from cosleec.runtime.manager import Manager, RuntimeEvent
-from cosleec.runtime.model import CompiledRule, Obligation
+from cosleec.runtime.manager import Manager, RuntimeEvent, UnknownEvents
+from cosleec.runtime.model import MAX_WINDOW_S, CompiledRule, DeadlineError, Obligation
 from cosleec.runtime.obligations import Tracked
 from cosleec.runtime.ruleset import RuleSet
 from cosleec.runtime.tasks import Reporter, Task, hedge
 from cosleec.runtime.values import MeasureSpec, Value
 
 __all__ = [
+    "MAX_WINDOW_S",
     "AuditLog",
     "BindingError",
     "Capability",
@@ -37,9 +39,12 @@ __all__ = [
     "ConfigurationError",
     "Context",
     "ContextError",
+    "DeadlineError",
     "Decision",
     "HedgeSemantics",
     "Implementations",
+    "Journal",
+    "JournalError",
     "LayerManager",
     "LayerState",
     "LayerSwitch",
@@ -47,11 +52,13 @@ __all__ = [
     "MeasureSpec",
     "MonotonicClock",
     "Obligation",
+    "Ran",
     "Reporter",
     "RuleSet",
     "RuntimeEvent",
     "Task",
     "Tracked",
+    "UnknownEvents",
     "Unknowns",
     "Value",
     "VirtualClock",

@@ -3,6 +3,11 @@
 Each record is written and flushed to the operating system before ``write`` returns; a
 crash of the Python process cannot lose a record already written. ``fsync=True`` also
 survives a crash of the machine, at a cost per record.
+
+A crash in the middle of a write leaves a torn last line. Opening the log sets it aside --
+appended to ``<log>.torn`` and cut from the log -- so it is never glued to the first
+record of the next run; with a journal, the Manager then writes the records that line
+held again, from the journal (each record carries its sequence number, ``seq``).
 """
 
 from __future__ import annotations
@@ -10,6 +15,7 @@ from __future__ import annotations
 import json
 import os
 import threading
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any, TextIO
 
@@ -19,15 +25,18 @@ from cosleec.errors import UserError
 class AuditLog:
     """An append-only JSON Lines file of runtime events; pass one (or a path) as ``Manager(audit=...)``.
 
-    Opening it creates missing parent directories and appends to an existing file.
-    Thread-safe: records are written whole, one per line, in the order of the calls.
-    ``count`` is the number of records this object wrote.
+    Opening it creates missing parent directories and appends to an existing file, after
+    setting aside a torn last line (``torn`` is its text, ``None`` when there was none).
+    ``last_seq`` is the ``seq`` of the last complete record found (0 if none). Thread-safe:
+    records are written whole, one per line, in the order of the calls. ``count`` is the
+    number of records this object wrote.
     """
 
     def __init__(self, path: str | Path, *, fsync: bool = False) -> None:
         self.path = Path(path)
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.torn, self.last_seq = _repair(self.path)
             self._fh: TextIO = self.path.open("a", encoding="utf-8")
         except OSError as e:
             raise UserError(
@@ -39,18 +48,58 @@ class AuditLog:
 
     def write(self, record: dict[str, Any]) -> None:
         """Append one record and flush it to the operating system before returning."""
-        line = json.dumps(record, default=str, separators=(",", ":")) + "\n"
+        self.write_many((record,))
+
+    def write_many(self, records: Iterable[dict[str, Any]]) -> None:
+        """Append records in order with one flush (and one fsync) for all of them."""
+        text = "".join(json.dumps(r, default=str, separators=(",", ":")) + "\n" for r in records)
+        if not text:
+            return
         with self._lock:
-            self._fh.write(line)
+            self._fh.write(text)
             self._fh.flush()
             if self._fsync:
                 os.fsync(self._fh.fileno())
-            self.count += 1
+            self.count += text.count("\n")
 
     def close(self) -> None:
         """Close the file; later writes fail."""
         with self._lock:
             self._fh.close()
+
+
+def _repair(path: Path) -> tuple[str | None, int]:
+    """Set aside a torn last line (to ``<path>.torn``); return it and the last complete ``seq``."""
+    if not path.exists():
+        return None, 0
+    with path.open("rb+") as fh:
+        size = fh.seek(0, os.SEEK_END)
+        start, chunk = size, b""
+        # read back until the chunk holds the whole last line and the whole line before it
+        while start > 0 and chunk.count(b"\n") < 3:
+            start = max(0, start - 65536)
+            fh.seek(start)
+            chunk = fh.read(size - start)
+        torn = None
+        if chunk and not chunk.endswith(b"\n"):
+            end = chunk.rfind(b"\n")  # -1: the whole file is one torn line
+            torn = chunk[end + 1 :].decode("utf-8", "replace")
+            with path.with_name(path.name + ".torn").open("ab") as aside:
+                aside.write(chunk[end + 1 :] + b"\n")
+            fh.truncate(start + end + 1)
+            chunk = chunk[: end + 1]
+    lines = chunk.rstrip(b"\n").split(b"\n")
+    if start > 0:
+        lines = lines[1:]  # the first may be cut
+    seq = 0
+    if lines and lines[-1]:
+        try:
+            rec = json.loads(lines[-1])
+            if isinstance(rec, dict) and isinstance(rec.get("seq"), int):
+                seq = rec["seq"]
+        except ValueError:
+            pass
+    return torn, seq
 
 
 def read_audit(path: str | Path) -> list[dict[str, Any]]:

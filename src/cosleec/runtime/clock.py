@@ -7,6 +7,7 @@ simulated time (``--sim-time``).
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from typing import Protocol
@@ -36,6 +37,7 @@ class VirtualClock:
     """Time that moves only when told to (``advance``/``set``): deadlines in tests are exact."""
 
     def __init__(self, start: float = 0.0) -> None:
+        _finite(start)
         self._t = start
         self._lock = threading.Lock()
 
@@ -49,6 +51,7 @@ class VirtualClock:
         Moving the clock judges nothing by itself: call ``Manager.tick()`` afterwards so
         the deadlines and stale values it passed are processed.
         """
+        _finite(seconds)
         if seconds < 0:
             raise ValueError("time does not go back")
         with self._lock:
@@ -56,11 +59,24 @@ class VirtualClock:
             return self._t
 
     def set(self, t: float) -> None:
-        """Jump to time ``t`` (seconds); ValueError if ``t`` is earlier than now.
+        """Jump to time ``t`` (seconds); ValueError if ``t`` is earlier than now or not a finite number.
 
         The Manager node uses it to follow the ``clock`` topic in simulated time.
         """
+        _finite(t)
         with self._lock:
             if t < self._t:
                 raise ValueError("time does not go back")
             self._t = t
+
+
+def _finite(t: object) -> None:
+    """ValueError unless ``t`` is a finite real number (NaN and infinity would stop every deadline)."""
+    if isinstance(t, bool) or not isinstance(t, int | float):
+        raise ValueError(f"a time is a number of seconds, not {type(t).__name__}")
+    try:
+        ok = math.isfinite(t)
+    except OverflowError:
+        ok = False
+    if not ok:
+        raise ValueError("a time must be a finite number of seconds")

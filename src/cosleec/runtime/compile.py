@@ -3,11 +3,21 @@
 A condition is compiled once, to Python source evaluated by CPython itself: the fastest
 evaluation available and exactly the operators' mathematical meaning (numbers compare
 exactly; scale literals compare by position; booleans by equality). A missing value
-raises KeyError, which the caller turns into an *unknown measure*.
+raises KeyError.
+
+Unknown values follow Kleene's three-valued logic, independent of operand order:
+``true or unknown`` is true, ``false and unknown`` is false, ``not unknown``, a comparison
+or arithmetic with an unknown operand, and anything else that depends on it is unknown
+(``None``). Each condition therefore has two compiled forms: the fast one, which raises
+KeyError as soon as it reads a missing measure (and, when it does not raise, already
+agrees with Kleene: a short-circuit only skips an operand that cannot change the
+result), and :meth:`Compiler.kleene`, used only after that KeyError, which evaluates
+every operand and returns True, False or None.
 """
 
 from __future__ import annotations
 
+import operator
 from collections.abc import Callable
 from typing import Any
 
@@ -91,6 +101,88 @@ class Compiler:
             fn = eval(compile(f"lambda v: {src}", "<sleec condition>", "eval"))
             self._cache[src] = fn
         return fn, frozenset(reads), src
+
+
+    def kleene(self, e: A.Expr | None) -> Callable[[Values], Any]:
+        """The three-valued form of ``e``: True, False, a number, or None when unknown.
+
+        Slower than :meth:`function` (no short-circuit, one closure per node): call it only
+        when the fast form raised KeyError.
+        """
+        if e is None:
+            return _true
+        return self._kleene(e, None)
+
+    def _kleene(self, e: A.Expr, scale: str | None) -> Callable[[Values], Any]:
+        if isinstance(e, A.BoolLit | A.IntLit):
+            return _const(e.value)
+        if isinstance(e, A.DecimalLit):
+            return _const(float(e.text))
+        if isinstance(e, A.Name):
+            s = self.symbols
+            if e.name in s.measures:
+                name = e.name
+                return lambda v: v.get(name)
+            if e.name in s.constant_values:
+                return _const(s.constant_values[e.name])
+            if scale is not None:
+                m = s.measures[scale]
+                assert isinstance(m.type, A.ScaleType)
+                return _const(m.type.literals.index(e.name))
+            raise ValueError(f"cannot evaluate {e.name!r} here")
+        if isinstance(e, A.Not):
+            inner = self._kleene(e.operand, None)
+            return lambda v: None if (x := inner(v)) is None else not x
+        if isinstance(e, A.BinOp):
+            left, right = self._kleene(e.left, None), self._kleene(e.right, None)
+            if e.op == "and":
+                return lambda v: _and(left(v), right(v))
+            if e.op == "or":
+                return lambda v: _or(left(v), right(v))
+            return _strict(_ARITH[e.op], left, right)
+        scale = self._scale_of(e.left) or self._scale_of(e.right)
+        return _strict(_COMPARE[e.op], self._kleene(e.left, scale), self._kleene(e.right, scale))
+
+
+_ARITH: dict[str, Callable[[Any, Any], Any]] = {"+": operator.add, "-": operator.sub, "*": operator.mul}
+_COMPARE: dict[str, Callable[[Any, Any], Any]] = {
+    "<": operator.lt,
+    "<=": operator.le,
+    ">": operator.gt,
+    ">=": operator.ge,
+    "=": operator.eq,
+    "<>": operator.ne,
+}
+
+
+def _const(x: Any) -> Callable[[Values], Any]:
+    return lambda v: x
+
+
+def _and(a: Any, b: Any) -> bool | None:
+    """Kleene conjunction: false if either side is false, unknown if either is unknown."""
+    if (a is not None and not a) or (b is not None and not b):
+        return False
+    return None if a is None or b is None else True
+
+
+def _or(a: Any, b: Any) -> bool | None:
+    """Kleene disjunction: true if either side is true, unknown if either is unknown."""
+    if (a is not None and a) or (b is not None and b):
+        return True
+    return None if a is None or b is None else False
+
+
+def _strict(
+    op: Callable[[Any, Any], Any], left: Callable[[Values], Any], right: Callable[[Values], Any]
+) -> Callable[[Values], Any]:
+    """An operator that is unknown when either operand is (comparison, arithmetic)."""
+
+    def apply(v: Values) -> Any:
+        a, b = left(v), right(v)
+        return None if a is None or b is None else op(a, b)
+
+    return apply
 
 
 def _true(v: Values) -> bool:

@@ -38,7 +38,8 @@ class Context:
         for name, value in updates.items():
             spec = measures.get(name)
             if spec is None:
-                raise ContextError(f"unknown measure {name!r}")
+                shown = repr(name) if len(name) <= 80 else f"{name[:80]!r}... ({len(name) - 80} more characters)"
+                raise ContextError(f"unknown measure {shown}")
             if spec.kind == "boolean" and (value is True or value is False):
                 out[name] = value  # the common case, without a call
             else:

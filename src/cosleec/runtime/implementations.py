@@ -21,8 +21,11 @@ embedded Manager and remote task nodes.
 
 from __future__ import annotations
 
+import contextvars
+import difflib
 import logging
 from collections.abc import Callable, Iterable
+from dataclasses import dataclass
 from typing import Any
 
 from cosleec.cop import Snapshot, activate, layered
@@ -36,6 +39,28 @@ log = logging.getLogger("cosleec.runtime")
 
 Capability = Callable[[Obligation, Decision], Any]
 Handler = Callable[[Decision], Any]
+
+
+@dataclass(frozen=True, slots=True)
+class Ran:
+    """The outcome of one implementation run for a decision: a capability, a task method, a fallback.
+
+    ``what`` is ``task``, ``capability`` or ``fallback``; ``event`` the event a capability
+    performs (None for a task's method); ``error`` is None when it returned normally.
+    """
+
+    what: str
+    event: str | None
+    error: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        """True when the implementation returned without raising."""
+        return self.error is None
+
+    def to_json(self) -> dict[str, Any]:
+        """The fields of a ``task-done`` / ``task-failed`` record."""
+        return {"what": self.what, "event": self.event, "error": self.error}
 
 
 def _events(spec: ResponseSpec | None, out: set[str]) -> None:
@@ -77,7 +102,20 @@ class Implementations:
         self._handlers.pop(task.rule, None)
 
     def capability(self, event: str) -> Callable[[Capability], Capability]:
-        """Decorator: ``fn(obligation, decision)`` performs ``event`` whenever a rule obliges it."""
+        """Decorator: ``fn(obligation, decision)`` performs ``event`` whenever a rule obliges it.
+
+        BindingError at once, with the closest names, when no response of the rules names
+        ``event``: a misspelt capability would otherwise never run, silently.
+        """
+        if event not in self.ruleset.responds:
+            close = difflib.get_close_matches(event, sorted(self.ruleset.responds), n=3)
+            what = f"{event[:80]!r}" + ("..." if len(event) > 80 else "")
+            raise BindingError(
+                [
+                    f"capability {what}: no rule's response names this event"
+                    + (f" (did you mean {', '.join(close)}?)" if close else "")
+                ]
+            )
 
         def register(fn: Capability) -> Capability:
             self.capabilities[event] = fn
@@ -165,26 +203,52 @@ class Implementations:
             self.handler(rule)
 
     def compose(self, decision: Decision) -> None:
-        """Capability style: run the handler of every event the decision obliges."""
+        """Capability style: run the handler of every event the decision obliges.
+
+        Every capability runs even when an earlier one raised (``A and B``: B still runs);
+        each outcome is collected by the dispatch that called it, and the first failure is
+        raised again once all have run.
+        """
+        errors = [ran for ran in self._capabilities(decision, set()) if not ran.ok]
+        if errors:
+            raise _Failed(errors)
+
+    def _capabilities(self, decision: Decision, handled: set[str]) -> list[Ran]:
+        out = []
         for ob in decision.obligations:
             if ob.negated:
                 continue
             cap = self.capabilities.get(ob.event)
-            if cap is not None:
+            if cap is None:
+                continue
+            handled.add(ob.event)
+            try:
                 cap(ob, decision)
+                out.append(Ran("capability", ob.event))
+            except Exception as e:
+                self.failures += 1
+                log.exception("capability %s failed on decision %s of %s", ob.event, decision.id, decision.rule)
+                out.append(Ran("capability", ob.event, _describe(e)))
+        runs = _RUNS.get()
+        if runs is not None:
+            runs.extend(out)
+        return out
 
-    def dispatch(self, rule: CompiledRule, decision: Decision, composition: Snapshot | None = None) -> bool:
+    def dispatch(
+        self, rule: CompiledRule, decision: Decision, composition: Snapshot | None = None
+    ) -> list[Ran]:
         """Run the rule's layered method for ``decision`` under ``composition``; a failing task
         never stops the caller.
 
         ``composition`` is the rule's COP composition as the Layer Manager had it when the
         decision was made (the embedded Manager passes it). Without one -- a task node,
         which has no Layer Manager of its own -- it is the composition of the layer the
-        decision names, as the Manager chose it. Returns False (and counts a failure) when
-        the implementation raised; a decision without a clause (undetermined) runs nothing.
+        decision names, as the Manager chose it. Returns what ran, each with its outcome
+        (empty for a decision without a clause, which runs nothing); a failure is also
+        counted in :attr:`failures`.
         """
         if decision.clause is None:
-            return True
+            return []
         if composition is None:
             if (
                 not 0 <= decision.clause <= len(rule.clauses)
@@ -198,7 +262,7 @@ class Implementations:
                     decision.clause,
                     decision.layer,
                 )
-                return False
+                return [Ran("task", None, f"clause {decision.clause} and layer {decision.layer} disagree")]
             composition = rule.compositions[decision.clause]
         layers = composition.layers
 
@@ -212,30 +276,58 @@ class Implementations:
 
         return self._guarded("task", rule, decision, run)
 
-    def dispatch_fallback(self, rule: CompiledRule, decision: Decision) -> bool:
-        """Run an ``otherwise`` decision: capabilities for its events, else the task's ``fallback``."""
-        fallback = getattr(self.tasks.get(rule.name), "fallback", None)
+    def dispatch_fallback(self, rule: CompiledRule, decision: Decision) -> list[Ran]:
+        """Run an ``otherwise`` decision: capabilities for its events, else the task's ``fallback``.
 
-        def run() -> None:
-            handled = set()
-            for ob in decision.obligations:
-                cap = self.capabilities.get(ob.event)
-                if cap is not None and not ob.negated:
-                    cap(ob, decision)
-                    handled.add(ob.event)
-            if fallback is not None and any(
-                not o.negated and o.event not in handled for o in decision.obligations
-            ):
+        Returns what ran, each with its outcome (every capability runs, whatever the others do).
+        """
+        fallback = getattr(self.tasks.get(rule.name), "fallback", None)
+        handled: set[str] = set()
+        out = self._capabilities(decision, handled)
+        if fallback is not None and any(not o.negated and o.event not in handled for o in decision.obligations):
+
+            def run() -> None:
                 fallback(decision)
 
-        return self._guarded("fallback", rule, decision, run)
+            out += self._guarded("fallback", rule, decision, run)
+        return out
 
-    def _guarded(self, what: str, rule: CompiledRule, decision: Decision, run: Callable[[], None]) -> bool:
-        """Run a task's code; a failure is logged and counted, never raised into the caller."""
+    def _guarded(self, what: str, rule: CompiledRule, decision: Decision, run: Callable[[], None]) -> list[Ran]:
+        """Run a task's code; a failure is logged and counted, never raised into the caller.
+
+        Capabilities composed inside it report their own outcomes; a task method's outcome
+        is one more (``event`` None).
+        """
+        runs: list[Ran] = []
+        token = _RUNS.set(runs)
         try:
             run()
-            return True
-        except Exception:
+            if what == "task" and not runs:
+                runs.append(Ran("task", None))
+        except _Failed:
+            pass  # composed capabilities failed: their outcomes are already in `runs`
+        except Exception as e:
             self.failures += 1
             log.exception("%s for %s failed on decision %s", what, rule.name, decision.id)
-            return False
+            runs.append(Ran(what, None, _describe(e)))
+        finally:
+            _RUNS.reset(token)
+        return runs
+
+
+class _Failed(Exception):
+    """Raised by :meth:`Implementations.compose` after every capability ran, when some failed."""
+
+    def __init__(self, errors: list[Ran]) -> None:
+        super().__init__("; ".join(f"{r.event}: {r.error}" for r in errors))
+        self.errors = errors
+
+
+# the outcomes of the capabilities composed inside one guarded run (a task may call compose)
+_RUNS: contextvars.ContextVar[list[Ran] | None] = contextvars.ContextVar("cosleec_runs", default=None)
+
+
+def _describe(e: BaseException) -> str:
+    """An exception in one bounded line: ``ValueError: no gripper`` (at most 300 characters)."""
+    text = f"{type(e).__name__}: {e}"
+    return text if len(text) <= 300 else text[:300] + f"... ({len(text) - 300} more characters)"

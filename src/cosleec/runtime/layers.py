@@ -81,16 +81,15 @@ class LayerState:
 
 
 def evaluate(conds: Iterable[Clause], v: Values) -> tuple[tuple[bool | None, ...], tuple[str, ...]]:
-    """Every condition's value (None when a measure it reads has no value) and those measures."""
+    """Every condition's three-valued value (Kleene: None when unknown values decide it) and
+    the measures without a value that the conditions read, in order."""
     out: list[bool | None] = []
     missing: list[str] = []
     for c in conds:
-        try:
-            out.append(bool(c.condition(v)))
-        except KeyError as e:
-            out.append(None)
-            name = e.args[0] if e.args else "?"
-            if name not in missing:
+        x = c.value(v)
+        out.append(x)
+        for name in sorted(c.reads):
+            if name not in v and name not in missing:
                 missing.append(name)
     return tuple(out), tuple(missing)
 

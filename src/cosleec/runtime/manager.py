@@ -2,38 +2,76 @@
 
 It plays the paper's *Manager* role (owns the rules and the context) and hosts the COP
 *Layer Manager* (:mod:`cosleec.runtime.layers`); a *Context Listener* feeds it from the
-robot's topics (``cosleec.nodes``). Every state change happens under one lock, so a
-trigger is always decided against a context that no update has half-changed;
-implementations run outside the lock, so a slow or failing task never blocks it.
+robot's topics (``cosleec.nodes``).
+
+Every state change happens in one *step* under one lock, so a trigger is always decided
+against a context that no update has half-changed. A step ends by committing what it
+changed together with its records -- to the journal (one SQLite transaction), then to the
+audit log -- still under the lock: no change without its record, no record without its
+change, and records in the order the changes were made. Observers then hear the records
+in that same order. Implementations run outside the lock, so a slow or failing task never
+blocks it; what they did is recorded by a step of its own (``task-done``/``task-failed``).
+
+What happens when the runtime does not know (each a documented policy, fail closed):
+
+- *an unknown measure*: conditions are three-valued (Kleene). A clause choice that stays
+  unknown makes the decision **undetermined**: nothing runs, and the prohibitions of every
+  clause that could apply are enforced (so not knowing never allows what one reading of
+  the rules forbids). The same policy applies to the trigger condition, to the ``unless``
+  of a braced inner response and to ``otherwise`` responses.
+- *a deadline that depends on an unknown measure*: an obligation's deadline is read as now
+  (the strictest), a prohibition's as :data:`~cosleec.runtime.model.MAX_WINDOW_S` (in
+  force, in effect, until the Manager is restarted without it).
+- *an event no declaration names*: :meth:`Manager.event` and :meth:`Manager.request` raise
+  ContextError (``unknown_events="raise"``, the default) or refuse it and record why
+  (``"refuse"``: ``event`` does nothing, ``request`` answers False).
+- *a failed journal*: the Manager stops deciding (JournalError), and ``request`` refuses.
 """
 
 from __future__ import annotations
 
+import contextlib
+import dataclasses
+import datetime
+import difflib
+import functools
 import itertools
+import json
 import logging
 import threading
+import time
+import uuid
 from collections import deque
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
 from pathlib import Path
 from typing import Any, TypeVar
 
 from cosleec.cop import Snapshot
-from cosleec.lang import HedgeSemantics, Specification, Unknowns, choose
+from cosleec.lang import HedgeSemantics, Specification, Unknowns, candidates, choose
 from cosleec.runtime.audit import AuditLog
 from cosleec.runtime.clock import Clock, MonotonicClock
 from cosleec.runtime.context import Context
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.errors import ConfigurationError, ContextError
-from cosleec.runtime.implementations import Capability, Implementations
+from cosleec.runtime.implementations import Capability, Implementations, Ran
+from cosleec.runtime.journal import Change, Journal, JournalError, Saved
 from cosleec.runtime.layers import LayerManager, LayerSwitch, evaluate
-from cosleec.runtime.model import CompiledRule, Obligation, ResponseSpec
-from cosleec.runtime.obligations import Outcome, Tracked, Tracker
+from cosleec.runtime.model import MAX_WINDOW_S, CompiledRule, Obligation, ResponseSpec
+from cosleec.runtime.obligations import PENDING, Outcome, Tracked, Tracker
 from cosleec.runtime.ruleset import RuleSet
 from cosleec.runtime.tasks import Task
 
 E = TypeVar("E", bound=StrEnum)
+log = logging.getLogger("cosleec.runtime")
+
+
+class UnknownEvents(StrEnum):
+    """What :meth:`Manager.event` and :meth:`Manager.request` do with an event no declaration names."""
+
+    RAISE = "raise"  # ContextError naming the event and the closest declared names
+    REFUSE = "refuse"  # record it as rejected; request answers False, event does nothing
 
 
 def _option(kind: type[E], value: object, name: str) -> E:
@@ -44,19 +82,46 @@ def _option(kind: type[E], value: object, name: str) -> E:
         except ValueError:
             pass
     choices = ", ".join(repr(str(k)) for k in kind)
-    raise ConfigurationError(f"{name} must be one of {choices}, not {value!r}")
+    raise ConfigurationError(f"{name} must be one of {choices}, not {_cut(repr(value))}")
+
+
+def _cut(text: str, n: int = 120) -> str:
+    """``text`` cut to ``n`` characters: reasons never echo a huge input whole."""
+    return text if len(text) <= n else f"{text[:n]}... ({len(text) - n} more characters)"
 
 
 @dataclass(frozen=True)
 class RuntimeEvent:
     """What observers (terminal display, ROS publishers, the audit log, tests) are told, in order.
 
-    ``kind`` is one of context, layers, decision, obligation, refused, rejected, task-failed.
+    ``kind`` is one of event, context, layers, decision, obligation, refused, rejected,
+    task-done, task-failed, task-interrupted, restored, dropped. ``seq`` numbers the
+    records of one Manager (continued across restarts with a journal, or from the audit
+    log it appends to); 0 when nothing records.
     """
 
     kind: str
     time: float
     data: dict[str, Any] = field(default_factory=dict)
+    seq: int = 0
+
+
+@dataclass
+class _Step:
+    """What one locked step changed: its records, in order, and the journal's share of it."""
+
+    events: list[RuntimeEvent] = field(default_factory=list)
+    change: Change = field(default_factory=Change)
+    more: bool = False  # a batched tick left deadlines for the next batch
+
+
+@dataclass
+class _Issued:
+    """The obligations of a response, or -- undetermined -- the prohibitions it might impose."""
+
+    obligations: tuple[Obligation, ...]
+    missing: tuple[str, ...] = ()
+    determined: bool = True
 
 
 class Manager:
@@ -71,11 +136,15 @@ class Manager:
     Options: ``semantics`` (``"last-wins"`` or ``"nested"``, :class:`HedgeSemantics`);
     ``clock`` -- a :class:`Clock` (monotonic by default; a VirtualClock for tests);
     ``unknown`` -- how a clause condition over a measure with no value is read
-    (``"undetermined"``, the fail-closed default: the decision is undetermined and nothing
-    runs; ``"false"``/``"true"``); ``untimed`` -- the deadline of an untimed response
-    (``"none"``, ``"immediate"`` or seconds); ``max_age`` -- seconds after which a
-    measure's value is stale; ``audit`` -- a JSON Lines audit log; ``history`` -- how
-    many decisions :attr:`decisions` keeps; ``dispatch=False`` decides without running
+    (``"undetermined"``, the fail-closed default, see the module docstring;
+    ``"false"``/``"true"``); ``unknown_events`` -- ``"raise"`` or ``"refuse"``;
+    ``untimed`` -- the deadline of an untimed response (``"none"``, ``"immediate"`` or
+    seconds); ``max_age`` -- seconds after which a measure's value is stale; ``audit`` --
+    a JSON Lines audit log; ``journal`` -- a SQLite file the state survives a crash in
+    (:mod:`cosleec.runtime.journal`); ``history`` -- how many decisions :attr:`decisions`
+    keeps; ``max_depth`` -- how deeply implementations may trigger rules whose
+    implementations trigger rules (a capability that triggers its own rule is stopped
+    there, with a ``task-failed`` record); ``dispatch=False`` decides without running
     implementations (the ROS Manager node, ``cosleec decide``).
     """
 
@@ -86,10 +155,13 @@ class Manager:
         semantics: HedgeSemantics | str = HedgeSemantics.LAST_WINS,
         clock: Clock | None = None,
         unknown: Unknowns | str = Unknowns.UNDETERMINED,
+        unknown_events: UnknownEvents | str = UnknownEvents.RAISE,
         untimed: str | float = "none",
         audit: str | Path | AuditLog | None = None,
+        journal: str | Path | Journal | None = None,
         max_age: Mapping[str, float] | None = None,
         history: int = 10_000,
+        max_depth: int = 16,
         dispatch: bool = True,
     ) -> None:
         if not isinstance(rules, RuleSet):
@@ -104,19 +176,44 @@ class Manager:
         self.layer_manager = LayerManager(
             rules, _option(HedgeSemantics, semantics, "semantics"), _option(Unknowns, unknown, "unknown")
         )
-        self.tracker = Tracker(untimed)
+        self.unknown_events = _option(UnknownEvents, unknown_events, "unknown_events")
+        self.tracker = Tracker(_untimed(untimed))
         self.implementations = Implementations(rules)
         self.dispatch_locally = dispatch
-        self.audit = audit if isinstance(audit, AuditLog) else AuditLog(audit) if audit else None
+        if isinstance(max_depth, bool) or not isinstance(max_depth, int) or max_depth < 1:
+            raise ConfigurationError(f"max_depth must be a whole number of at least 1, not {max_depth!r}")
+        self.max_depth = max_depth
         self.decisions: deque[Decision] = deque(maxlen=history)
-        self.stats = {"updates": 0, "rejected": 0, "events": 0, "decisions": 0, "refused": 0, "violations": 0}
+        self.stats = {
+            "updates": 0,
+            "rejected": 0,
+            "events": 0,
+            "decisions": 0,
+            "refused": 0,
+            "violations": 0,
+            "undetermined": 0,
+            "task_failures": 0,
+        }
+        self.run_id = uuid.uuid4().hex[:12]
         self._lock = threading.RLock()
-        self._seq = itertools.count(1)
-        self._ids = itertools.count(1)
+        # the next decision id, causal sequence number (occurrences and obligations) and record number
+        self._next = {"decision": 1, "seq": 1, "record": 1}
         self._observers: list[Callable[[RuntimeEvent], None]] = []
+        self._delivery: deque[RuntimeEvent] = deque()
+        self._delivering = threading.Lock()
+        self._depth = threading.local()
         self._wake = threading.Condition()
         self._timer: threading.Thread | None = None
         self._stop = threading.Event()
+        self._broken: JournalError | None = None
+        self._interrupted: list[dict[str, Any]] = []
+        self.audit = audit if isinstance(audit, AuditLog) else AuditLog(audit) if audit else None
+        if self.audit is not None:  # sequence numbers go on from where the log ends
+            self._next["record"] = self.audit.last_seq + 1
+        self.journal = journal if isinstance(journal, Journal) else Journal(journal) if journal else None
+        self._restored: Saved | None = None
+        if self.journal is not None:
+            self._open_journal(self.journal)
 
     @classmethod
     def from_file(cls, path: str | Path, *, infer_defs: bool = False, **options: Any) -> Manager:
@@ -156,84 +253,97 @@ class Manager:
 
         Use it for actions many rules share: a rule without a task, and every ``otherwise``
         fallback, runs the capability of each event its decision obliges. A second
-        registration for the same event replaces the first.
+        registration for the same event replaces the first. BindingError, with the closest
+        names, when no response of the rules names ``event``.
         """
         return self.implementations.capability(event)
 
     def subscribe(self, fn: Callable[[RuntimeEvent], None]) -> Callable[[], None]:
         """Call ``fn`` with every :class:`RuntimeEvent` from now on; returns the function that unsubscribes.
 
-        Observers run in order on the thread that caused the event, once the state change is
-        complete; one that raises is logged and ignored. Keep them quick: they delay the
-        caller (the Manager node publishes on its topics from one). While anyone listens,
-        the Manager builds event payloads it otherwise skips.
+        Observers hear every record once, in the order the records were made, one at a time;
+        usually on the thread that caused them, once the step is complete (under
+        concurrency, possibly on another caller's thread, a moment later). One that raises
+        is logged and ignored. Keep them quick: they delay the caller (the Manager node
+        publishes on its topics from one). While anyone listens, the Manager builds event
+        payloads it otherwise skips.
         """
         self._observers.append(fn)
         return lambda: self._observers.remove(fn)
 
     def start(self, *, check: bool = True, timer: bool = False) -> Manager:
-        """Check that every clause has an implementation; optionally run deadlines on a thread.
+        """Check that every clause has an implementation; judge what happened while down; optionally
+        run deadlines on a thread.
 
         The check raises BindingError listing what is missing; it is skipped with
-        ``check=False`` or when the Manager does not dispatch. With ``timer=True`` a daemon
-        thread judges deadlines and stale values as time passes; without it, call
-        :meth:`tick` yourself (as tests with a VirtualClock do). Returns ``self``.
+        ``check=False`` or when the Manager does not dispatch. With a journal, deadlines
+        that passed while the Manager was down are judged now (their ``otherwise`` runs
+        once). With ``timer=True`` a daemon thread judges deadlines and stale values as time
+        passes; without it, call :meth:`tick` yourself (as tests with a VirtualClock do).
+        Returns ``self``.
         """
         if check and self.dispatch_locally:
             self.implementations.check()
         if self.dispatch_locally:
             self.implementations.prepare()  # start-up work, not the first trigger's latency
+        self.tick()
         if timer and self._timer is None:
             self._timer = threading.Thread(target=self._run_timer, name="cosleec-deadlines", daemon=True)
             self._timer.start()
         return self
 
     def close(self) -> None:
-        """Stop the timer thread (waiting up to 5 s) and close the audit log.
+        """Stop the timer thread (waiting up to 5 s), then close the journal and the audit log.
 
-        Call it once, when done: with an audit log, a Manager used after closing fails on
-        its next record.
+        Call it once, when done: a Manager used after closing fails on its next record.
         """
         self._stop.set()
         with self._wake:
             self._wake.notify_all()
         if self._timer is not None:
             self._timer.join(5)
-        if self.audit is not None:
-            self.audit.close()
+        with self._lock:
+            if self.journal is not None:
+                self.journal.close()
+            if self.audit is not None:
+                self.audit.close()
 
     # ------------------------------------------------------------------ context
     def update(self, values: Mapping[str, object] | None = None, /, **kw: object) -> list[LayerSwitch]:
         """Set measure values atomically; returns the layer switches ``(rule, old, new)``.
 
-        A wrong type, unknown measure or value outside a scale raises ContextError with the
-        reason, and nothing changes.
+        A wrong type, unknown measure, value outside a scale, non-finite or out-of-range
+        number raises ContextError with the reason, and nothing changes (the rejection is
+        recorded).
         """
         updates = {**(values or {}), **kw}
-        events: list[RuntimeEvent] = []
-        with self._lock:
+        rejected: ContextError | None = None
+        with self._step() as step:
             try:
                 stored = self.context.validate(updates)
             except ContextError as e:
                 self.stats["rejected"] += 1
-                self._emit_later(
-                    events, "rejected", {"reason": str(e), "update": {k: repr(v) for k, v in updates.items()}}
-                )
-                self._flush(events)
-                raise
-            now = self.clock.now()
-            self.stats["updates"] += 1
-            self._advance(now, events)
-            changed = self.context.apply(stored, now)
-            switches = self.layer_manager.update(changed, self.context.values) if changed else []
-            if changed and self._listening:
-                self._emit_later(
-                    events,
-                    "context",
-                    {"values": self.context.external(sorted(changed)), "version": self.context.version},
-                )
-            result = self._switched(switches, events)
-        self._flush(events)
+                shown = {_cut(str(k), 80): _show(v) for k, v in itertools.islice(updates.items(), 20)}
+                self._emit(step, "rejected", {"reason": _cut(str(e), 300), "update": shown})
+                rejected = e
+            else:
+                now = self.clock.now()
+                self.stats["updates"] += 1
+                self._advance(now, step)
+                changed = self.context.apply(stored, now)
+                if self.journal is not None:
+                    for n in stored:
+                        step.change.context[n] = (self.context.external((n,))[n], now)
+                switches = self.layer_manager.update(changed, self.context.values) if changed else []
+                if changed and self._recording:
+                    self._emit(
+                        step,
+                        "context",
+                        {"values": self.context.external(sorted(changed)), "version": self.context.version},
+                    )
+                result = self._switched(switches, step)
+        if rejected is not None:
+            raise rejected
         return result
 
     def values(self) -> dict[str, Any]:
@@ -259,58 +369,62 @@ class Manager:
     def event(self, name: str) -> list[Decision]:
         """An event occurred: it may fulfil or violate obligations, and it triggers rules.
 
-        Returns the decisions of the rules it triggered (whose trigger condition held).
+        Returns the decisions of the rules it triggered (whose trigger condition held, or
+        might hold: an undetermined decision is returned too). An event no declaration
+        names follows ``unknown_events``.
         """
-        events: list[RuntimeEvent] = []
         followups: list[tuple[CompiledRule, Decision]] = []
-        with self._lock:
-            if name not in self.ruleset.events:
-                self.stats["rejected"] += 1
-                self._emit_later(events, "rejected", {"reason": f"unknown event {name!r}"})
-                self._flush(events)
-                raise ContextError(f"unknown event {name!r}")
+        decisions: list[tuple[CompiledRule, Decision, Snapshot | None]] = []
+        with self._step() as step:
+            if not self._known(name, "event", step):
+                return []
             now = self.clock.now()
-            seq = next(self._seq)
+            seq = self._count("seq")
             self.stats["events"] += 1
-            followups += self._advance(now, events)
+            followups += self._advance(now, step)
+            if self._recording:
+                self._emit(step, "event", {"event": name, "causal": seq})
             out = self.tracker.occur(name, now, seq)
-            followups += self._settle(out, now, seq, events)
-            decisions: list[tuple[CompiledRule, Decision, Snapshot | None]] = []
+            followups += self._settle(out, now, seq, step)
             for rule in self.ruleset.by_trigger.get(name, ()):
                 d = self._decide(rule, name, now)
                 if d is None:
                     continue
                 # the rule's composition as the Layer Manager has it at this trigger: the
                 # dispatch runs under it, whatever the context does in the meantime
-                decisions.append((rule, d, self.layer_manager.composition_of(rule) if d.clause is not None else None))
-                self._record(d, events)
+                composition = self.layer_manager.composition_of(rule) if d.clause is not None else None
+                decisions.append((rule, d, composition))
+                self._record(d, step, queue=composition is not None)
                 for ob in d.obligations:
-                    t = self.tracker.start(d.id, d.clause, ob, now, seq)
-                    if self._listening:
-                        self._emit_later(events, "obligation", t.to_json())
-        self._flush(events)
+                    self._track(self.tracker.start(d.id, d.clause, ob, now, seq), step)
         self._notify_timer()
         if self.dispatch_locally:
             for rule, d, composition in decisions:
-                if composition is not None and not self.implementations.dispatch(rule, d, composition):
-                    self._flush([RuntimeEvent("task-failed", now, {"rule": rule.name, "decision": d.id})])
-            for rule, d in followups:
-                self.implementations.dispatch_fallback(rule, d)
+                if composition is not None:
+                    self._run(rule, d, functools.partial(self.implementations.dispatch, rule, d, composition))
+            self._fallbacks(followups)
         return [d for _, d, _ in decisions]
 
     def request(self, name: str) -> bool:
-        """May ``name`` happen now? False (and the attempt recorded) while a prohibition holds."""
-        events: list[RuntimeEvent] = []
-        with self._lock:
+        """May ``name`` happen now? False (and the attempt recorded) while a prohibition holds.
+
+        Also False when the Manager cannot keep its state (a failed journal), and for an
+        event no declaration names under ``unknown_events="refuse"``.
+        """
+        if self._broken is not None:
+            return False
+        with self._step() as step:
+            if not self._known(name, "request", step):
+                return False
             now = self.clock.now()
-            self._advance(now, events)
+            followups = self._advance(now, step)
             forbidding = self.tracker.forbidding(name, now)
             for t in forbidding:
                 t.refused += 1
             if forbidding:
                 self.stats["refused"] += 1
-                self._emit_later(
-                    events,
+                self._emit(
+                    step,
                     "refused",
                     {
                         "event": name,
@@ -318,18 +432,26 @@ class Manager:
                         "obligations": [t.id for t in forbidding],
                     },
                 )
-        self._flush(events)
+        if self.dispatch_locally:
+            self._fallbacks(followups)
         return not forbidding
 
     def tick(self) -> list[Decision]:
-        """Process deadlines and stale values up to now (the timer thread calls this too)."""
-        events: list[RuntimeEvent] = []
-        with self._lock:
-            followups = self._advance(self.clock.now(), events)
-        self._flush(events)
+        """Process deadlines and stale values up to now (the timer thread calls this too).
+
+        Many deadlines due at once are judged in batches, releasing the lock between them,
+        so triggers and requests are not held up. Returns the ``otherwise`` decisions started.
+        """
+        followups: list[tuple[CompiledRule, Decision]] = []
+        more = True
+        while more:
+            with self._step() as step:
+                now = self.clock.now()
+                batch = self._advance(now, step, limit=1000)
+                more = step.more
+            followups += batch
         if self.dispatch_locally:
-            for rule, d in followups:
-                self.implementations.dispatch_fallback(rule, d)
+            self._fallbacks(followups)
         return [d for _, d in followups]
 
     def outstanding(self) -> list[Tracked]:
@@ -340,66 +462,183 @@ class Manager:
         with self._lock:
             return self.tracker.outstanding()
 
+    # ------------------------------------------------------------------ steps
+    @contextlib.contextmanager
+    def _step(self) -> Iterator[_Step]:
+        """One locked step: what it changes is committed with its records when it ends, even
+        when it ends by an exception (every change made so far has its record); observers
+        hear the records after the lock is released, in order."""
+        if self._broken is not None:
+            raise self._broken
+        try:
+            with self._lock:
+                step = _Step()
+                try:
+                    yield step
+                finally:
+                    self._commit(step)
+        finally:
+            self._deliver()
+
+    def _count(self, name: str) -> int:
+        """The next number of counter ``name`` (decision, seq, record), used up."""
+        n = self._next[name]
+        self._next[name] = n + 1
+        return n
+
+    def _commit(self, step: _Step) -> None:
+        if not step.events and not step.change:
+            return
+        stamped = []
+        wall = None
+        full: list[tuple[int, dict[str, Any]]] = []
+        keep = self.audit is not None or self.journal is not None
+        for ev in step.events:
+            ev = dataclasses.replace(ev, seq=self._count("record"))
+            stamped.append(ev)
+            if keep:
+                if wall is None:
+                    wall = datetime.datetime.now(datetime.UTC).isoformat(timespec="microseconds")
+                full.append(
+                    (
+                        ev.seq,
+                        {
+                            "seq": ev.seq,
+                            "kind": ev.kind,
+                            "time": ev.time,
+                            "wall": wall,
+                            "mono": time.monotonic(),
+                            "run": self.run_id,
+                            "rules": self.ruleset.digest[:16],
+                            **ev.data,
+                        },
+                    )
+                )
+        if self.journal is not None:
+            try:
+                self.journal.commit(
+                    step.change, full if self.audit is not None else (), self._meta(), self.clock.now()
+                )
+            except JournalError as e:
+                self._broken = e
+                log.error("journal failed, the Manager stops deciding: %s", e)
+                raise
+        if self.audit is not None and full:
+            self.audit.write_many(r for _, r in full)
+            if self.journal is not None:
+                self.journal.exported(full[-1][0])
+        if self._observers:
+            self._delivery.extend(stamped)
+
+    def _deliver(self) -> None:
+        """Hand queued records to observers in order; whoever holds the delivery lock delivers for all."""
+        while self._delivery:
+            if not self._delivering.acquire(blocking=False):
+                return  # another thread is delivering: it delivers ours too, in order
+            try:
+                while self._delivery:
+                    ev = self._delivery.popleft()
+                    for fn in list(self._observers):
+                        try:
+                            fn(ev)
+                        except Exception:  # an observer must never break the runtime
+                            log.exception("observer failed")
+            finally:
+                self._delivering.release()
+
+    def _meta(self) -> dict[str, str]:
+        counters = {**self._next, "obligation": self.tracker.next_id, "version": self.context.version}
+        return {"rules": self.ruleset.digest, "run": self.run_id, "counters": json.dumps(counters)}
+
     # ------------------------------------------------------------------ internals (under the lock)
-    def _advance(self, now: float, events: list[RuntimeEvent]) -> list[tuple[CompiledRule, Decision]]:
+    def _known(self, name: str, what: str, step: _Step) -> bool:
+        """Is ``name`` a declared event? If not, apply ``unknown_events`` (record, then raise or refuse)."""
+        if name in self.ruleset.events:
+            return True
+        self.stats["rejected"] += 1
+        close = difflib.get_close_matches(name, sorted(self.ruleset.events), n=3) if len(name) < 200 else []
+        reason = f"unknown event {_cut(repr(name))}"
+        hint = f"did you mean {', '.join(close)}?" if close else "declare it in the rules' def block"
+        self._emit(step, "rejected", {"reason": reason, "what": what, "hint": hint})
+        if self.unknown_events == UnknownEvents.RAISE:
+            raise ContextError(reason, hint=hint)
+        return False
+
+    def _advance(
+        self, now: float, step: _Step, limit: int | None = None
+    ) -> list[tuple[CompiledRule, Decision]]:
         gone = self.context.expire(now)
         if gone:
             switches = self.layer_manager.update(gone, self.context.values)
-            self._emit_later(
-                events, "context", {"values": dict.fromkeys(sorted(gone)), "stale": sorted(gone)}
-            )
-            self._switched(switches, events)
+            self._emit(step, "context", {"values": dict.fromkeys(sorted(gone)), "stale": sorted(gone)})
+            for n in gone:
+                step.change.context[n] = None
+            self._switched(switches, step)
         followups: list[tuple[CompiledRule, Decision]] = []
+        judged = 0
         for _ in range(1000):  # a chain of otherwise fallbacks can expire within one advance
-            out = self.tracker.due(now)
+            out = self.tracker.due(now, None if limit is None else limit - judged)
             if not out.changed:
                 break
-            followups += self._settle(out, now, next(self._seq), events)
+            judged += len(out.changed)
+            followups += self._settle(out, now, self._count("seq"), step)
+            if limit is not None and judged >= limit:
+                step.more = True
+                break
         return followups
 
-    def _switched(self, switches: list[LayerSwitch], events: list[RuntimeEvent]) -> list[LayerSwitch]:
+    def _switched(self, switches: list[LayerSwitch], step: _Step) -> list[LayerSwitch]:
         """Announce layer switches to observers; returns them."""
-        result = switches
-        if result and self._listening:
-            self._emit_later(events, "layers", self.layer_manager.state(result).to_json())
-        return result
+        if switches and self._recording:
+            self._emit(step, "layers", self.layer_manager.state(switches).to_json())
+        return switches
+
+    def _track(self, t: Tracked, step: _Step) -> None:
+        """Record an obligation's new state (and keep it in the journal while it is pending)."""
+        if self._recording:
+            rec = t.to_json()
+            self._emit(step, "obligation", rec)
+            if self.journal is not None:
+                step.change.obligations[t.id] = rec if t.status == PENDING else None
 
     def _settle(
-        self, out: Outcome, now: float, seq: int, events: list[RuntimeEvent]
+        self, out: Outcome, now: float, seq: int, step: _Step
     ) -> list[tuple[CompiledRule, Decision]]:
         followups = []
         for t in out.changed:
             if t.status == "violated" and not t.late:
                 self.stats["violations"] += 1
-            self._emit_later(events, "obligation", t.to_json())
+            self._track(t, step)
         for t, start in out.fallbacks:
             ob = t.obligation
             assert ob.otherwise is not None
             rule = self.ruleset.rule(t.rule)
-            obligations = self._issue(ob.otherwise, rule.name)
-            why = f"{rule.name}: {ob.describe()} was violated at {start:g}; otherwise " + (
-                " and ".join(o.describe() for o in obligations) or "nothing is required"
-            )
+            issued = self._issue(ob.otherwise, rule.name)
+            what = " and ".join(o.describe() for o in issued.obligations) or "nothing is required"
+            if not issued.determined:
+                what = f"undetermined (no value for {', '.join(issued.missing)}); meanwhile {what}"
+            why = f"{rule.name}: {ob.describe()} was violated at {start:g}; otherwise {what}"
             d = Decision(
-                id=next(self._ids),
+                id=self._count("decision"),
                 time=start,
                 event="otherwise",
                 rule=rule.name,
-                clause=t.clause,
+                clause=t.clause if issued.determined else None,
                 layer=None,
                 semantics=self.semantics,
                 values={},
                 conditions=(),
-                obligations=obligations,
+                obligations=issued.obligations,
+                missing=issued.missing,
                 reason=why,
                 context_version=self.context.version,
                 violated=t.id,
             )
-            self._record(d, events)
-            for o in obligations:
-                nt = self.tracker.start(d.id, d.clause, o, start, seq, t.depth + 1)
-                self._emit_later(events, "obligation", nt.to_json())
-            followups.append((rule, d))
+            self._record(d, step, queue=issued.determined)
+            for o in issued.obligations:
+                self._track(self.tracker.start(d.id, d.clause, o, start, seq, t.depth + 1), step)
+            if issued.determined:
+                followups.append((rule, d))
         return followups
 
     def _decide(self, rule: CompiledRule, event: str, now: float) -> Decision | None:
@@ -407,15 +646,25 @@ class Manager:
         missing: tuple[str, ...] = ()
         try:
             fired: bool | None = bool(rule.condition(v))
-        except KeyError as e:
-            fired, missing = None, (str(e.args[0]),)
+        except KeyError:
+            x = rule.trigger_kleene(v)
+            fired = None if x is None else bool(x)
+            if fired is None:
+                missing = tuple(sorted(n for n in rule.trigger_reads if n not in v))
         if fired is False:
             return None
         status = self.layer_manager.status[rule.index]
         clause = status.clause if fired else None
-        if clause is None and not missing:
+        if fired and clause is None:
             missing = status.missing
-        obligations = self._issue(rule.response_of(clause), rule.name) if clause is not None else ()
+        if clause is not None:
+            issued = self._issue(rule.response_of(clause), rule.name)
+            if not issued.determined:  # an inner response's own `unless` is unknown
+                clause, missing = None, issued.missing
+        else:
+            issued = self._forbidden(rule, status.values, fired)
+        if clause is None:
+            self.stats["undetermined"] += 1
         conds = ((0, rule.trigger_text, fired), *zip(rule.clause_ids, rule.clause_texts, status.values))
         values = {
             n: (lits[x] if lits is not None and x is not None else x)
@@ -424,7 +673,7 @@ class Manager:
         }
         # the explanation is computed from these parts when first read (Decision.explanation)
         return Decision(
-            id=next(self._ids),
+            id=self._count("decision"),
             time=now,
             event=event,
             rule=rule.name,
@@ -433,30 +682,59 @@ class Manager:
             semantics=self.semantics,
             values=values,
             conditions=conds,
-            obligations=obligations,
+            obligations=issued.obligations,
             missing=missing,
             context_version=self.context.version,
             unknowns=self.layer_manager.unknowns,
         )
 
-    def _issue(self, spec: ResponseSpec | None, rule: str) -> tuple[Obligation, ...]:
-        """The concrete obligations of a response, starting now (deadlines on this snapshot)."""
+    def _forbidden(self, rule: CompiledRule, values: tuple[bool | None, ...], fired: bool | None) -> _Issued:
+        """An undetermined decision's obligations: the prohibitions of every clause that could apply."""
+        clauses = candidates(values, self.semantics) if values else frozenset({0})
+        out: list[Obligation] = []
+        for k in sorted(clauses):
+            spec = rule.response_of(k)
+            if spec is not None:
+                out += _prohibitions(self._issue(spec, rule.name, any_clause=True).obligations)
+        return _Issued(tuple(out), determined=False)
+
+    def _issue(self, spec: ResponseSpec | None, rule: str, *, any_clause: bool = False) -> _Issued:
+        """The concrete obligations of a response, starting now (deadlines on this snapshot).
+
+        A braced inner response chooses among its own clauses here; when that choice is
+        undetermined, the result is undetermined and holds the prohibitions of every inner
+        clause that could apply. ``any_clause`` collects every candidate's obligations.
+        """
         if spec is None:
-            return ()
+            return _Issued(())
         v = self.context.values
         if spec.clauses:  # a braced inner response: its own hedges, read when it starts
-            vals, _ = evaluate(spec.clauses, v)
+            vals, missing = evaluate(spec.clauses, v)
             k = choose(vals, self.semantics, self.layer_manager.unknowns)
+            if k is None or any_clause:
+                ks = candidates(vals, self.semantics) if k is None else frozenset({k})
+                out: list[Obligation] = []
+                for j in sorted(ks):
+                    sub = self._issue(spec.clauses[j - 1].response, rule, any_clause=True) if j else None
+                    out += _prohibitions(sub.obligations if sub is not None else self._items(spec, rule))
+                if k is None:
+                    return _Issued(tuple(out), missing, determined=False)
             if k:
                 return self._issue(spec.clauses[k - 1].response, rule)
+        return _Issued(self._items(spec, rule))
+
+    def _items(self, spec: ResponseSpec, rule: str) -> tuple[Obligation, ...]:
+        v = self.context.values
         out = []
         for it in spec.items:
-            hi = lo = None
             try:
                 hi = it.hi(v) if it.hi is not None else None
+            except KeyError:  # unknown (or out of range): an obligation is due now, a prohibition holds on
+                hi = MAX_WINDOW_S if it.negated else 0.0
+            try:
                 lo = it.lo(v) if it.lo is not None else None
             except KeyError:
-                hi = 0.0  # a deadline that depends on an unknown measure: the strictest reading
+                lo = 0.0  # the earliest start: the widest window either way
             alts = tuple(a.event for a in it.alternative.items) if it.alternative is not None else ()
             out.append(
                 Obligation(
@@ -468,34 +746,63 @@ class Manager:
                     alternatives=alts,
                     otherwise=it.otherwise,
                     rule=rule,
+                    item=it.key,
                 )
             )
         return tuple(out)
 
-    def _record(self, d: Decision, events: list[RuntimeEvent]) -> None:
+    def _record(self, d: Decision, step: _Step, *, queue: bool = False) -> None:
+        """Record a decision; ``queue`` puts its implementation in the journal's outbox until it ran."""
         self.decisions.append(d)
         self.stats["decisions"] += 1
-        if self._listening:
-            self._emit_later(events, "decision", d.to_json())
+        if self._recording:
+            rec = d.to_json()
+            self._emit(step, "decision", rec)
+            if queue and self.journal is not None and self.dispatch_locally:
+                step.change.outbox[d.id] = {"decision": d.id, "rule": d.rule, "event": d.event}
 
-    def _emit_later(self, events: list[RuntimeEvent], kind: str, data: dict[str, Any]) -> None:
-        events.append(RuntimeEvent(kind, self.clock.now(), data))
+    def _emit(self, step: _Step, kind: str, data: dict[str, Any]) -> None:
+        step.events.append(RuntimeEvent(kind, self.clock.now(), data))
 
     @property
-    def _listening(self) -> bool:
-        """Does anyone read runtime events? If not, no event payload is built."""
-        return bool(self._observers) or self.audit is not None
+    def _recording(self) -> bool:
+        """Does anyone read runtime events (observers, audit log, journal)? If not, no payload is built."""
+        return bool(self._observers) or self.audit is not None or self.journal is not None
 
-    # ------------------------------------------------------------------ outside the lock
-    def _flush(self, events: Iterable[RuntimeEvent]) -> None:
-        for ev in events:
-            if self.audit is not None:
-                self.audit.write({"kind": ev.kind, "time": ev.time, **ev.data})
-            for fn in list(self._observers):
-                try:
-                    fn(ev)
-                except Exception:  # an observer must never break the runtime
-                    logging.getLogger("cosleec.runtime").exception("observer failed")
+    # ------------------------------------------------------------------ implementations (outside the lock)
+    def _run(self, rule: CompiledRule, d: Decision, run: Callable[[], list[Ran]]) -> None:
+        """Run a decision's implementation once, then record each outcome in a step of its own."""
+        depth = getattr(self._depth, "n", 0)
+        if depth >= self.max_depth:
+            ran = [
+                Ran(
+                    "task",
+                    None,
+                    f"not run: implementations triggered rules {depth} deep (max_depth={self.max_depth}); "
+                    f"does an implementation of {rule.name} trigger {rule.trigger} again?",
+                )
+            ]
+            log.error("%s: %s", rule.name, ran[0].error)
+        else:
+            self._depth.n = depth + 1
+            try:
+                ran = run()
+            finally:
+                self._depth.n = depth
+        failed = [r for r in ran if not r.ok]
+        self.stats["task_failures"] += len(failed)
+        if not self._recording:
+            return
+        with self._step() as step:
+            for r in ran:
+                kind = "task-done" if r.ok else "task-failed"
+                self._emit(step, kind, {"rule": rule.name, "decision": d.id, "clause": d.clause, **r.to_json()})
+            if self.journal is not None and self.dispatch_locally:
+                step.change.outbox[d.id] = None
+
+    def _fallbacks(self, followups: list[tuple[CompiledRule, Decision]]) -> None:
+        for rule, d in followups:
+            self._run(rule, d, functools.partial(self.implementations.dispatch_fallback, rule, d))
 
     def _notify_timer(self) -> None:
         if self._timer is not None:
@@ -512,4 +819,115 @@ class Manager:
             with self._wake:
                 self._wake.wait(timeout=0.5 if wait is None else min(wait, 0.5))
             if not self._stop.is_set():
-                self.tick()
+                try:
+                    self.tick()
+                except JournalError:
+                    return  # logged where it happened; the Manager refuses from now on
+
+    # ------------------------------------------------------------------ restoring from a journal
+    def _open_journal(self, journal: Journal) -> None:
+        saved = journal.load()
+        if saved is None:
+            with self._step() as step:
+                self._emit(step, "restored", {"from": None, "rules_changed": False})
+            return
+        self._restored = saved
+        with self._step() as step:
+            self._restore(saved, step)
+
+    def _restore(self, saved: Saved, step: _Step) -> None:
+        """Take back what the journal kept (under the lock, as one step)."""
+        c = saved.counters
+        for name in ("decision", "seq", "record"):
+            self._next[name] = max(self._next[name], c.get(name, 1))
+        if self.audit is not None:  # records committed but not yet in the audit log (a crash between)
+            late = [r for r in saved.records if r.get("seq", 0) > self.audit.last_seq]
+            self.audit.write_many(late)
+            if late:
+                self._next["record"] = max(self._next["record"], late[-1]["seq"] + 1)
+        now = self.clock.now()
+        # the clock may have started again (a new process on a virtual clock, a reboot):
+        # shift saved clock times so that the time the Manager was down still passes
+        down = max(0.0, time.time() - saved.wall)
+        shift = 0.0 if now >= saved.clock else now - down - saved.clock
+        changed = saved.rules != self.ruleset.digest
+        dropped: list[str] = []
+        values: dict[str, Any] = {}
+        for name, (value, stamp) in saved.context.items():
+            if name not in self.context.measures:
+                dropped.append(f"measure {name}: the rules no longer declare it")
+                continue
+            try:
+                values[name] = self.context.validate({name: value})[name]
+            except ContextError as e:
+                dropped.append(f"measure {name}: {e}")
+                continue
+            self.context.stamps[name] = stamp + shift
+        self.context.values.update(values)
+        self.context.version = max(c.get("version", 0), 1 if values else 0)
+        self.layer_manager.update(set(values), self.context.values)
+        kept = 0
+        for rec in saved.obligations:
+            t = Tracked.from_json(rec)
+            item = self.ruleset.items.get(t.obligation.item)
+            if t.rule not in self.ruleset.by_name or item is None or item.event != t.event:
+                dropped.append(f"obligation {t.id} ({t.rule}: {t.obligation.describe()}): the rules no longer have it")
+                continue
+            t.obligation = dataclasses.replace(t.obligation, otherwise=item.otherwise)
+            t.start += shift
+            t.lo += shift
+            t.hi = None if t.hi is None else t.hi + shift
+            self.tracker.resume(t, c.get("obligation", 1))
+            kept += 1
+        for rec in saved.outbox:  # decided, but perhaps never run: recorded, not run again
+            self._interrupted.append(rec)
+            self._emit(step, "task-interrupted", {**rec, "reason": "the Manager stopped before it was known to have run"})
+            step.change.outbox[int(rec["decision"])] = None
+        for what in dropped:
+            self._emit(step, "dropped", {"what": what})
+        self._emit(
+            step,
+            "restored",
+            {
+                "from": saved.run,
+                "rules_changed": changed,
+                "context": sorted(values),
+                "obligations": kept,
+                "dropped": len(dropped),
+                "interrupted": len(saved.outbox),
+                "shift": shift,
+            },
+        )
+        if self.journal is not None:  # what was dropped leaves the journal in this same step
+            for name in saved.context:
+                if name not in values:
+                    step.change.context[name] = None
+            for rec in saved.obligations:
+                if not self.tracker.tracks(int(rec["id"])):
+                    step.change.obligations[int(rec["id"])] = None
+
+
+def _show(value: object) -> str:
+    """A value for a record, cut short; never fails (an int too long to print is described)."""
+    if isinstance(value, int) and value.bit_length() > 256:
+        return f"<an integer of {value.bit_length()} bits>"
+    try:
+        return _cut(repr(value), 80)
+    except Exception:  # a repr that raises must not lose the record
+        return f"<{type(value).__name__}>"
+
+
+def _prohibitions(obligations: tuple[Obligation, ...]) -> list[Obligation]:
+    return [o for o in obligations if o.negated]
+
+
+def _untimed(value: str | float) -> str | float:
+    """The ``untimed`` option checked: ``"none"``, ``"immediate"`` or a finite number of seconds >= 0."""
+    if value in ("none", "immediate"):
+        return value
+    if isinstance(value, int | float) and not isinstance(value, bool) and 0 <= value <= MAX_WINDOW_S:
+        return float(value)
+    raise ConfigurationError(
+        f"untimed must be 'none', 'immediate' or a number of seconds from 0 to {MAX_WINDOW_S:g}, "
+        f"not {_cut(repr(value))}"
+    )

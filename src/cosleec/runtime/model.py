@@ -19,11 +19,13 @@ may serve several Managers.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+import math
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 from cosleec.cop import Layer, LayerGroup, Snapshot
+from cosleec.errors import ConfigurationError
 from cosleec.lang import ast as A
 from cosleec.runtime.compile import Compiler, Values, text
 
@@ -48,6 +50,7 @@ class Obligation:
     alternatives: tuple[str, ...] = ()  # events of an `else` that also satisfy it
     otherwise: ResponseSpec | None = field(default=None, compare=False, repr=False)
     rule: str = ""
+    item: str = field(default="", compare=False)  # the response item it came from (ItemSpec.key)
 
     def to_json(self) -> dict[str, Any]:
         """The wire and audit form (see :meth:`from_json`)."""
@@ -59,6 +62,7 @@ class Obligation:
             "eventually": self.eventually,
             "alternatives": list(self.alternatives),
             "rule": self.rule,
+            "item": self.item,
             "otherwise": self.otherwise.first_json() if self.otherwise is not None else None,
         }
 
@@ -72,8 +76,9 @@ class Obligation:
             within_s=None if within is None else float(within),
             from_s=float(d.get("from_s", 0.0)),
             eventually=bool(d.get("eventually", False)),
-            alternatives=tuple(d.get("alternatives", ())),
+            alternatives=tuple(str(a) for a in d.get("alternatives", ())),
             rule=str(d.get("rule", "")),
+            item=str(d.get("item", "")),
         )
 
     def describe(self) -> str:
@@ -96,8 +101,13 @@ def _fmt_s(x: float) -> str:
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class ItemSpec:
-    """One compiled response item: the event, its window as functions of the context."""
+    """One compiled response item: the event, its window as functions of the context.
 
+    ``key`` names it within its rule set (``R1.2:0/o:1``: clause R1.2, item 0, its
+    ``otherwise``, item 1); a journal restores an obligation's ``otherwise`` by it.
+    """
+
+    key: str
     event: str
     negated: bool
     lo: Seconds | None
@@ -113,11 +123,20 @@ class Clause:
 
     index: int  # 1-based
     layer: str  # "R1.2"
-    condition: Callable[[Values], Any]
+    condition: Callable[[Values], Any]  # raises KeyError on an unknown measure (fast)
+    kleene: Callable[[Values], Any]  # True, False or None (unknown): after that KeyError
     reads: frozenset[str]
     text: str
     response: ResponseSpec | None  # None: nothing is required
     source: str = "True"  # the compiled condition's Python source
+
+    def value(self, v: Values) -> bool | None:
+        """The condition's three-valued truth on ``v``: None when an unknown measure decides it."""
+        try:
+            return bool(self.condition(v))
+        except KeyError:
+            x = self.kleene(v)
+            return None if x is None else bool(x)
 
 
 @dataclass(frozen=True, slots=True)
@@ -130,6 +149,17 @@ class ResponseSpec:
     def events(self) -> tuple[str, ...]:
         """The events its items name, in order."""
         return tuple(i.event for i in self.items)
+
+    def walk(self) -> Iterator[ItemSpec]:
+        """Every item of this response and, depth first, of its otherwise, else and inner clauses."""
+        for it in self.items:
+            yield it
+            for sub in (it.otherwise, it.alternative):
+                if sub is not None:
+                    yield from sub.walk()
+        for c in self.clauses:
+            if c.response is not None:
+                yield from c.response.walk()
 
     def first_json(self) -> dict[str, Any] | None:
         """A description of the first item, for records (deadlines known only if constant)."""
@@ -158,7 +188,9 @@ class CompiledRule:
     index: int
     name: str
     trigger: str
-    condition: Callable[[Values], Any]
+    condition: Callable[[Values], Any]  # the trigger condition, fast form (KeyError when unknown)
+    trigger_kleene: Callable[[Values], Any]  # its three-valued form
+    trigger_reads: frozenset[str]
     trigger_text: str
     default: ResponseSpec
     clauses: tuple[Clause, ...]
@@ -175,54 +207,113 @@ class CompiledRule:
         """The response of clause ``clause`` (0: the default)."""
         return self.default if clause == 0 else self.clauses[clause - 1].response
 
+    def responses(self) -> Iterator[ResponseSpec]:
+        """The default response and each clause's response (clauses that require nothing left out)."""
+        yield self.default
+        for c in self.clauses:
+            if c.response is not None:
+                yield c.response
+
     def layer_of(self, clause: int) -> str | None:
         """The name of clause ``clause``'s layer; None for the default (the base)."""
         return None if clause == 0 else self.clauses[clause - 1].layer
 
 
-def _duration(c: Compiler, d: A.Duration) -> Seconds:
+# The longest window the runtime keeps (about 317 years): past it a clock time in seconds
+# loses its sub-millisecond precision, so a longer one is a mistake, not a norm.
+MAX_WINDOW_S = 1e10
+
+
+class DeadlineError(ConfigurationError):
+    """A deadline written in the rules is beyond what the runtime can keep (:data:`MAX_WINDOW_S`)."""
+
+
+def _duration(c: Compiler, d: A.Duration, where: str) -> Seconds:
+    """The deadline as seconds; KeyError while a measure it reads is unknown.
+
+    A deadline read from measures that comes out non-finite or longer than
+    :data:`MAX_WINDOW_S` is unknown too (KeyError): the caller reads it fail-closed. A
+    constant one that large is a :class:`DeadlineError` now, at compile time.
+    """
     unit = A.TIME_UNITS[d.unit]
-    src = c.source(d.value, set())
-    fn: Seconds = eval(compile(f"lambda v: ({src}) * {unit}", "<sleec deadline>", "eval"))
-    return fn
+    reads: set[str] = set()
+    src = c.source(d.value, reads)
+    raw: Seconds = eval(compile(f"lambda v: ({src}) * {unit}", "<sleec deadline>", "eval"))
+
+    def seconds(v: Values) -> float:
+        try:
+            x = float(raw(v))
+        except OverflowError:
+            x = math.inf
+        if not -MAX_WINDOW_S <= x <= MAX_WINDOW_S:  # also false for NaN
+            raise KeyError(f"deadline {text(d.value)} {d.unit} out of range")
+        return x
+
+    if not reads:
+        try:
+            value = seconds({})
+        except KeyError:
+            raise DeadlineError(
+                f"the deadline {_cut(text(d.value))} {d.unit} is longer than the runtime can keep",
+                where=f"{where}:{d.span}" if d.span.line else where,
+                hint=f"write a deadline of at most {MAX_WINDOW_S:.0e} seconds",
+            ) from None
+        return lambda v: value
+    return seconds
+
+
+def _cut(s: str, n: int = 40) -> str:
+    return s if len(s) <= n else f"{s[:n]}... ({len(s) - n} more characters)"
 
 
 def _zero(v: Values) -> float:
     return 0.0
 
 
-def compile_response(c: Compiler, r: A.Response, owner: str) -> ResponseSpec:
-    """Compile a response; ``owner`` names its clauses' layers (``R1~1`` for inner ones)."""
+def compile_response(c: Compiler, r: A.Response, key: str, where: str = "") -> ResponseSpec:
+    """Compile a response; ``key`` prefixes its items' keys and names its inner clauses
+    (``R1~1``); ``where`` is the rule file, for errors."""
     items = []
-    for it in r.items:
+    for n, it in enumerate(r.items):
+        k = f"{key}:{n}"
         occ = it.occurrence
         lo = hi = None
         if occ.limit is not None:
-            hi = _duration(c, occ.limit.hi)
+            hi = _duration(c, occ.limit.hi, where)
             if occ.limit.lo is not None:
-                lo = _duration(c, occ.limit.lo)
+                lo = _duration(c, occ.limit.lo, where)
         elif it.otherwise is not None and not occ.eventually:
             hi = _zero  # `otherwise` after an untimed occurrence reads it as `within 0 seconds`
         items.append(
             ItemSpec(
+                key=k,
                 event=occ.event,
                 negated=occ.negated,
                 lo=lo,
                 hi=hi,
                 eventually=occ.eventually,
-                otherwise=compile_response(c, it.otherwise, owner) if it.otherwise is not None else None,
-                alternative=compile_response(c, it.alternative, owner) if it.alternative is not None else None,
+                otherwise=compile_response(c, it.otherwise, f"{k}/o", where) if it.otherwise is not None else None,
+                alternative=(
+                    compile_response(c, it.alternative, f"{k}/e", where) if it.alternative is not None else None
+                ),
             )
         )
-    clauses = tuple(_clause(c, d, f"{owner}~{i}", i) for i, d in enumerate(r.defeaters, start=1))
+    clauses = tuple(_clause(c, d, f"{key}~{i}", i, where) for i, d in enumerate(r.defeaters, start=1))
     return ResponseSpec(tuple(items), clauses)
 
 
-def _clause(c: Compiler, d: A.Defeater, layer: str, index: int) -> Clause:
+def _clause(c: Compiler, d: A.Defeater, layer: str, index: int, where: str) -> Clause:
     fn, reads, src = c.function(d.condition)
-    resp = compile_response(c, d.response, layer) if d.response is not None else None
+    resp = compile_response(c, d.response, layer, where) if d.response is not None else None
     return Clause(
-        index=index, layer=layer, condition=fn, reads=reads, text=text(d.condition), response=resp, source=src
+        index=index,
+        layer=layer,
+        condition=fn,
+        kleene=c.kleene(d.condition),
+        reads=reads,
+        text=text(d.condition),
+        response=resp,
+        source=src,
     )
 
 
@@ -234,12 +325,15 @@ def _all_clauses(clauses: tuple[Clause, ...]) -> Callable[[Values], tuple[bool, 
 
 
 def compile_rule(
-    c: Compiler, index: int, r: A.Rule, literals: Mapping[str, tuple[str, ...]]
+    c: Compiler, index: int, r: A.Rule, literals: Mapping[str, tuple[str, ...]], where: str = ""
 ) -> CompiledRule:
-    """Compile one checked rule; ``literals`` gives each scale measure's literals."""
+    """Compile one checked rule; ``literals`` gives each scale measure's literals, ``where``
+    names the rule file in errors (DeadlineError)."""
     cond, trigger_reads, _ = c.function(r.trigger.condition)
-    default = compile_response(c, A.Response(r.response.items, ()), r.name)
-    clauses = tuple(_clause(c, d, f"{r.name}.{k}", k) for k, d in enumerate(r.response.defeaters, start=1))
+    default = compile_response(c, A.Response(r.response.items, ()), r.name, where)
+    clauses = tuple(
+        _clause(c, d, f"{r.name}.{k}", k, where) for k, d in enumerate(r.response.defeaters, start=1)
+    )
     hedge_reads = frozenset().union(*(cl.reads for cl in clauses))
     layers = tuple(Layer(cl.layer) for cl in clauses)
     if layers:
@@ -249,6 +343,8 @@ def compile_rule(
         name=r.name,
         trigger=r.trigger.event,
         condition=cond,
+        trigger_kleene=c.kleene(r.trigger.condition),
+        trigger_reads=trigger_reads,
         trigger_text=text(r.trigger.condition),
         default=default,
         clauses=clauses,

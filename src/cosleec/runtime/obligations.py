@@ -9,8 +9,8 @@ passing of time to it. The rules it applies:
   occurrences. An untimed ``E`` has no deadline (pending, reported as outstanding) unless
   the runtime is configured otherwise (``Manager(untimed=...)``); an untimed ``not E``
   holds only at the trigger instant.
-- ``otherwise`` starts only on a real miss, at the deadline; an E that arrives after the
-  deadline is recorded as *late* and does not cancel the fallback.
+- ``otherwise`` starts only on a real miss, at the deadline; the first E that arrives
+  after the deadline is recorded, once, as *late* and does not cancel the fallback.
 - ``not E within T`` holds while E is not reported in its window: a request for E is
   refused and recorded; an E reported anyway violates it (and starts its ``otherwise`` at
   that moment).
@@ -22,7 +22,6 @@ Causal order: an occurrence counts only for obligations created before it was ha
 from __future__ import annotations
 
 import heapq
-import itertools
 from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -50,7 +49,7 @@ class Tracked:
     status: str = PENDING
     outcome_at: float | None = None
     by: str | None = None  # the event that fulfilled (or violated) it
-    late: list[float] = field(default_factory=list)
+    late: list[float] = field(default_factory=list)  # the first E after a missed deadline (at most one)
     refused: int = 0  # requests refused by this prohibition
 
     @property
@@ -74,7 +73,7 @@ class Tracked:
             "id": self.id,
             "decision": self.decision_id,
             "clause": self.clause,
-            "seq": self.seq,
+            "causal": self.seq,  # its place in the causal order of occurrences
             "obligation": self.obligation.to_json(),
             "rule": self.rule,
             "event": self.event,
@@ -103,7 +102,7 @@ class Tracked:
             start=float(d["start"]),
             lo=float(lo),
             hi=None if hi is None else float(hi),
-            seq=int(d["seq"]),
+            seq=int(d["causal"] if "causal" in d else d["seq"]),
             depth=int(d.get("depth", 0)),
             status=str(d["status"]),
             outcome_at=None if at is None else float(at),
@@ -138,14 +137,28 @@ class Tracker:
         self._active: dict[int, Tracked] = {}
         self._by_event: dict[str, dict[int, Tracked]] = {}
         self._heap: list[tuple[float, int]] = []
-        self._missed: dict[str, deque[Tracked]] = {}
-        self.closed: deque[Tracked] = deque(maxlen=100_000)
-        self._ids = itertools.count(1)
+        self._missed: dict[str, deque[Tracked]] = {}  # per event: recent misses a late E may still report
+        self.closed: deque[Tracked] = deque(maxlen=1000)  # the most recent outcomes, for inspection
+        self._next = 1  # the next obligation id
 
     @property
     def active(self) -> list[Tracked]:
         """Every obligation in force, prohibitions included (a new list)."""
         return list(self._active.values())
+
+    @property
+    def next_id(self) -> int:
+        """The id the next obligation will get (kept by a journal across restarts)."""
+        return self._next
+
+    def resume(self, tracked: Tracked, next_id: int) -> None:
+        """Track an obligation restored from a journal, as it was; later ids start at ``next_id``."""
+        self._index(tracked)
+        self._next = max(next_id, tracked.id + 1, self._next)
+
+    def tracks(self, oid: int) -> bool:
+        """Is obligation ``oid`` in force?"""
+        return oid in self._active
 
     def start(
         self, decision_id: int, clause: int | None, ob: Obligation, now: float, seq: int, depth: int = 0
@@ -160,7 +173,7 @@ class Tracker:
             elif isinstance(self.untimed, int | float) and not isinstance(self.untimed, bool):
                 hi = float(self.untimed)
         t = Tracked(
-            id=next(self._ids),
+            id=self._next,
             decision_id=decision_id,
             clause=clause,
             rule=ob.rule,
@@ -171,14 +184,18 @@ class Tracker:
             seq=seq,
             depth=depth,
         )
+        self._next += 1
         if t.hi is not None and t.hi < t.lo:
             t.hi = t.lo  # a negative deadline (LEGOS expression): already closed
+        self._index(t)
+        return t
+
+    def _index(self, t: Tracked) -> None:
         self._active[t.id] = t
-        for ev in (ob.event, *ob.alternatives):
+        for ev in (t.obligation.event, *t.obligation.alternatives):
             self._by_event.setdefault(ev, {})[t.id] = t
         if t.hi is not None:
             heapq.heappush(self._heap, (t.hi, t.id))
-        return t
 
     def _close(self, t: Tracked) -> None:
         del self._active[t.id]
@@ -214,21 +231,23 @@ class Tracker:
                 t.status, t.outcome_at, t.by = FULFILLED, now, event
                 out.changed.append(t)
                 self._close(t)
-        for t in self._missed.get(event, ()):  # an E after its deadline is recorded as late
-            if t.hi is not None and now > t.hi and t.seq < seq and now not in t.late:
+        missed = self._missed.get(event)
+        if missed:  # the first E after a missed deadline is recorded as late, once
+            for t in [t for t in missed if t.hi is not None and now > t.hi and t.seq < seq]:
                 t.late.append(now)
                 out.changed.append(t)
+                missed.remove(t)
         return out
 
-    def due(self, now: float) -> Outcome:
-        """Close every window that ended before ``now``.
+    def due(self, now: float, limit: int | None = None) -> Outcome:
+        """Close every window that ended before ``now`` (at most ``limit`` of them).
 
         A pending obligation is violated (its ``otherwise``, if any, is returned in
         ``fallbacks``, starting at the deadline); a prohibition is respected.
         """
         out = Outcome()
         heap = self._heap
-        while heap and heap[0][0] < now:
+        while heap and heap[0][0] < now and (limit is None or len(out.changed) < limit):
             hi, tid = heapq.heappop(heap)
             t = self._active.get(tid)
             if t is None or t.hi != hi:

@@ -14,6 +14,7 @@ diagnostic. Lookups by rule name and by trigger are dictionary lookups.
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,10 +28,11 @@ from cosleec.lang import (
     analyse,
     analyse_file,
     check,
+    format_spec,
     infer_definitions,
 )
 from cosleec.runtime.compile import Compiler
-from cosleec.runtime.model import CompiledRule, compile_rule
+from cosleec.runtime.model import CompiledRule, ItemSpec, compile_rule
 from cosleec.runtime.values import MeasureSpec
 
 
@@ -47,6 +49,9 @@ class RuleSet:
     events: frozenset[str]
     by_trigger: Mapping[str, tuple[CompiledRule, ...]]
     by_name: Mapping[str, CompiledRule]
+    items: Mapping[str, ItemSpec]  # every response item by its key (``R1.2:0/o:1``)
+    responds: frozenset[str]  # the events some response obliges (capabilities may exist for these)
+    digest: str  # sha256 of the canonical text: which rules a journal or audit record belongs to
 
     @classmethod
     def from_file(cls, path: str | Path, *, infer_defs: bool = False) -> RuleSet:
@@ -81,7 +86,8 @@ class RuleSet:
         compiler = Compiler(symbols)
         measures = {m.name: MeasureSpec.of(m) for m in spec.measures}
         literals = {n: m.literals for n, m in measures.items() if m.literals}
-        rules = tuple(compile_rule(compiler, i, r, literals) for i, r in enumerate(spec.rules))
+        rules = tuple(compile_rule(compiler, i, r, literals, spec.path) for i, r in enumerate(spec.rules))
+        items = {it.key: it for r in rules for resp in r.responses() for it in resp.walk()}
         by_trigger: dict[str, list[CompiledRule]] = {}
         for cr in rules:
             by_trigger.setdefault(cr.trigger, []).append(cr)
@@ -92,6 +98,9 @@ class RuleSet:
             events=frozenset(e.name for e in spec.events),
             by_trigger={k: tuple(v) for k, v in by_trigger.items()},
             by_name={r.name: r for r in rules},
+            items=items,
+            responds=frozenset(it.event for it in items.values() if not it.negated),
+            digest=hashlib.sha256(format_spec(spec).encode()).hexdigest(),
         )
 
     def rule(self, name: str) -> CompiledRule:

@@ -48,6 +48,7 @@ def test_decide_json_shape(capsys: pytest.CaptureFixture[str]) -> None:
                             "eventually": False,
                             "alternatives": [],
                             "rule": "R1",
+                        "item": "R1.1:0",
                             "otherwise": None,
                         },
                     {
@@ -58,6 +59,7 @@ def test_decide_json_shape(capsys: pytest.CaptureFixture[str]) -> None:
                             "eventually": False,
                             "alternatives": [],
                             "rule": "R1",
+                        "item": "R1.1:1",
                             "otherwise": None,
                         },
                 ],
@@ -81,6 +83,7 @@ def test_decide_otherwise_and_prohibition_objects(capsys: pytest.CaptureFixture[
             "eventually": False,
             "alternatives": [],
             "rule": "R3",
+            "item": "R3:0",
             "otherwise": {"event": "SupportCalled", "negated": False, "within_s": 60.0, "otherwise": None},
         }
     ]
@@ -110,6 +113,7 @@ def test_decide_otherwise_and_prohibition_objects(capsys: pytest.CaptureFixture[
         "eventually": False,
         "alternatives": [],
         "rule": "R6",
+        "item": "R6:0",
         "otherwise": None,
     }
 

@@ -163,9 +163,9 @@ def test_a_received_decision_whose_clause_and_layer_disagree_runs_nothing() -> N
         conditions=(),
         obligations=(Obligation(event="Refuse", rule="R1"),),
     )
-    assert impl.dispatch(rule, good) and ran == ["Refuse"]
+    assert all(r.ok for r in impl.dispatch(rule, good)) and ran == ["Refuse"]
     bad = dataclasses.replace(good, id=2, layer=None)  # says clause 1 but names the default
-    assert not impl.dispatch(rule, bad) and ran == ["Refuse"] and impl.failures == 1
+    assert not any(r.ok for r in impl.dispatch(rule, bad)) and ran == ["Refuse"] and impl.failures == 1
 
 
 def test_obligation_records_round_trip_through_their_wire_format() -> None:

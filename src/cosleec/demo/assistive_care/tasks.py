@@ -89,7 +89,7 @@ def install(manager: Host) -> Robot:
     """Bind the tasks and capabilities of this example to ``manager``; returns the robot."""
     robot = Robot(manager)
     manager.bind(CurtainTask(robot))
-    for event in sorted(manager.ruleset.events):
+    for event in sorted(manager.ruleset.responds):  # what some rule may oblige: a capability each
 
         def capability(ob: Obligation, decision: Decision, event: str = event) -> None:
             if event == "ExplainWhy":

@@ -1,0 +1,169 @@
+"""The Manager's journal: what it must not forget, kept in one SQLite file across crashes.
+
+``Manager(..., journal="state.db")`` writes, in the same transaction as the state change
+that caused them, every measure value, every obligation and prohibition still in force
+(with its window), the counters that make ids unique (decisions, obligations, the causal
+sequence, audit records), the implementations not yet run, and the audit records not
+yet copied to the JSON Lines audit log. A Manager started on the same journal restores all
+of it (:class:`Saved`), so a ``kill -9`` loses no obligation, forgets no prohibition and
+reuses no id.
+
+SQLite in WAL mode with ``synchronous=NORMAL``: a commit survives the death of the
+process at any instant; a power cut can lose the last commits (pass ``fsync=True`` for
+``synchronous=FULL``, at a cost per step). One connection, used under the Manager's lock.
+"""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+import threading
+import time
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from cosleec.errors import UserError
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE IF NOT EXISTS context (name TEXT PRIMARY KEY, value TEXT NOT NULL, stamp REAL NOT NULL);
+CREATE TABLE IF NOT EXISTS obligations (id INTEGER PRIMARY KEY, record TEXT NOT NULL);
+CREATE TABLE IF NOT EXISTS outbox (id INTEGER PRIMARY KEY, record TEXT NOT NULL);
+CREATE TABLE IF NOT EXISTS records (seq INTEGER PRIMARY KEY, record TEXT NOT NULL);
+"""
+
+
+class JournalError(UserError):
+    """The journal cannot be opened or written (a path that is not writable, a full disk).
+
+    A Manager whose journal fails stops deciding: every later call raises this error and
+    :meth:`~cosleec.runtime.Manager.request` refuses, since its state can no longer be kept.
+    """
+
+
+@dataclass
+class Saved:
+    """Everything a journal held when it was opened: restored by the Manager at start."""
+
+    rules: str  # the digest of the rule set that wrote it
+    run: str  # the run that wrote last
+    counters: dict[str, int]
+    clock: float  # clock time of the last commit
+    wall: float  # Unix time of the last commit
+    context: dict[str, tuple[Any, float]]  # measure -> (value as users see it, clock time set)
+    obligations: list[dict[str, Any]]  # obligation records (Tracked.to_json), pending ones only
+    outbox: list[dict[str, Any]]  # implementations decided but not known to have run
+    records: list[dict[str, Any]] = field(default_factory=list)  # audit records not yet in the audit log
+
+
+@dataclass
+class Change:
+    """What one step of the Manager changed, committed to the journal in one transaction."""
+
+    context: dict[str, tuple[Any, float] | None] = field(default_factory=dict)  # None: now unknown
+    obligations: dict[int, dict[str, Any] | None] = field(default_factory=dict)  # None: closed
+    outbox: dict[int, dict[str, Any] | None] = field(default_factory=dict)  # None: done
+
+    def __bool__(self) -> bool:
+        return bool(self.context or self.obligations or self.outbox)
+
+
+class Journal:
+    """A SQLite journal of a Manager's state (see the module docstring).
+
+    Not thread-safe by itself: the Manager calls it under its lock (the connection is
+    allowed to move between threads for that reason).
+    """
+
+    def __init__(self, path: str | Path, *, fsync: bool = False) -> None:
+        self.path = Path(path)
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._db = sqlite3.connect(self.path, check_same_thread=False, isolation_level=None)
+            self._db.execute("PRAGMA journal_mode=WAL")
+            self._db.execute(f"PRAGMA synchronous={'FULL' if fsync else 'NORMAL'}")
+            self._db.executescript(_SCHEMA)
+        except (OSError, sqlite3.Error) as e:
+            raise JournalError(
+                f"cannot open the journal: {e}", where=str(path), hint="give a writable path to a journal file"
+            ) from None
+        self._lock = threading.Lock()
+        self._exported = 0  # audit records up to this sequence number are in the audit log
+
+    def load(self) -> Saved | None:
+        """What the journal holds; None for a new journal."""
+        db = self._db
+        meta = dict(db.execute("SELECT key, value FROM meta").fetchall())
+        if "rules" not in meta:
+            return None
+        clock = json.loads(meta.get("clock", '{"clock": 0, "wall": 0}'))
+        return Saved(
+            rules=meta["rules"],
+            run=meta.get("run", ""),
+            counters={k: int(v) for k, v in json.loads(meta.get("counters", "{}")).items()},
+            clock=float(clock["clock"]),
+            wall=float(clock["wall"]),
+            context={n: (json.loads(v), float(s)) for n, v, s in db.execute("SELECT name, value, stamp FROM context")},
+            obligations=[json.loads(r) for (r,) in db.execute("SELECT record FROM obligations ORDER BY id")],
+            outbox=[json.loads(r) for (r,) in db.execute("SELECT record FROM outbox ORDER BY id")],
+            records=[json.loads(r) for (r,) in db.execute("SELECT record FROM records ORDER BY seq")],
+        )
+
+    def commit(
+        self,
+        change: Change,
+        records: Iterable[tuple[int, dict[str, Any]]],
+        meta: Mapping[str, str],
+        clock: float,
+    ) -> None:
+        """Write one step: its state change, its audit records ``(seq, record)`` and ``meta``, atomically.
+
+        Audit records already copied to the audit log (:meth:`exported`) are deleted here,
+        in the same transaction. JournalError if the write fails (nothing of it is kept).
+        """
+        db = self._db
+        try:
+            db.execute("BEGIN IMMEDIATE")
+            try:
+                for name, cv in change.context.items():
+                    if cv is None:
+                        db.execute("DELETE FROM context WHERE name = ?", (name,))
+                    else:
+                        db.execute(
+                            "INSERT OR REPLACE INTO context VALUES (?, ?, ?)", (name, json.dumps(cv[0]), cv[1])
+                        )
+                for oid, rec in change.obligations.items():
+                    if rec is None:
+                        db.execute("DELETE FROM obligations WHERE id = ?", (oid,))
+                    else:
+                        db.execute("INSERT OR REPLACE INTO obligations VALUES (?, ?)", (oid, _dumps(rec)))
+                for did, rec in change.outbox.items():
+                    if rec is None:
+                        db.execute("DELETE FROM outbox WHERE id = ?", (did,))
+                    else:
+                        db.execute("INSERT OR REPLACE INTO outbox VALUES (?, ?)", (did, _dumps(rec)))
+                db.executemany("INSERT INTO records VALUES (?, ?)", ((s, _dumps(r)) for s, r in records))
+                if self._exported:
+                    db.execute("DELETE FROM records WHERE seq <= ?", (self._exported,))
+                rows = [*meta.items(), ("clock", json.dumps({"clock": clock, "wall": time.time()}))]
+                db.executemany("INSERT OR REPLACE INTO meta VALUES (?, ?)", rows)
+                db.execute("COMMIT")
+            except BaseException:
+                db.execute("ROLLBACK")
+                raise
+        except sqlite3.Error as e:
+            raise JournalError(f"cannot write the journal: {e}", where=str(self.path)) from None
+
+    def exported(self, seq: int) -> None:
+        """Audit records up to ``seq`` are safely in the audit log: the next commit deletes them."""
+        self._exported = max(self._exported, seq)
+
+    def close(self) -> None:
+        """Close the database; the journal keeps what was committed."""
+        self._db.close()
+
+
+def _dumps(record: Mapping[str, Any]) -> str:
+    return json.dumps(record, default=str, separators=(",", ":"))

@@ -1,0 +1,428 @@
+"""Fail closed, stay bounded, act exactly once: the embedded runtime when it does not know.
+
+Each test names the finding it pins down; each one failed on the code before the fix.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import threading
+from pathlib import Path
+from typing import Any
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from cosleec.cli.main import main
+from cosleec.runtime import (
+    BindingError,
+    ConfigurationError,
+    ContextError,
+    Manager,
+    RuntimeEvent,
+    VirtualClock,
+    read_audit,
+)
+
+DEFS = "def_start event E event F event G event Rec event Help measure a : boolean measure b : boolean "
+
+
+def manager(rules: str, defs: str = "", **kw: Any) -> tuple[Manager, VirtualClock]:
+    clock = VirtualClock()
+    text = f"{DEFS}{defs} def_end rule_start {rules} rule_end"
+    return Manager.from_text(text, clock=clock, **kw), clock
+
+
+# ---------------------------------------------------------------------------- unknown names
+
+
+def test_a_request_for_an_undeclared_event_raises_with_the_closest_names() -> None:
+    m, _ = manager("R1 when E then F")
+    with pytest.raises(ContextError, match="unknown event 'Reec'") as e:
+        m.request("Reec")
+    assert "Rec" in e.value.hint
+    assert m.stats["rejected"] == 1
+
+
+def test_unknown_events_refuse_answers_false_and_records_why(tmp_path: Path) -> None:
+    log = tmp_path / "audit.jsonl"
+    m, _ = manager("R1 when E then F", unknown_events="refuse", audit=log)
+    assert m.request("Typo") is False
+    assert m.event("Typo") == []
+    m.close()
+    rejected = [r for r in read_audit(log) if r["kind"] == "rejected"]
+    assert [r["what"] for r in rejected] == ["request", "event"]
+    assert all("unknown event 'Typo'" in r["reason"] for r in rejected)
+
+
+def test_an_unknown_events_policy_that_does_not_exist_is_refused() -> None:
+    with pytest.raises(ConfigurationError, match="unknown_events"):
+        manager("R1 when E then F", unknown_events="allow")
+
+
+def test_a_capability_for_an_event_no_response_names_is_refused_with_did_you_mean() -> None:
+    m, _ = manager("R1 when E then F within 1 seconds otherwise Help")
+    with pytest.raises(BindingError, match="did you mean Help"):
+        m.capability("Hepl")
+    with pytest.raises(BindingError, match="no rule's response"):
+        m.capability("E")  # a trigger, never an obligation
+    m.capability("Help")(lambda ob, d: None)  # an otherwise event is a response
+
+
+def test_a_reason_never_echoes_a_huge_name_whole() -> None:
+    m, _ = manager("R1 when E then F")
+    with pytest.raises(ContextError) as e:
+        m.update({"x" * 10_000_000: True})
+    assert len(str(e.value)) < 300
+    with pytest.raises(ContextError) as e:
+        m.request("y" * 10_000_000)
+    assert len(str(e.value)) < 300
+
+
+# ---------------------------------------------------------------------------- Kleene
+
+
+def test_or_with_an_unknown_side_is_true_whatever_the_operand_order() -> None:
+    m, _ = manager("R1 when E and (a or b) then F R2 when E and (b or a) then G")
+    m.update(a=True)  # b is unknown
+    assert [(d.rule, d.clause) for d in m.event("E")] == [("R1", 0), ("R2", 0)]
+
+
+def test_and_with_a_false_side_is_false_whatever_the_operand_order() -> None:
+    m, _ = manager("R1 when E and (a and b) then F R2 when E and (b and a) then G")
+    m.update(a=False)
+    assert m.event("E") == []
+
+
+def test_an_unknown_that_decides_the_trigger_makes_the_decision_undetermined() -> None:
+    m, _ = manager("R1 when E and (a or b) then F")
+    m.update(a=False)
+    (d,) = m.event("E")
+    assert d.undetermined and d.missing == ("b",)
+
+
+def test_an_unless_over_or_is_decided_by_its_known_side() -> None:
+    m, _ = manager("R1 when E then F unless (b or a) then G")
+    m.update(a=True)
+    (d,) = m.event("E")
+    assert d.clause == 1  # before: KeyError on b, undetermined
+
+
+# An independent oracle: Kleene's strong three-valued logic, from its truth tables.
+K_AND = {(True, True): True, (True, None): None, (None, True): None, (None, None): None}
+K_OR = {(False, False): False, (False, None): None, (None, False): None, (None, None): None}
+
+
+def k_and(x: bool | None, y: bool | None) -> bool | None:
+    if x is False or y is False:
+        return False
+    return K_AND[(x, y)]
+
+
+def k_or(x: bool | None, y: bool | None) -> bool | None:
+    if x is True or y is True:
+        return True
+    return K_OR[(x, y)]
+
+
+exprs = st.recursive(
+    st.sampled_from(["a", "b", "c", "true", "false"]),
+    lambda inner: st.one_of(
+        st.tuples(st.just("not"), inner),
+        st.tuples(st.sampled_from(["and", "or"]), inner, inner),
+    ),
+    max_leaves=8,
+)
+
+
+def text(e: Any) -> str:
+    if isinstance(e, str):
+        return e
+    if e[0] == "not":
+        return f"(not {text(e[1])})"
+    return f"({text(e[1])} {e[0]} {text(e[2])})"
+
+
+def oracle(e: Any, env: dict[str, bool | None]) -> bool | None:
+    if isinstance(e, str):
+        return {"true": True, "false": False}.get(e, env.get(e))
+    if e[0] == "not":
+        x = oracle(e[1], env)
+        return None if x is None else not x
+    f = k_and if e[0] == "and" else k_or
+    return f(oracle(e[1], env), oracle(e[2], env))
+
+
+@settings(max_examples=300, deadline=None)
+@given(exprs, st.fixed_dictionaries({n: st.sampled_from([True, False, None]) for n in "abc"}))
+def test_conditions_are_kleene_three_valued(e: Any, env: dict[str, bool | None]) -> None:
+    m, _ = manager(f"R1 when E then F unless {text(e)} then G", defs="measure c : boolean")
+    known = {k: v for k, v in env.items() if v is not None}
+    if known:
+        m.update(known)
+    (d,) = m.event("E")
+    want = oracle(e, env)
+    assert d.conditions[1][2] == want
+    assert d.clause == (None if want is None else 1 if want else 0)
+
+
+# ---------------------------------------------------------------------------- undetermined
+
+
+def test_an_undetermined_decision_keeps_every_prohibition_a_reading_of_it_imposes() -> None:
+    # R1 forbids recording unless the user consented: consent unknown must not allow recording
+    m, _ = manager("R1 when E then not Rec within 10 minutes unless a then F")
+    m.event("E")
+    assert m.decisions[-1].undetermined
+    assert m.request("Rec") is False  # before: True (no obligation at all)
+
+
+INNER = "R1 when E then F unless b then { not Rec within 10 minutes unless a then G }"
+
+
+def test_an_undetermined_inner_unless_is_not_read_as_false() -> None:
+    # the braced inner response's own unless over an unknown measure
+    m, _ = manager(INNER)
+    m.update(b=True)
+    (d,) = m.event("E")
+    assert d.undetermined and d.missing == ("a",)
+    assert m.request("Rec") is False  # before: the unless counted as false... and here, true
+    assert d.obligations and all(o.negated for o in d.obligations)
+
+
+def test_a_determined_inner_unless_takes_its_clause() -> None:
+    m, _ = manager(INNER)
+    m.update(b=True, a=True)
+    (d,) = m.event("E")
+    assert d.clause == 1 and [o.event for o in d.obligations] == ["G"]
+    assert m.request("Rec") is True
+    m.update(a=False)
+    (d,) = m.event("E")
+    assert [(o.event, o.negated) for o in d.obligations] == [("Rec", True)]
+    assert m.request("Rec") is False
+
+
+def test_an_undetermined_inner_unless_of_an_otherwise_runs_nothing() -> None:
+    m, clock = manager("R1 when E then F within 1 seconds otherwise { not Rec within 10 minutes unless a then G }")
+    ran: list[str] = []
+    m.capability("F")(lambda ob, d: None)
+    m.capability("G")(lambda ob, d: ran.append("G"))
+    m.start()
+    m.event("E")
+    clock.advance(2)
+    assert m.tick() == []  # no fallback dispatched
+    assert ran == [] and m.request("Rec") is False
+    assert m.decisions[-1].event == "otherwise" and m.decisions[-1].undetermined
+
+
+def test_a_prohibition_whose_deadline_is_unknown_stays_in_force(tmp_path: Path) -> None:
+    m, clock = manager("R1 when E then not Rec within (n) seconds", defs="measure n : numeric")
+    m.event("E")
+    clock.advance(10**6)
+    assert m.request("Rec") is False
+
+
+# ---------------------------------------------------------------------------- bad values
+
+
+def test_a_number_beyond_float_range_is_rejected_and_nothing_changes(tmp_path: Path) -> None:
+    log = tmp_path / "a.jsonl"
+    m, _ = manager("R1 when E then F within (n) seconds", defs="measure n : numeric", audit=log)
+    with pytest.raises(ContextError, match="finite"):
+        m.update(n=10**5000)
+    assert m.values()["n"] is None
+    m.close()
+    (rec,) = read_audit(log)
+    assert rec["kind"] == "rejected" and len(json.dumps(rec)) < 1000
+
+
+def test_a_deadline_too_large_for_the_runtime_is_a_user_error(tmp_path: Path, capsys: Any) -> None:
+    f = tmp_path / "big.sleec"
+    f.write_text(f"def_start event E event F def_end rule_start R1 when E then F within {'9' * 400} seconds rule_end")
+    assert main(["decide", str(f), "--event", "E"]) == 1
+    err = capsys.readouterr().err
+    assert f"{f}:1:" in err and "longer than the runtime can keep" in err and len(err) < 600
+
+
+def test_a_huge_measure_dependent_deadline_is_read_fail_closed() -> None:
+    m, clock = manager("R1 when E then F within (n) days", defs="measure n : numeric")
+    m.update(n=1e300)  # longer than the runtime keeps
+    (d,) = m.event("E")
+    assert d.obligations[0].within_s == 0.0  # due now: the strictest reading
+    clock.advance(1)
+    m.tick()
+    assert m.stats["violations"] == 1
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), -float("inf"), 10**400, "3", True])
+def test_the_virtual_clock_accepts_only_finite_times(bad: Any) -> None:
+    c = VirtualClock(5)
+    with pytest.raises(ValueError):
+        c.set(bad)
+    with pytest.raises(ValueError):
+        c.advance(bad)
+    assert c.now() == 5
+
+
+def test_untimed_and_max_depth_options_are_checked() -> None:
+    with pytest.raises(ConfigurationError, match="untimed"):
+        manager("R1 when E then F", untimed="bogus")
+    with pytest.raises(ConfigurationError, match="untimed"):
+        manager("R1 when E then F", untimed=float("nan"))
+    with pytest.raises(ConfigurationError, match="max_depth"):
+        manager("R1 when E then F", max_depth=0)
+
+
+# ---------------------------------------------------------------------------- bounded
+
+
+def test_a_missed_deadline_is_reported_late_once(tmp_path: Path) -> None:
+    log = tmp_path / "a.jsonl"
+    m, clock = manager("R1 when E then F within 1 seconds", audit=log)
+    m.event("E")
+    clock.advance(2)
+    m.tick()
+    for _ in range(50):
+        clock.advance(1)
+        m.event("F")
+    m.close()
+    records = read_audit(log)
+    late = [r for r in records if r["kind"] == "obligation" and r["late"]]
+    assert len(late) == 1 and late[0]["late"] == [3.0]
+    assert max(len(json.dumps(r)) for r in records) < 2000
+
+
+def test_tick_releases_the_lock_between_batches() -> None:
+    m, clock = manager("R1 when E then F within 1 seconds")
+    for _ in range(3000):
+        m.event("E")
+    clock.advance(2)
+    blocked: list[tuple[bool, int]] = []
+
+    def observer(ev: RuntimeEvent) -> None:  # runs between steps, outside the lock
+        if ev.kind == "obligation" and ev.data["status"] == "violated" and not blocked:
+            judged = m.stats["violations"]
+            t = threading.Thread(target=m.request, args=("F",))  # it judges the rest itself
+            t.start()
+            t.join(5)
+            blocked.append((t.is_alive(), judged))
+
+    m.subscribe(observer)
+    assert m.tick() == []
+    # after the first batch of 1000, with work left, another thread could take the lock
+    assert blocked == [(False, 1000)]
+    assert m.stats["violations"] == 3000
+
+
+# ---------------------------------------------------------------------------- order
+
+
+def test_the_audit_log_and_observers_see_records_in_the_order_they_were_made(tmp_path: Path) -> None:
+    log = tmp_path / "a.jsonl"
+    m, _ = manager("R1 when E then F within 1 seconds unless a then G", audit=log)
+    seen: list[int] = []
+    m.subscribe(lambda ev: seen.append(ev.seq))
+
+    def work(i: int) -> None:
+        for j in range(300):
+            if j % 3 == 0:
+                m.update(a=bool((i + j) % 2))
+            m.event("E")
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(6)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    m.close()
+    records = read_audit(log)
+    assert [r["seq"] for r in records] == list(range(1, len(records) + 1))
+    assert seen == [r["seq"] for r in records]
+    ids = [r["id"] for r in records if r["kind"] == "decision"]
+    assert ids == sorted(ids) and len(ids) == 1800
+
+
+def test_a_torn_last_line_is_set_aside_not_glued(tmp_path: Path) -> None:
+    log = tmp_path / "a.jsonl"
+    m, _ = manager("R1 when E then F", audit=log)
+    m.event("E")
+    m.close()
+    n = len(read_audit(log))
+    with log.open("a") as fh:
+        fh.write('{"seq": 99, "kind": "deci')  # the process died mid-line
+    m2, _ = manager("R1 when E then F", audit=log)
+    assert m2.audit is not None and m2.audit.torn == '{"seq": 99, "kind": "deci'
+    m2.event("E")
+    m2.close()
+    lines = log.read_text().splitlines()
+    records = [json.loads(line) for line in lines]  # every line is whole JSON
+    assert [r["seq"] for r in records] == list(range(1, len(records) + 1)) and len(records) > n
+    assert (tmp_path / "a.jsonl.torn").read_text() == '{"seq": 99, "kind": "deci\n'
+    assert len({r["run"] for r in records}) == 2
+
+
+# ---------------------------------------------------------------------------- exactly once
+
+
+def test_a_and_b_runs_both_capabilities_and_records_each_outcome(tmp_path: Path) -> None:
+    log = tmp_path / "a.jsonl"
+    m, _ = manager("R1 when E then F and G", audit=log)
+    ran: list[str] = []
+
+    @m.capability("F")
+    def f(ob: Any, d: Any) -> None:
+        ran.append("F")
+        raise RuntimeError("no arm")
+
+    m.capability("G")(lambda ob, d: ran.append("G"))
+    m.start()
+    m.event("E")
+    m.close()
+    assert ran == ["F", "G"]
+    out = {(r["kind"], r["event"]) for r in read_audit(log) if r["kind"].startswith("task-")}
+    assert out == {("task-failed", "F"), ("task-done", "G")}
+    assert m.stats["task_failures"] == 1
+
+
+def test_a_failing_otherwise_records_task_failed(tmp_path: Path) -> None:
+    log = tmp_path / "a.jsonl"
+    m, clock = manager("R1 when E then F within 1 seconds otherwise Help", audit=log)
+    m.capability("F")(lambda ob, d: None)
+
+    @m.capability("Help")
+    def help_(ob: Any, d: Any) -> None:
+        raise RuntimeError("phone line down")
+
+    m.start()
+    m.event("E")
+    clock.advance(2)
+    (d,) = m.tick()
+    m.close()
+    failed = [r for r in read_audit(log) if r["kind"] == "task-failed"]
+    assert [(r["decision"], r["event"]) for r in failed] == [(d.id, "Help")]
+    assert "phone line down" in failed[0]["error"]
+
+
+def test_a_capability_that_triggers_its_own_rule_is_stopped_with_a_record(tmp_path: Path) -> None:
+    log = tmp_path / "a.jsonl"
+    m, _ = manager("R1 when E then F R2 when F then G", defs="", audit=log, max_depth=5)
+    calls = itertools.count()
+
+    @m.capability("F")
+    def f(ob: Any, d: Any) -> None:
+        next(calls)
+        m.event("F")
+
+    @m.capability("G")
+    def g(ob: Any, d: Any) -> None:
+        next(calls)
+        m.event("E")  # E -> F -> G -> E ... without end
+
+    m.start()
+    m.event("E")
+    m.close()
+    assert next(calls) == 5
+    failed = [r for r in read_audit(log) if r["kind"] == "task-failed"]
+    assert len(failed) == 1 and "max_depth=5" in failed[0]["error"]

@@ -1,0 +1,153 @@
+"""The journal: a Manager killed with SIGKILL forgets nothing it must enforce.
+
+Each test kills a real process (``os.kill(os.getpid(), SIGKILL)`` inside it, at a chosen
+point) and starts a new Manager on the same journal.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from cosleec.runtime import JournalError, Manager, VirtualClock, read_audit
+
+RULES = """def_start
+ event Trigger event Act event Help event Rec event Watch
+ measure consent : boolean
+def_end
+rule_start
+ R1 when Trigger then Act within 5 seconds otherwise Help
+ R2 when Watch then not Rec within 10 minutes unless consent
+rule_end
+"""
+
+
+def die_after(tmp_path: Path, body: str) -> None:
+    """Run ``body`` in a new process with ``m`` (a Manager on the journal) and kill it with SIGKILL."""
+    (tmp_path / "rules.sleec").write_text(RULES)
+    script = textwrap.dedent(
+        f"""
+        import os, signal
+        from cosleec.runtime import Manager, VirtualClock
+        clock = VirtualClock(100)
+        m = Manager.from_file({str(tmp_path / "rules.sleec")!r}, clock=clock,
+                              journal={str(tmp_path / "state.db")!r}, audit={str(tmp_path / "audit.jsonl")!r})
+        m.capability("Act")(lambda ob, d: None)
+        m.capability("Help")(lambda ob, d: print("HELP", d.id, flush=True))
+        m.start()
+        """
+    ) + textwrap.dedent(body) + "\nos.kill(os.getpid(), signal.SIGKILL)\n"
+    p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert p.returncode == -9, p.stderr
+
+
+def again(tmp_path: Path, t: float, helped: list[int] | None = None, **kw: Any) -> Manager:
+    m = Manager.from_file(
+        tmp_path / "rules.sleec",
+        clock=VirtualClock(t),
+        journal=tmp_path / "state.db",
+        audit=tmp_path / "audit.jsonl",
+        **kw,
+    )
+    m.capability("Act")(lambda ob, d: None)
+    m.capability("Help")(lambda ob, d: helped.append(d.id) if helped is not None else None)
+    return m
+
+
+def test_a_prohibition_survives_a_kill(tmp_path: Path) -> None:
+    die_after(tmp_path, 'm.update(consent=False); m.event("Watch"); assert not m.request("Rec")')
+    m = again(tmp_path, 160).start()
+    assert m.request("Rec") is False  # before: allowed after the restart
+    assert m.values()["consent"] is False and m.active_layers() == []
+    (d,) = m.event("Watch")
+    assert d.id == 2  # decision ids go on (before: 1 again)
+    m.close()
+
+
+def test_a_deadline_passed_while_down_is_violated_and_its_otherwise_runs_once(tmp_path: Path) -> None:
+    die_after(tmp_path, 'm.event("Trigger")')
+    helped: list[int] = []
+    m = again(tmp_path, 110, helped).start()  # the deadline was 105
+    assert len(helped) == 1 and m.stats["violations"] == 1
+    m.close()
+    helped2: list[int] = []
+    again(tmp_path, 120, helped2).start().close()  # a third run: nothing is owed any more
+    assert helped2 == []
+    records = read_audit(tmp_path / "audit.jsonl")
+    violated = [r for r in records if r["kind"] == "obligation" and r["status"] == "violated"]
+    assert [(r["event"], r["window"][1]) for r in violated] == [("Act", 105.0)]
+    assert [r["seq"] for r in records] == list(range(1, len(records) + 1))
+
+
+def test_an_obligation_fulfilled_after_the_restart_counts(tmp_path: Path) -> None:
+    die_after(tmp_path, 'm.event("Trigger")')
+    helped: list[int] = []
+    m = again(tmp_path, 103, helped).start()
+    m.event("Act")
+    m.tick()
+    assert m.outstanding() == [] and helped == [] and m.stats["violations"] == 0
+    m.close()
+
+
+def test_an_implementation_cut_short_by_the_kill_is_recorded_not_run_again(tmp_path: Path) -> None:
+    (tmp_path / "rules.sleec").write_text(RULES)
+    die_after(
+        tmp_path,
+        """
+        import os, signal
+        m.capability("Act")(lambda ob, d: os.kill(os.getpid(), signal.SIGKILL))
+        m.event("Trigger")
+        """,
+    )
+    ran: list[int] = []
+    m = again(tmp_path, 101)
+    m.capability("Act")(lambda ob, d: ran.append(d.id))
+    m.start()
+    m.close()
+    assert ran == []
+    records = read_audit(tmp_path / "audit.jsonl")
+    (cut,) = [r for r in records if r["kind"] == "task-interrupted"]
+    assert cut["decision"] == 1 and cut["rule"] == "R1"
+
+
+def test_records_lost_between_journal_and_audit_log_are_written_once(tmp_path: Path) -> None:
+    # the last step's records are committed to the journal before they reach the audit log:
+    # a kill in between leaves them missing or torn there, and the next start writes them
+    die_after(tmp_path, 'm.update(consent=True); m.event("Watch")')
+    log = tmp_path / "audit.jsonl"
+    lines = log.read_text().splitlines(keepends=True)
+    last = json.loads(lines[-1])
+    log.write_text("".join(lines[:-1]) + lines[-1][:10])  # the last record torn mid-line
+    m = again(tmp_path, 101)
+    m.close()
+    records = read_audit(log)
+    seqs = [r["seq"] for r in records]
+    assert seqs == list(range(1, len(records) + 1)) and seqs[-1] > last["seq"]
+    assert [r for r in records if r["seq"] == last["seq"]] == [last]
+    assert (tmp_path / "audit.jsonl.torn").read_text() == lines[-1][:10] + "\n"
+
+
+def test_a_changed_rule_set_keeps_what_it_still_names_and_records_what_it_drops(tmp_path: Path) -> None:
+    die_after(tmp_path, 'm.update(consent=False); m.event("Watch"); m.event("Trigger")')
+    (tmp_path / "rules.sleec").write_text(RULES.replace(" R2 when Watch then not Rec within 10 minutes unless consent\n", ""))
+    m = again(tmp_path, 101).start()
+    assert m.request("Rec") is True  # the rule that forbade it is gone, and that is recorded
+    assert [t.rule for t in m.outstanding()] == ["R1"]
+    m.close()
+    records = read_audit(tmp_path / "audit.jsonl")
+    dropped = [r["what"] for r in records if r["kind"] == "dropped"]
+    assert any("R2: not Rec" in w for w in dropped)
+    restored = [r for r in records if r["kind"] == "restored" and r["from"]]
+    assert restored[-1]["rules_changed"] is True and restored[-1]["obligations"] == 1
+
+
+def test_an_unwritable_journal_is_a_user_error(tmp_path: Path) -> None:
+    (tmp_path / "dir").mkdir()
+    with pytest.raises(JournalError, match="cannot open the journal"):
+        Manager.from_text(RULES, journal=tmp_path / "dir")
