@@ -8,6 +8,9 @@
 (b) 10,000 rules loaded: the median cost of one measure update that touches <= 10 rules,
     against the same update with only 100 rules loaded (cost must not depend on the
     rules an update does not touch).
+(c) What a deployment pays at 60 x 20: the same path with the JSON Lines audit log, and
+    with the audit log and the SQLite journal (every step committed with its records
+    before the implementation runs), as ratios to (a) measured in the same run.
 Targets: p99 <= 100 us at 60 x 20 (SLEEC@run.time: 6.9 s mean); (b) median <= 50 us.
 """
 
@@ -16,6 +19,7 @@ from __future__ import annotations
 import random
 import statistics
 import sys
+import tempfile
 import time
 
 from _common import args, report
@@ -34,9 +38,17 @@ def grid_rules(n_rules: int, n_clauses: int) -> str:
 
 
 def run_point(
-    n_rules: int, n_clauses: int, cases: int, rng: random.Random
+    n_rules: int, n_clauses: int, cases: int, rng: random.Random, persist: str = "none"
 ) -> tuple[list[float], list[float]]:
-    m = Manager.from_text(grid_rules(n_rules, n_clauses), clock=VirtualClock(), history=64)
+    """Latencies of our path and of the hand-coded one; ``persist``: none, audit or journal
+    (the audit log and the journal), written to a fresh temporary directory."""
+    tmp = tempfile.TemporaryDirectory()
+    durable: dict[str, str] = {}
+    if persist in ("audit", "journal"):
+        durable["audit"] = f"{tmp.name}/audit.jsonl"
+    if persist == "journal":
+        durable["journal"] = f"{tmp.name}/state.db"
+    m = Manager.from_text(grid_rules(n_rules, n_clauses), clock=VirtualClock(), history=64, **durable)
     hits: list[float] = []
 
     def implementation(ob, decision) -> None:  # type: ignore[no-untyped-def]
@@ -69,6 +81,7 @@ def run_point(
         implementation(None, chosen)
         base.append(hits[-1] - t0)
     m.close()
+    tmp.cleanup()
     return ours, base
 
 
@@ -161,6 +174,24 @@ def main() -> int:
             f"median {ctl_median:.1f} us: this machine's own tail for an operation that long",
         )
     )
+    # (c) the durable paths at the largest point, interleaved with the plain one (same run)
+    nr, nc = rules_axis[-1], clause_axis[-1]
+    medians: dict[str, list[float]] = {"none": [], "audit": [], "journal": []}
+    p99s: dict[str, list[float]] = {"none": [], "audit": [], "journal": []}
+    for _ in range(rounds):
+        for persist in medians:
+            o, _b = run_point(nr, nc, cases, rng, persist)
+            medians[persist].append(statistics.median(o) * 1e6)
+            p99s[persist].append(percentile([x * 1e6 for x in o], 99))
+    durable = {k: (statistics.median(v), statistics.median(p99s[k])) for k, v in medians.items()}
+    for k, label in (("audit", "with the audit log"), ("journal", "with audit log and journal")):
+        rows.append(
+            (
+                f"{nr} x {nc} {label}",
+                f"median {durable[k][0]:.1f} us",
+                f"{durable[k][0] / durable['none'][0]:.2f}x the plain path; p99 {durable[k][1]:.1f} us",
+            )
+        )
     repeats = 2000 if a.quick else 20000
     u10k = update_cost(10_000, repeats) * 1e6
     u100 = update_cost(100, repeats) * 1e6
@@ -178,6 +209,10 @@ def main() -> int:
         "update_median_us_10k_rules": round(u10k, 2),
         "update_median_us_100_rules": round(u100, 2),
         "update_ratio_10k_vs_100": round(u10k / u100, 2),
+        "durable_median_us_at_60x20": {k: round(v[0], 1) for k, v in durable.items()},
+        "durable_p99_us_at_60x20": {k: round(v[1], 1) for k, v in durable.items()},
+        "audit_over_plain": round(durable["audit"][0] / durable["none"][0], 2),
+        "journal_over_plain": round(durable["journal"][0] / durable["none"][0], 2),
         "targets": {"p99_us_at_60x20": 100, "update_median_us_10k_rules": 50},
         "sleec_at_runtime_mean_s_at_60x20": 6.9,
         "quick": a.quick,

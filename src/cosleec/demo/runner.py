@@ -54,6 +54,7 @@ def run(
     *,
     semantics: str = "last-wins",
     audit: str | None = None,
+    journal: str | None = None,
     on_step: Callable[[float, Step], None] | None = None,
     on_event: Callable[[RuntimeEvent], None] | None = None,
 ) -> Run:
@@ -62,12 +63,17 @@ def run(
     The demo's tasks are bound and checked first. Step kinds: ``set``, ``event``,
     ``advance`` (then a tick), ``request``, and ``fail``/``recover`` to make a robot action
     fail or work again. ``on_step(now, step)`` runs before each step, ``on_event`` for
-    every runtime event; ``audit`` names a JSON Lines audit trail. The Manager is closed
-    before returning.
+    every runtime event; ``audit`` names a JSON Lines audit trail and ``journal`` the
+    Manager's SQLite journal (state kept across runs and crashes: a journal a previous run
+    left is restored first). The Manager is closed before returning.
     """
     clock = VirtualClock()
     manager = Manager.from_file(
-        rules_path(), clock=clock, semantics=semantics, audit=AuditLog(audit) if audit else None
+        rules_path(),
+        clock=clock,
+        semantics=semantics,
+        audit=AuditLog(audit) if audit else None,
+        journal=journal,
     )
     robot = tasks.install(manager)
     manager.start()
@@ -179,7 +185,9 @@ class Display:
             self.out.print(Text(pad + f"rejected: {d['reason']}", style="red"))
 
 
-def main(as_json: bool = False, semantics: str = "last-wins", audit: str | None = None) -> int:
+def main(
+    as_json: bool = False, semantics: str = "last-wins", audit: str | None = None, journal: str | None = None
+) -> int:
     """``cosleec demo``: play the scripted day and show it (``as_json``: one JSON line per runtime event).
 
     Returns 0: checking the decisions against ``scenario.EXPECTED`` is the tests' job.
@@ -189,7 +197,7 @@ def main(as_json: bool = False, semantics: str = "last-wins", audit: str | None 
         def emit(ev: RuntimeEvent) -> None:
             print(json.dumps({"kind": ev.kind, "time": ev.time, **ev.data}, default=str))
 
-        run(semantics=semantics, audit=audit, on_event=emit)
+        run(semantics=semantics, audit=audit, journal=journal, on_event=emit)
         return 0
     console = Console(highlight=False)
     console.print(
@@ -197,7 +205,9 @@ def main(as_json: bool = False, semantics: str = "last-wins", audit: str | None 
     )
     console.print(Text(f"rules: {rules_path()}   semantics: {semantics}", style="dim"))
     display = Display(console)
-    result = run(semantics=semantics, audit=audit, on_step=display.step, on_event=display.event)
+    result = run(
+        semantics=semantics, audit=audit, journal=journal, on_step=display.step, on_event=display.event
+    )
     m = result.manager
     console.print()
     s = m.stats

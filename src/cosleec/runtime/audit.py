@@ -52,7 +52,11 @@ class AuditLog:
 
     def write_many(self, records: Iterable[dict[str, Any]]) -> None:
         """Append records in order with one flush (and one fsync) for all of them."""
-        text = "".join(json.dumps(r, default=str, separators=(",", ":")) + "\n" for r in records)
+        self.write_lines(json.dumps(r, default=str, separators=(",", ":")) for r in records)
+
+    def write_lines(self, lines: Iterable[str]) -> None:
+        """Append records already encoded as one-line JSON texts, in order, with one flush."""
+        text = "".join(f"{line}\n" for line in lines)
         if not text:
             return
         with self._lock:

@@ -91,20 +91,21 @@ class Journal:
             ) from None
         self._lock = threading.Lock()
         self._exported = 0  # audit records up to this sequence number are in the audit log
+        self._deleted = 0  # ... and up to this one are deleted from the journal
 
     def load(self) -> Saved | None:
         """What the journal holds; None for a new journal."""
         db = self._db
-        meta = dict(db.execute("SELECT key, value FROM meta").fetchall())
-        if "rules" not in meta:
+        row = db.execute("SELECT value FROM meta WHERE key = 'state'").fetchone()
+        if row is None:
             return None
-        clock = json.loads(meta.get("clock", '{"clock": 0, "wall": 0}'))
+        meta = json.loads(row[0])
         return Saved(
-            rules=meta["rules"],
-            run=meta.get("run", ""),
-            counters={k: int(v) for k, v in json.loads(meta.get("counters", "{}")).items()},
-            clock=float(clock["clock"]),
-            wall=float(clock["wall"]),
+            rules=str(meta["rules"]),
+            run=str(meta.get("run", "")),
+            counters={k: int(v) for k, v in meta.get("counters", {}).items()},
+            clock=float(meta["clock"]),
+            wall=float(meta["wall"]),
             context={n: (json.loads(v), float(s)) for n, v, s in db.execute("SELECT name, value, stamp FROM context")},
             obligations=[json.loads(r) for (r,) in db.execute("SELECT record FROM obligations ORDER BY id")],
             outbox=[json.loads(r) for (r,) in db.execute("SELECT record FROM outbox ORDER BY id")],
@@ -114,11 +115,11 @@ class Journal:
     def commit(
         self,
         change: Change,
-        records: Iterable[tuple[int, dict[str, Any]]],
-        meta: Mapping[str, str],
+        records: Iterable[tuple[int, str]],
+        meta: Mapping[str, Any],
         clock: float,
     ) -> None:
-        """Write one step: its state change, its audit records ``(seq, record)`` and ``meta``, atomically.
+        """Write one step: its state change, its audit records ``(seq, JSON text)`` and ``meta``, atomically.
 
         Audit records already copied to the audit log (:meth:`exported`) are deleted here,
         in the same transaction. JournalError if the write fails (nothing of it is kept).
@@ -127,29 +128,25 @@ class Journal:
         try:
             db.execute("BEGIN IMMEDIATE")
             try:
-                for name, cv in change.context.items():
-                    if cv is None:
-                        db.execute("DELETE FROM context WHERE name = ?", (name,))
-                    else:
-                        db.execute(
-                            "INSERT OR REPLACE INTO context VALUES (?, ?, ?)", (name, json.dumps(cv[0]), cv[1])
-                        )
-                for oid, rec in change.obligations.items():
-                    if rec is None:
-                        db.execute("DELETE FROM obligations WHERE id = ?", (oid,))
-                    else:
-                        db.execute("INSERT OR REPLACE INTO obligations VALUES (?, ?)", (oid, _dumps(rec)))
-                for did, rec in change.outbox.items():
-                    if rec is None:
-                        db.execute("DELETE FROM outbox WHERE id = ?", (did,))
-                    else:
-                        db.execute("INSERT OR REPLACE INTO outbox VALUES (?, ?)", (did, _dumps(rec)))
-                db.executemany("INSERT INTO records VALUES (?, ?)", ((s, _dumps(r)) for s, r in records))
-                if self._exported:
-                    db.execute("DELETE FROM records WHERE seq <= ?", (self._exported,))
-                rows = [*meta.items(), ("clock", json.dumps({"clock": clock, "wall": time.time()}))]
-                db.executemany("INSERT OR REPLACE INTO meta VALUES (?, ?)", rows)
+                for table, key, rows in (
+                    ("context", "name", [(n, json.dumps(cv[0]), cv[1]) for n, cv in change.context.items() if cv]),
+                    ("obligations", "id", [(k, _dumps(r)) for k, r in change.obligations.items() if r]),
+                    ("outbox", "id", [(k, _dumps(r)) for k, r in change.outbox.items() if r]),
+                ):
+                    gone = [(k,) for k, v in getattr(change, table).items() if v is None]
+                    if gone:
+                        db.executemany(f"DELETE FROM {table} WHERE {key} = ?", gone)
+                    if rows:
+                        marks = ", ".join("?" * len(rows[0]))
+                        db.executemany(f"INSERT OR REPLACE INTO {table} VALUES ({marks})", rows)
+                db.executemany("INSERT INTO records VALUES (?, ?)", records)
+                exported = self._exported
+                if exported > self._deleted:
+                    db.execute("DELETE FROM records WHERE seq <= ?", (exported,))
+                state = _dumps({**meta, "clock": clock, "wall": time.time()})
+                db.execute("INSERT OR REPLACE INTO meta VALUES ('state', ?)", (state,))
                 db.execute("COMMIT")
+                self._deleted = exported
             except BaseException:
                 db.execute("ROLLBACK")
                 raise

@@ -38,6 +38,7 @@ import functools
 import itertools
 import json
 import logging
+import math
 import threading
 import time
 import uuid
@@ -332,8 +333,7 @@ class Manager:
                 self._advance(now, step)
                 changed = self.context.apply(stored, now)
                 if self.journal is not None:
-                    for n in stored:
-                        step.change.context[n] = (self.context.external((n,))[n], now)
+                    step.change.context.update((n, (x, now)) for n, x in self.context.external(stored).items())
                 switches = self.layer_manager.update(changed, self.context.values) if changed else []
                 if changed and self._recording:
                     self._emit(
@@ -489,46 +489,33 @@ class Manager:
     def _commit(self, step: _Step) -> None:
         if not step.events and not step.change:
             return
-        stamped = []
-        wall = None
-        full: list[tuple[int, dict[str, Any]]] = []
-        keep = self.audit is not None or self.journal is not None
-        for ev in step.events:
-            ev = dataclasses.replace(ev, seq=self._count("record"))
-            stamped.append(ev)
-            if keep:
-                if wall is None:
-                    wall = datetime.datetime.now(datetime.UTC).isoformat(timespec="microseconds")
-                full.append(
+        lines: list[tuple[int, str]] = []
+        if self.audit is not None:
+            wall = datetime.datetime.now(datetime.UTC).isoformat(timespec="microseconds")
+            mono = time.monotonic()
+            head = f',"wall":"{wall}","mono":{mono!r},"run":"{self.run_id}","rules":"{self.ruleset.digest[:16]}"'
+            for ev in step.events:
+                body = json.dumps(ev.data, default=str, separators=(",", ":"))
+                lines.append(
                     (
                         ev.seq,
-                        {
-                            "seq": ev.seq,
-                            "kind": ev.kind,
-                            "time": ev.time,
-                            "wall": wall,
-                            "mono": time.monotonic(),
-                            "run": self.run_id,
-                            "rules": self.ruleset.digest[:16],
-                            **ev.data,
-                        },
+                        f'{{"seq":{ev.seq},"kind":"{ev.kind}","time":{_number(ev.time)}{head}'
+                        + (f",{body[1:]}" if len(body) > 2 else "}"),
                     )
                 )
         if self.journal is not None:
             try:
-                self.journal.commit(
-                    step.change, full if self.audit is not None else (), self._meta(), self.clock.now()
-                )
+                self.journal.commit(step.change, lines, self._meta(), self.clock.now())
             except JournalError as e:
                 self._broken = e
                 log.error("journal failed, the Manager stops deciding: %s", e)
                 raise
-        if self.audit is not None and full:
-            self.audit.write_many(r for _, r in full)
+        if self.audit is not None and lines:
+            self.audit.write_lines(text for _, text in lines)
             if self.journal is not None:
-                self.journal.exported(full[-1][0])
+                self.journal.exported(lines[-1][0])
         if self._observers:
-            self._delivery.extend(stamped)
+            self._delivery.extend(step.events)
 
     def _deliver(self) -> None:
         """Hand queued records to observers in order; whoever holds the delivery lock delivers for all."""
@@ -546,9 +533,9 @@ class Manager:
             finally:
                 self._delivering.release()
 
-    def _meta(self) -> dict[str, str]:
+    def _meta(self) -> dict[str, Any]:
         counters = {**self._next, "obligation": self.tracker.next_id, "version": self.context.version}
-        return {"rules": self.ruleset.digest, "run": self.run_id, "counters": json.dumps(counters)}
+        return {"rules": self.ruleset.digest, "run": self.run_id, "counters": counters}
 
     # ------------------------------------------------------------------ internals (under the lock)
     def _known(self, name: str, what: str, step: _Step) -> bool:
@@ -762,7 +749,8 @@ class Manager:
                 step.change.outbox[d.id] = {"decision": d.id, "rule": d.rule, "event": d.event}
 
     def _emit(self, step: _Step, kind: str, data: dict[str, Any]) -> None:
-        step.events.append(RuntimeEvent(kind, self.clock.now(), data))
+        """Add a record to the step; it is numbered now (every record of a step is committed)."""
+        step.events.append(RuntimeEvent(kind, self.clock.now(), data, self._count("record")))
 
     @property
     def _recording(self) -> bool:
@@ -905,6 +893,11 @@ class Manager:
             for rec in saved.obligations:
                 if not self.tracker.tracks(int(rec["id"])):
                     step.change.obligations[int(rec["id"])] = None
+
+
+def _number(x: float) -> str:
+    """A clock time as JSON: non-finite values (never from a checked clock) as null."""
+    return repr(x) if isinstance(x, int | float) and math.isfinite(x) else "null"
 
 
 def _show(value: object) -> str:

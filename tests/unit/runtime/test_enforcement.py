@@ -426,3 +426,25 @@ def test_a_capability_that_triggers_its_own_rule_is_stopped_with_a_record(tmp_pa
     assert next(calls) == 5
     failed = [r for r in read_audit(log) if r["kind"] == "task-failed"]
     assert len(failed) == 1 and "max_depth=5" in failed[0]["error"]
+
+
+def test_an_exception_inside_a_step_keeps_the_record_of_every_change_made(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # before: an OverflowError half-way through a trigger dropped the records of the
+    # changes already made (the decision), which stayed in force unrecorded
+    log, db = tmp_path / "a.jsonl", tmp_path / "j.db"
+    m, _ = manager("R1 when E then F within 1 seconds", audit=log, journal=db)
+
+    def boom(*args: Any, **kw: Any) -> Any:
+        raise OverflowError("a bug of ours")
+
+    monkeypatch.setattr(m.tracker, "start", boom)
+    with pytest.raises(OverflowError):
+        m.event("E")
+    assert [d.id for d in m.decisions] == [1]
+    kinds = [r["kind"] for r in read_audit(log)]
+    assert kinds[-2:] == ["event", "decision"]
+    m2, _ = manager("R1 when E then F within 1 seconds", journal=db)
+    (d,) = m2.event("E")
+    assert d.id == 2  # the journal has the decision too: its id is not given again
