@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 from typing import Any
 
@@ -54,6 +55,20 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     t.add_argument(
         "--status-each", action="store_true", help="publish status after every obligation (harnesses)"
     )
+    t.add_argument(
+        "--when-manager-down",
+        choices=("refuse", "raise"),
+        default="refuse",
+        help="when the Manager does not answer a task's request in time: refuse the action (default), "
+        "or raise ManagerUnavailable into the task",
+    )
+    t.add_argument(
+        "--request-timeout",
+        type=float,
+        default=2.0,
+        metavar="SECONDS",
+        help="how long a task's request waits for the Manager's answer (default 2)",
+    )
     common(t)
     lp = nodes.add_parser("launch", help="start the nodes of a launch file; stop them on SIGINT/SIGTERM")
     lp.add_argument("file")
@@ -63,6 +78,19 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     )
     d.add_argument("--json", action="store_true")
     common(d)
+
+
+def node_name(namespace: str, kind: str) -> str:
+    """The middleware name of a ``kind`` node under ``namespace``: ``/robot1`` gives ``robot1_manager``.
+
+    ROS 1 lets one node hold a name: two Managers both named ``cosleec_manager`` would
+    evict each other, so the name carries the namespace (``/cosleec`` still gives
+    ``cosleec_manager``; ``/fleet/robot1`` gives ``fleet_robot1_manager``). What a ROS
+    name cannot hold becomes ``_``, and a name that would start with a digit starts with
+    ``n``, so the result is valid on ROS 1 and ROS 2.
+    """
+    name = "_".join(p for p in re.split(r"[^A-Za-z0-9]+", f"{namespace}/{kind}") if p) or kind
+    return name if name[0].isalpha() else f"n{name}"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -77,7 +105,6 @@ def run(args: argparse.Namespace) -> int:
     if node == "demo":
         return ros.run_demo(backend, args.namespace, args.json)
 
-    name = f"cosleec_{node}" if node != "task" else f"cosleec_{args.name}"
     # rules and mapping are read before the middleware starts: a mistake is reported at once
     path = args.rules if node != "listener" else args.rules or None
     rules = RuleSet.from_file(path) if path else None
@@ -86,6 +113,8 @@ def run(args: argparse.Namespace) -> int:
         if node == "listener"
         else None
     )
+    namespace = mapping.namespace if mapping is not None and mapping.namespace else args.namespace
+    name = node_name(namespace, node if node != "task" else args.name)
 
     def make(t: Any) -> Any:
         if node == "manager":
@@ -110,7 +139,15 @@ def run(args: argparse.Namespace) -> int:
             assert mapping is not None
             return ListenerNode(t, mapping, namespace=args.namespace)
         assert rules is not None
-        tn = TaskNode(t, rules, namespace=args.namespace, name=args.name, status_each=args.status_each)
+        tn = TaskNode(
+            t,
+            rules,
+            namespace=args.namespace,
+            name=args.name,
+            status_each=args.status_each,
+            when_manager_down=args.when_manager_down,
+            request_timeout=args.request_timeout,
+        )
         ros.load_module(args.module).install(tn)
         only = args.only.split(",") if args.only else None
         return tn.start(only)

@@ -9,18 +9,28 @@ from __future__ import annotations
 
 import difflib
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from cosleec.lang import ast as A
 from cosleec.lang import hedges
-from cosleec.lang.diagnostics import DiagnosticSink
+from cosleec.lang.diagnostics import QUOTE_LIMIT, DiagnosticSink, clip
 
 # Names SLEEC-TK rejects because they clash with its CSP encoding (§3).
 TK_RESERVED = frozenset({"STOP", "P", "Q", "c", "d"})
 
 BOOL = "bool"
 NUM = "num"
+
+MAX_LINT_CLAUSES = 12
+"""The unreachable-clause lint asks :mod:`cosleec.lang.hedges` about a rule's clauses only
+when the rule has at most this many (the real corpus has at most 6). The question costs far
+more than n**2 per rule: :func:`hedges.reachable` tries every pair of clauses, and
+:func:`hedges.blockers` asks it again once per other clause for each dead clause, so a
+generated rule of 20,000 ``unless false`` clauses ran out of memory, and even a 16-clause
+rule of unknown conditions and ``true`` took seconds (12 clauses: at most about one). A
+longer rule gets only what holds under every semantics, at one look per clause: a clause
+whose condition is the literal ``false`` never applies."""
 
 
 @dataclass(frozen=True)
@@ -32,6 +42,9 @@ class Options:
     lint: bool = False  # naming conventions and style suggestions
     tk_names: bool = False  # warn about names SLEEC-TK rejects
     semantics: hedges.HedgeSemantics = hedges.HedgeSemantics.LAST_WINS  # for the hedge lint
+    # per rule (or concern, purpose), diagnostics of one code kept before the rest are
+    # folded into one "... and N more" summary (DiagnosticSink.folding); 0 keeps them all
+    repeat_limit: int = 20
 
 
 @dataclass
@@ -66,7 +79,9 @@ class Checker:
         self.opt = options
         self.table = SymbolTable()
         self.scale_literals: set[str] = set()
+        self._owners_of: dict[str, list[str]] = {}  # scale literal -> the measures whose scale has it
         self._cycles: set[frozenset[str]] = set()
+        self._suggestions: dict[tuple[str, str], str | None] = {}  # _did_you_mean's answers
 
     # ------------------------------------------------------------------ entry point
     def run(self) -> SymbolTable:
@@ -99,7 +114,7 @@ class Checker:
             if isinstance(d, A.FluentDecl):
                 self.sink.warning(
                     "unsupported-fluent",
-                    f"`fluent {d.name}` is an extension of CPeluti/LEGOS-SLEEC (goal fluents for "
+                    f"`fluent {clip(d.name)}` is an extension of CPeluti/LEGOS-SLEEC (goal fluents for "
                     "conflict explanation); cosleec ignores it",
                     d.span,
                 )
@@ -110,16 +125,16 @@ class Checker:
                 if prev == d:  # the same declaration again: harmless, but worth cleaning up
                     self.sink.warning(
                         "redeclared",
-                        f"`{d.name}` is declared twice, identically",
+                        f"`{clip(d.name)}` is declared twice, identically",
                         d.span,
                         related=(("first declared here", prev.span),),
                     )
                     continue
                 self.sink.error(
                     "duplicate-name",
-                    f"`{d.name}` is already declared as {_kind_word(prev)}",
+                    f"`{clip(d.name)}` is already declared as {_kind_word(prev)}",
                     d.span,
-                    related=((f"`{d.name}` first declared here", prev.span),),
+                    related=((f"`{clip(d.name)}` first declared here", prev.span),),
                 )
                 continue
             first[d.name] = d
@@ -127,18 +142,18 @@ class Checker:
                 t.events[d.name] = d
                 if self.opt.lint and not d.name[:1].isupper():
                     self.sink.warning(
-                        "naming", f"event `{d.name}` should start with an upper-case letter", d.span
+                        "naming", f"event `{clip(d.name)}` should start with an upper-case letter", d.span
                     )
             elif isinstance(d, A.MeasureDecl):
                 t.measures[d.name] = d
                 if self.opt.lint and not d.name[:1].islower():
                     self.sink.warning(
-                        "naming", f"measure `{d.name}` should start with a lower-case letter", d.span
+                        "naming", f"measure `{clip(d.name)}` should start with a lower-case letter", d.span
                     )
             else:
                 t.constants[d.name] = d
                 if self.opt.lint and d.name != d.name.upper():
-                    self.sink.warning("naming", f"constant `{d.name}` should be ALL_CAPS", d.span)
+                    self.sink.warning("naming", f"constant `{clip(d.name)}` should be ALL_CAPS", d.span)
         # scale literals: unique within their scale, distinct from every declared name
         for m in t.measures.values():
             if isinstance(m.type, A.ScaleType):
@@ -147,13 +162,18 @@ class Checker:
                 for lit, span in zip(m.type.literals, spans):
                     if lit in seen:
                         self.sink.error(
-                            "duplicate-literal", f"`{lit}` appears twice in the scale of `{m.name}`", span
+                            "duplicate-literal",
+                            f"`{clip(lit)}` appears twice in the scale of `{clip(m.name)}`",
+                            span,
                         )
+                    else:
+                        self._owners_of.setdefault(lit, []).append(m.name)
                     seen.add(lit)
                     if lit in first:
                         self.sink.error(
                             "literal-clash",
-                            f"scale literal `{lit}` of `{m.name}` has the name of {_kind_word(first[lit])}",
+                            f"scale literal `{clip(lit)}` of `{clip(m.name)}` has the name of "
+                            f"{_kind_word(first[lit])}",
                             span,
                         )
                     self._check_name(lit, span)
@@ -165,7 +185,7 @@ class Checker:
         if not _IDENTIFIER.fullmatch(name):
             self.sink.error(
                 "malformed-name",
-                f"`{name}` is not a SLEEC name",
+                f"`{clip(name)}` is not a SLEEC name",
                 span,
                 hint="a name is a letter or `_`, then letters, digits or `_`",
             )
@@ -175,7 +195,9 @@ class Checker:
         # not reserve the DSL's words: either way it is a name. The printer escapes it.
         if self.opt.tk_names and name in TK_RESERVED:
             self.sink.warning(
-                "tk-reserved", f"SLEEC-TK rejects the name `{name}` (it clashes with its CSP encoding)", span
+                "tk-reserved",
+                f"SLEEC-TK rejects the name `{clip(name)}` (it clashes with its CSP encoding)",
+                span,
             )
 
     def _constants(self) -> None:
@@ -196,7 +218,7 @@ class Checker:
             members = frozenset(path)
             if path[0] == name and members not in self._cycles:
                 self._cycles.add(members)
-                cycle = " -> ".join([*path, name])
+                cycle = clip(" -> ".join([*path, name]), 4 * QUOTE_LIMIT)
                 self.sink.error(
                     "constant-cycle", f"constants refer to each other in a cycle: {cycle}", c.span
                 )
@@ -206,14 +228,16 @@ class Checker:
             kind = t.kind(ref)
             if kind is not None:
                 self.sink.error(
-                    "constant-ref", f"constant `{name}` refers to {kind} `{ref}`; only constants can", c.span
+                    "constant-ref",
+                    f"constant `{clip(name)}` refers to {kind} `{clip(ref)}`; only constants can",
+                    c.span,
                 )
             else:
                 self.sink.error(
                     "undeclared",
-                    f"constant `{name}` refers to undeclared `{ref}`",
+                    f"constant `{clip(name)}` refers to undeclared `{clip(ref)}`",
                     c.span,
-                    hint=self._did_you_mean(ref, t.constants),
+                    hint=self._did_you_mean(ref, "constants", "undeclared"),
                 )
             return None
         v = self._constant_value(ref, [*path, name])
@@ -228,15 +252,17 @@ class Checker:
             if r.name in names:
                 self.sink.error(
                     "duplicate-rule",
-                    f"rule `{r.name}` is defined twice",
+                    f"rule `{clip(r.name)}` is defined twice",
                     r.span,
-                    related=((f"`{r.name}` first defined here", names[r.name].span),),
+                    related=((f"`{clip(r.name)}` first defined here", names[r.name].span),),
                 )
             else:
                 names[r.name] = r
             self._check_name(r.name, r.span)
-            self._trigger(r.trigger)
-            self._response(r.response, top=True)
+            # a rule's clauses can repeat one mistake thousands of times: report some, count the rest
+            with self.sink.folding(f"rule `{clip(r.name)}`", self.opt.repeat_limit):
+                self._trigger(r.trigger)
+                self._response(r.response, top=True)
 
     def _trigger(self, trig: A.Trigger) -> None:
         self._event(trig.event, trig.span, "trigger")
@@ -249,13 +275,13 @@ class Checker:
             return
         kind = t.kind(name)
         if kind is not None:
-            self.sink.error("not-an-event", f"{role} `{name}` is a {kind}, not an event", span)
+            self.sink.error("not-an-event", f"{role} `{clip(name)}` is a {kind}, not an event", span)
         else:
             self.sink.error(
                 "undeclared-event",
-                f"{role} `{name}` is not declared as an event",
+                f"{role} `{clip(name)}` is not declared as an event",
                 span,
-                hint=self._did_you_mean(name, t.events),
+                hint=self._did_you_mean(name, "events", "undeclared-event"),
             )
 
     def _response(self, resp: A.Response, top: bool) -> None:
@@ -274,13 +300,13 @@ class Checker:
                 if occ.eventually:
                     self.sink.warning(
                         "unreachable-otherwise",
-                        f"`otherwise` after `{occ.event} eventually` can never start",
+                        f"`otherwise` after `{clip(occ.event)} eventually` can never start",
                         item.otherwise.span,
                     )
                 elif occ.limit is None:
                     self.sink.warning(
                         "untimed-otherwise",
-                        f"`otherwise` after untimed `{occ.event}` is read as `within 0 seconds`",
+                        f"`otherwise` after untimed `{clip(occ.event)}` is read as `within 0 seconds`",
                         item.otherwise.span,
                     )
                 self._response(item.otherwise, top=False)
@@ -289,7 +315,7 @@ class Checker:
             if self.opt.lint and occ.negated and occ.limit is None and not occ.eventually:
                 self.sink.warning(
                     "untimed-prohibition",
-                    f"`not {occ.event}` forbids it only at the trigger instant",
+                    f"`not {clip(occ.event)}` forbids it only at the trigger instant",
                     occ.span,
                     hint="add `within T` or `eventually`",
                 )
@@ -306,23 +332,35 @@ class Checker:
         conditions that imply another (equal, or a conjunct of it) -- is handed to
         :func:`hedges.reachable`, which asks :func:`hedges.choose` about every situation
         consistent with it; a clause it never chooses gets a warning naming the cause.
+
+        That is done only for a rule of at most :data:`MAX_LINT_CLAUSES` clauses, and gives
+        an answer only when few enough conditions are unknown (``hedges.MAX_FREE_CONDITIONS``).
+        Otherwise only clauses whose condition is the literal ``false`` are reported: no
+        semantics chooses a clause whose condition does not hold (hedges' module docstring).
         """
         ds = resp.defeaters
         if not ds:
             return
         conds = [d.condition for d in ds]
         fixed = {i + 1: c.value for i, c in enumerate(conds) if isinstance(c, A.BoolLit)}
-
-        def implies(i: int, j: int) -> bool:
-            return conds[j - 1] == conds[i - 1] or conds[j - 1] in _conjuncts(conds[i - 1])
-
-        semantics = self.opt.semantics
-        chosen = hedges.reachable(len(ds), semantics, fixed=fixed, implies=implies)
-        if chosen is None:
+        implies = _implication(conds) if len(ds) <= MAX_LINT_CLAUSES else None
+        chosen = None
+        if implies is not None:
+            chosen = hedges.reachable(len(ds), self.opt.semantics, fixed=fixed, implies=implies)
+        if chosen is None or implies is None:
+            for i, value in fixed.items():
+                if not value:
+                    self._never(ds, i)
             return
         for i in range(1, len(ds) + 1):
             if i not in chosen:
                 self._unreachable(ds, i, fixed, implies)
+
+    def _never(self, ds: tuple[A.Defeater, ...], i: int) -> None:
+        """Report clause ``i``, whose condition is the literal ``false``."""
+        self.sink.warning(
+            "unreachable-hedge", f"clause {i}: condition is `false`, it never applies", ds[i - 1].span
+        )
 
     def _unreachable(
         self, ds: tuple[A.Defeater, ...], i: int, fixed: dict[int, bool], implies: Callable[[int, int], bool]
@@ -331,9 +369,7 @@ class Checker:
         :func:`hedges.blockers`, so that no semantics is restated here)."""
         span = ds[i - 1].span
         if fixed.get(i) is False:
-            self.sink.warning(
-                "unreachable-hedge", f"clause {i}: condition is `false`, it never applies", span
-            )
+            self._never(ds, i)
             return
         semantics = self.opt.semantics
         culprits = hedges.blockers(i, len(ds), semantics, fixed=fixed, implies=implies)
@@ -382,7 +418,7 @@ class Checker:
             if hint is None:
                 close = difflib.get_close_matches(d.unit, list(A.TIME_UNITS), n=1)
                 hint = f"did you mean `{close[0]}`?" if close else "units are seconds, minutes, hours, days"
-            self.sink.error("bad-unit", f"`{d.unit}` is not a time unit", d.span, hint=hint)
+            self.sink.error("bad-unit", f"`{clip(d.unit)}` is not a time unit", d.span, hint=hint)
         ty = self._expr(d.value)
         if ty is not None and ty != NUM:
             self.sink.error(
@@ -392,7 +428,9 @@ class Checker:
         v = self._const_eval(d.value)
         if v is not None and unit is not None:
             if v < 0:
-                self.sink.error("bad-deadline", f"negative deadline ({v} {d.unit})", _span(d.value))
+                self.sink.error(
+                    "bad-deadline", f"negative deadline ({clip(str(v))} {d.unit})", _span(d.value)
+                )
             return v * unit
         return None
 
@@ -426,7 +464,7 @@ class Checker:
         if isinstance(e, A.DecimalLit):
             self.sink.error(
                 "decimal",
-                f"`{e.text}`: SLEEC numbers are integers (no decimal literals)",
+                f"`{clip(e.text)}`: SLEEC numbers are integers (no decimal literals)",
                 e.span,
                 hint="scale the measure, e.g. tenths of a degree",
             )
@@ -481,7 +519,9 @@ class Checker:
         if m is not None:
             if n.arrow:
                 self.sink.error(
-                    "kind", f"`->{n.name}` refers to a constant, but `{n.name}` is a measure", n.span
+                    "kind",
+                    f"`->{clip(n.name)}` refers to a constant, but `{clip(n.name)}` is a measure",
+                    n.span,
                 )
             if isinstance(m.type, A.BooleanType):
                 return BOOL
@@ -491,21 +531,22 @@ class Checker:
         if n.name in t.constants:
             if n.braced:
                 self.sink.error(
-                    "kind", f"`{{{n.name}}}`: `{n.name}` is a constant; braces mark measures", n.span
+                    "kind",
+                    f"`{{{clip(n.name)}}}`: `{clip(n.name)}` is a constant; braces mark measures",
+                    n.span,
                 )
             return NUM
         if n.name in t.events:
-            self.sink.error("not-a-measure", f"`{n.name}` is an event, not a measure", n.span)
+            self.sink.error("not-a-measure", f"`{clip(n.name)}` is an event, not a measure", n.span)
             return None
         if n.name in self.scale_literals and not n.braced and not n.arrow:
             return ("lit", n.name)
         what = "constant" if n.arrow else "measure"
-        pool = {**t.measures, **t.constants}
         self.sink.error(
             "undeclared",
-            f"`{n.name}` is not declared (expected a {what})",
+            f"`{clip(n.name)}` is not declared (expected a {what})",
             n.span,
-            hint=self._did_you_mean(n.name, pool),
+            hint=self._did_you_mean(n.name, "values", "undeclared"),
         )
         return None
 
@@ -528,8 +569,9 @@ class Checker:
                     owners = self._owners(lit)
                     self.sink.error(
                         "scale-literal",
-                        f"`{lit}` is not in the scale of `{lt[1]}` ({', '.join(m.type.literals)}); "
-                        f"it is a literal of `{'`, `'.join(owners)}`",
+                        f"`{clip(lit)}` is not in the scale of `{clip(lt[1])}` "
+                        f"({clip(', '.join(m.type.literals), 4 * QUOTE_LIMIT)}); "
+                        f"it is a literal of `{owners}`",
                         _span(lit_side),
                         hint="scale literals belong to their measure (LEGOS-SLEEC's global "
                         "literal table lets such cross-scale comparisons through)",
@@ -543,7 +585,7 @@ class Checker:
             owners = self._owners(lit)
             self.sink.error(
                 "type",
-                f"scale literal `{lit}` (of `{'`, `'.join(owners)}`) compared with {_type_word(lt)}",
+                f"scale literal `{clip(lit)}` (of `{owners}`) compared with {_type_word(lt)}",
                 _span(lit_side),
             )
             return BOOL
@@ -571,17 +613,18 @@ class Checker:
                 if s.name in seen:
                     self.sink.error(
                         "duplicate-name",
-                        f"{block} `{s.name}` is defined twice",
+                        f"{block} `{clip(s.name)}` is defined twice",
                         s.span,
                         related=(("first defined here", seen[s.name].span),),
                     )
                 seen.setdefault(s.name, s)
-                cur: A.Situation | None = s
-                while cur is not None:
-                    self._trigger(cur.trigger)
-                    for r in cur.responses:
-                        self._response(r, top=True)
-                    cur = cur.meanwhile
+                with self.sink.folding(f"{block} `{clip(s.name)}`", self.opt.repeat_limit):
+                    cur: A.Situation | None = s
+                    while cur is not None:
+                        self._trigger(cur.trigger)
+                        for r in cur.responses:
+                            self._response(r, top=True)
+                        cur = cur.meanwhile
 
     def _relations(self) -> None:
         for rel in self.spec.relations:
@@ -615,12 +658,11 @@ class Checker:
                 self._condition(rel.condition)
                 self._duration(rel.duration)
 
-    def _owners(self, lit: str) -> list[str]:
-        return [
-            m.name
-            for m in self.table.measures.values()
-            if isinstance(m.type, A.ScaleType) and lit in m.type.literals
-        ]
+    def _owners(self, lit: str) -> str:
+        """The measures whose scale has ``lit``, for a message: `` `a`, `b` `` without the outer
+        backticks, cut to a bounded length. Looked up in a table built with the declarations,
+        not by a walk over every measure per comparison."""
+        return clip("`, `".join(self._owners_of.get(lit, ())), 4 * QUOTE_LIMIT)
 
     def _nonstandard(self, span: A.Span, word: str, instead: str) -> None:
         self.sink.error(
@@ -631,10 +673,30 @@ class Checker:
             hint=f"did you mean `{instead}`?",
         )
 
-    @staticmethod
-    def _did_you_mean(name: str, pool: Mapping[str, object]) -> str | None:
-        close = difflib.get_close_matches(name, list(pool), n=1, cutoff=0.75)
-        return f"did you mean `{close[0]}`?" if close else None
+    def _did_you_mean(self, name: str, among: str, code: str) -> str | None:
+        """A "did you mean" hint for an undeclared ``name``: the closest declared name among
+        the ``events``, the ``constants`` or the ``values`` (measures and constants).
+
+        The search reads every declared name, so it is done only for a diagnostic with
+        ``code`` that will be shown (not folded, :meth:`DiagnosticSink.shown`), and once per
+        name: otherwise thousands of clauses misnaming a measure, in a file declaring
+        thousands, would cost their product.
+        """
+        if not self.sink.shown(code):
+            return None
+        key = (name, among)
+        if key not in self._suggestions:
+            t = self.table
+            pool: list[str] = (
+                list(t.events)
+                if among == "events"
+                else list(t.constants)
+                if among == "constants"
+                else [*t.measures, *t.constants]
+            )
+            close = difflib.get_close_matches(name, pool, n=1, cutoff=0.75)
+            self._suggestions[key] = f"did you mean `{clip(close[0])}`?" if close else None
+        return self._suggestions[key]
 
 
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -642,9 +704,32 @@ _OPERATORS: dict[type, frozenset[str]] = {A.BinOp: A.BOOL_OPS | A.ARITH_OPS, A.C
 
 
 def _conjuncts(e: A.Expr) -> list[A.Expr]:
-    if isinstance(e, A.BinOp) and e.op == "and":
-        return [*_conjuncts(e.left), *_conjuncts(e.right)]
-    return [e]
+    """The operands of a chain of ``and`` (``e`` itself if it is no ``and``), left to right."""
+    out: list[A.Expr] = []
+    todo = [e]
+    while todo:
+        x = todo.pop()
+        if isinstance(x, A.BinOp) and x.op == "and":
+            todo += (x.right, x.left)
+        else:
+            out.append(x)
+    return out
+
+
+def _implication(conds: Sequence[A.Expr]) -> Callable[[int, int], bool]:
+    """``implies(i, j)`` for the hedge lint: condition j (1-based) is condition i, or one of
+    its conjuncts, so that it holds whenever condition i does.
+
+    Conditions are compared by hashing (equal ASTs are equal meanings: spans do not take
+    part), each numbered once, so a question is one set lookup and setting up costs one
+    hash per condition and conjunct -- not a structural comparison per pair of clauses.
+    """
+    number: dict[A.Expr, int] = {}
+    ids = [number.setdefault(c, len(number)) for c in conds]
+    implied = [
+        frozenset([ids[i], *(number[p] for p in _conjuncts(c) if p in number)]) for i, c in enumerate(conds)
+    ]
+    return lambda i, j: ids[j - 1] in implied[i - 1]
 
 
 def _span(e: A.Expr) -> A.Span:
@@ -665,7 +750,7 @@ def _type_word(ty: Type) -> str:
     if ty == NUM:
         return "a number"
     if isinstance(ty, tuple):
-        return f"the scale of `{ty[1]}`" if ty[0] == "scale" else f"scale literal `{ty[1]}`"
+        return f"the scale of `{clip(ty[1])}`" if ty[0] == "scale" else f"scale literal `{clip(ty[1])}`"
     return "an unknown value"
 
 

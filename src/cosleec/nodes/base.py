@@ -1,7 +1,9 @@
 """What every node shares: topic names, JSON handling, rejection of bad messages, counters.
 
 It exists so that the Manager, the Layer Manager, the Context Listener and the task nodes
-behave alike on the wire: a bad message is rejected and counted, never fatal.
+behave alike on the wire: a bad message is rejected and counted, never fatal. Whatever a
+message does -- not JSON, nested too deep for the parser, a number too large for a float,
+a field of the wrong type, a 10 MB string -- the node rejects it and hears the next one.
 """
 
 from __future__ import annotations
@@ -9,13 +11,23 @@ from __future__ import annotations
 import json
 import logging
 import threading
-from collections.abc import Callable
+import time
+import uuid
+from collections.abc import Callable, Hashable
 from typing import Any
 
 from cosleec.errors import UserError
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, LATCHED, Transport, dumps, topic
 
 log = logging.getLogger("cosleec.nodes")
+
+#: a rejection's reason is cut to this many characters (a reason may echo the message)
+REASON_LIMIT = 200
+#: the payload excerpt published on ``rejected`` is cut to this many characters
+PAYLOAD_LIMIT = 500
+#: the errors a bad message is expected to cause in a handler; anything else is also
+#: rejected, but logged with its traceback and counted in ``errors`` too: it is our bug
+MESSAGE_FAULTS = (ValueError, TypeError, KeyError, RecursionError, OverflowError)
 
 
 class MessageError(UserError, ValueError):
@@ -24,6 +36,81 @@ class MessageError(UserError, ValueError):
     Raise it from a topic handler: :meth:`Node.on` rejects the message -- logged, counted
     and published on ``rejected`` -- and the node keeps running.
     """
+
+
+def clip(text: str, limit: int = REASON_LIMIT) -> str:
+    """``text`` cut to ``limit`` characters, saying how many were cut: ``abc…(9997 more)``.
+
+    Reasons and excerpts echo what a sender wrote; cut, a 10 MB name makes a short log line.
+    """
+    return text if len(text) <= limit else f"{text[:limit]}…({len(text) - limit} more)"
+
+
+def show(value: Any, limit: int = 80) -> str:
+    """``repr(value)`` cut to ``limit`` characters, for reasons; never raises.
+
+    A value whose repr fails (nested too deep, an int of more digits than Python prints)
+    is shown by its type.
+    """
+    try:
+        text = repr(value)
+    except Exception:  # RecursionError, ValueError (int digits limit), a broken __repr__
+        return f"<{type(value).__name__}>"
+    return clip(text, limit)
+
+
+def excerpt(payload: Any, limit: int = PAYLOAD_LIMIT) -> str:
+    """The start of a rejected payload as text (JSON for a dict), cut to ``limit``; never raises."""
+    if isinstance(payload, str):
+        return clip(payload, limit)
+    try:
+        return clip(dumps(payload) if isinstance(payload, dict) else repr(payload), limit)
+    except Exception:  # nested too deep to print: say what it was
+        return f"<{type(payload).__name__} that cannot be shown>"
+
+
+class LogLimiter:
+    """Logs at most one line per kind of trouble every ``every`` seconds, with a count of the rest.
+
+    A broken publisher at 1 kHz, or someone flooding a topic, must not flood the log (nor
+    fill the disk): the first line of a kind goes out at once, the next ones of that kind
+    are held back until ``every`` seconds have passed, and the next line that goes out says
+    how many were held back. The counters of the node count every one of them. Thread-safe.
+    """
+
+    #: kinds remembered at most (they are topic x error type, so few; a bound all the same)
+    MAX_KINDS = 1024
+
+    def __init__(
+        self, logger: logging.Logger, every: float = 10.0, clock: Callable[[], float] = time.monotonic
+    ) -> None:
+        self.logger = logger
+        self.every = every
+        self.clock = clock
+        self._last: dict[Hashable, tuple[float, int]] = {}  # kind -> (last logged at, held back since)
+        self._lock = threading.Lock()
+
+    def log(self, level: int, kind: Hashable, msg: str, *args: Any, exc_info: Any = None) -> bool:
+        """Log ``msg % args`` at ``level`` unless a line of ``kind`` went out less than ``every`` s ago.
+
+        Returns True if the line was logged.
+        """
+        with self._lock:
+            now = self.clock()
+            last = self._last.get(kind)
+            if last is not None and now - last[0] < self.every:
+                self._last[kind] = (last[0], last[1] + 1)
+                return False
+            held = last[1] if last is not None else 0
+            self._last.pop(kind, None)
+            if len(self._last) >= self.MAX_KINDS:
+                self._last.pop(next(iter(self._last)))  # forget the kind logged longest ago
+            self._last[kind] = (now, 0)
+        if held:
+            msg += " (%d more like it in the last %.0f s not logged)"
+            args = (*args, held, self.every)
+        self.logger.log(level, msg, *args, exc_info=exc_info)
+        return True
 
 
 def context_values(msg: dict[str, Any]) -> dict[str, Any]:
@@ -37,8 +124,10 @@ def context_values(msg: dict[str, Any]) -> dict[str, Any]:
 class Node:
     """A node publishes and subscribes JSON objects on ``<namespace>/<name>`` topics.
 
-    A message that is not a JSON object, or that the handler rejects with ValueError, is
-    logged, counted and reported on ``rejected``; the node keeps running.
+    A message that is not a JSON object, or that the handler fails on in any way, is
+    rejected: logged (rate-limited), counted and reported on ``rejected``; the node keeps
+    running. ``session`` is a token new with every node object: a node that restarts is
+    told apart from its earlier life (task nodes key decision ids by the Manager's).
     """
 
     name = "node"
@@ -49,11 +138,14 @@ class Node:
     def __init__(self, transport: Transport, namespace: str = DEFAULT_NAMESPACE) -> None:
         self.transport = transport
         self.namespace = namespace
-        self.counters: dict[str, int] = {"received": 0, "rejected": 0, "published": 0}
+        self.session = uuid.uuid4().hex
+        # errors: messages a handler failed on in a way no message should cause (our bugs)
+        self.counters: dict[str, int] = {"received": 0, "rejected": 0, "published": 0, "errors": 0}
         self._count_lock = threading.Lock()
         self._status_lock = threading.RLock()  # snapshots are published in the order they are taken
         self._status_seq = 0
         self._advertised: list[str] = []  # what status reports subscriber counts for
+        self.limiter = LogLimiter(log)
         for t in ("rejected", "status"):
             self.advertise(t)
 
@@ -78,9 +170,10 @@ class Node:
     def on(self, name: str, handler: Callable[[dict[str, Any]], None]) -> None:
         """Call ``handler`` with every JSON object received on topic ``name``.
 
-        A payload that is not a JSON object, or that the handler refuses by raising
-        ValueError, TypeError or KeyError, is :meth:`reject`-ed and the node carries on;
-        any other exception goes to the transport. The handler runs on a thread of the
+        A payload that is not a JSON object, or that the handler fails on with any
+        Exception, is rejected (:meth:`reject_error`) and the node carries on: one bad
+        message must never stop the transport's thread, or the node would go deaf while
+        its heartbeat still said it was alive. The handler runs on a thread of the
         transport, not the caller's.
         """
         full = self.topic(name)
@@ -92,27 +185,57 @@ class Node:
                 if not isinstance(message, dict):
                     raise MessageError("expected a JSON object")
                 handler(message)
-            except (ValueError, TypeError, KeyError) as e:
-                self.reject(full, str(e) or type(e).__name__, payload)
+            except Exception as e:
+                self.reject_error(full, e, payload)
 
         self.transport.subscribe(full, receive)
 
-    def reject(self, where: str, reason: str, payload: Any) -> None:
-        """Log, count and publish on ``rejected`` a message this node cannot use.
+    def reject_error(self, where: str, error: Exception, payload: Any) -> None:
+        """Reject a message on ``where`` that raised ``error``: :meth:`reject` with its reason.
 
-        ``where`` is the topic it came from; the payload is published cut to 500
-        characters. With ``status_each`` a status message follows at once.
+        An error outside :data:`MESSAGE_FAULTS` is a bug of ours rather than of the
+        message: it is also counted in ``errors`` and logged with its traceback.
+        """
+        if isinstance(error, MESSAGE_FAULTS):
+            self.reject(where, str(error) or type(error).__name__, payload, kind=type(error).__name__)
+            return
+        self._count("errors")
+        self.reject(
+            where, f"{type(error).__name__}: {error}", payload, kind=type(error).__name__, exc_info=error
+        )
+
+    def reject(
+        self,
+        where: str,
+        reason: str,
+        payload: Any,
+        *,
+        kind: Hashable = "rejected",
+        exc_info: BaseException | None = None,
+    ) -> None:
+        """Count, log and publish on ``rejected`` a message this node cannot use.
+
+        ``where`` is the topic it came from. The reason is cut to :data:`REASON_LIMIT`
+        characters and the payload to :data:`PAYLOAD_LIMIT`, so a huge message makes a short
+        report. The log is rate-limited per ``where`` and ``kind`` (:class:`LogLimiter`);
+        the count and the ``rejected`` message are not. With ``status_each`` a status
+        message follows at once.
         """
         self._count("rejected")
-        log.warning("%s: rejected message on %s: %s", self.name, where, reason)
-        text = (
-            payload
-            if isinstance(payload, str)
-            else dumps(payload)
-            if isinstance(payload, dict)
-            else repr(payload)
+        reason = clip(reason)
+        level = logging.ERROR if exc_info is not None else logging.WARNING
+        self.limiter.log(
+            level,
+            (where, kind),
+            "%s: rejected message on %s: %s",
+            self.name,
+            where,
+            reason,
+            exc_info=exc_info,
         )
-        self.publish("rejected", {"node": self.name, "topic": where, "reason": reason, "payload": text[:500]})
+        self.publish(
+            "rejected", {"node": self.name, "topic": where, "reason": reason, "payload": excerpt(payload)}
+        )
         if self.status_each:
             self.status()  # the count just changed: say so
 
@@ -124,8 +247,10 @@ class Node:
         """Publish the node's counters on ``status``; snapshots go out in the order they are taken.
 
         ``extra`` fields join the message, with the subscriber count of every advertised
-        topic when the transport can tell. :func:`cosleec.ros.serve` calls it every 0.5 s
-        as a heartbeat.
+        topic when the transport can tell, and what the transport says of its own health:
+        ``executor_alive`` (False once the thread that delivers messages has stopped: the
+        node is deaf) and ``transport_errors`` (callbacks that raised into the transport).
+        :func:`cosleec.ros.serve` calls it every 0.5 s as a heartbeat.
         """
         with self._status_lock:
             with self._count_lock:
@@ -134,6 +259,20 @@ class Node:
             count = getattr(self.transport, "subscribers", None)
             if count is not None:  # who listens to what this node publishes: is the graph complete?
                 subs = {n: count(self.topic(n)) for n in self._advertised}
+            health: dict[str, Any] = {}
+            alive = getattr(self.transport, "alive", None)
+            if alive is not None:
+                health["executor_alive"] = bool(alive())
+            errors = getattr(self.transport, "errors", None)
+            if isinstance(errors, int):
+                health["transport_errors"] = errors
             self._status_seq += 1
-            message = {"node": self.name, "seq": self._status_seq, "counters": counters, "subscribers": subs}
+            message = {
+                "node": self.name,
+                "seq": self._status_seq,
+                "session": self.session,
+                "counters": counters,
+                "subscribers": subs,
+                **health,
+            }
             self.publish("status", {**message, **extra})

@@ -17,20 +17,27 @@ mapping is ever evaluated as code::
       UserFallen:         {topic: /fall_detector, type: std_msgs/Bool, equals: true}
 
 All measures read from one incoming message are sent as one atomic context update.
+
+A value is checked before it leaves: a number must be finite and fit a float (NaN, inf
+and a 400-digit integer are rejected), a measure taken as it is must be of its measure's
+kind (no ``"fast"`` for a numeric measure), and without the rules to say the kind it must
+at least be a boolean, a number or a short string. A rejected value is counted and
+reported on ``rejected``; the rest of the message still counts.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+import sys
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import yaml
 
 from cosleec.errors import UserError
-from cosleec.nodes.base import MessageError, Node
+from cosleec.nodes.base import MessageError, Node, show
 from cosleec.runtime import MeasureSpec
 
 COMPARISONS = {
@@ -42,6 +49,8 @@ COMPARISONS = {
     "not_equals": lambda x, t: x != t,
 }
 KEYS = {"topic", "type", "field", "json", "bands", *COMPARISONS}
+#: the longest string a measure taken as it is may carry (scale literals are short words)
+MAX_TEXT = 1000
 
 
 class MappingError(UserError, ValueError):
@@ -60,9 +69,16 @@ class Entry:
     json: bool
     comparison: tuple[str, Any] | None
     bands: tuple[tuple[float, str], ...] | None  # (upper bound, literal); last bound is inf
+    #: the measure's kind (boolean, numeric, scale) and scale literals, when the rules were given
+    measure_kind: str | None = None
+    literals: tuple[str, ...] = ()
 
     def value(self, message: dict[str, Any]) -> Any:
-        """The measure value (or event condition) for one message; ValueError if it has none."""
+        """The measure value (or event condition) for one message; MessageError if it has none.
+
+        Non-finite or oversized numbers and values of the wrong kind are refused here,
+        before they reach the Manager.
+        """
         x: Any = message
         if self.json:
             raw = message.get("data")
@@ -79,15 +95,46 @@ class Entry:
                 isinstance(target, int | float) and not isinstance(x, int | float)
             ):
                 raise MessageError(
-                    f"{self.topic}: {'.'.join(self.field)} is {x!r}, not comparable with {target!r}"
+                    f"{self.topic}: {'.'.join(self.field)} is {show(x)}, not comparable with {target!r}"
                 )
+            if isinstance(target, int | float) and not isinstance(target, bool):
+                self._number(x)  # NaN compares false with everything: say so instead
             return bool(COMPARISONS[op](x, target))
         if self.bands is not None:
-            if isinstance(x, bool) or not isinstance(x, int | float) or math.isnan(x):
-                raise MessageError(f"{self.topic}: {'.'.join(self.field)} is {x!r}, not a number")
+            self._number(x)
             for bound, literal in self.bands:
                 if x < bound:
                     return literal
+        return self._as_is(x)
+
+    def _number(self, x: Any) -> float:
+        """``x`` as a finite float, or MessageError (a boolean, a string, NaN, inf, too large)."""
+        what = f"{self.topic}: {'.'.join(self.field) or 'the message'}"
+        if isinstance(x, bool) or not isinstance(x, int | float):
+            raise MessageError(f"{what} is {show(x)}, not a number")
+        if isinstance(x, int) and abs(x) > sys.float_info.max:
+            raise MessageError(f"{what} is an integer too large for a float ({x.bit_length()} bits)")
+        if not math.isfinite(x):
+            raise MessageError(f"{what} is {x!r}, not a finite number")
+        return float(x)
+
+    def _as_is(self, x: Any) -> Any:
+        """A value taken as it is, if it is of the measure's kind (any plain value without rules)."""
+        what = f"{self.topic}: {'.'.join(self.field) or 'the message'}"
+        kind = self.measure_kind
+        if kind == "boolean" and not isinstance(x, bool):
+            raise MessageError(f"{what} is {show(x)}, but {self.name} is boolean")
+        if kind == "numeric":
+            self._number(x)
+        elif kind == "scale" and (not isinstance(x, str) or (self.literals and x not in self.literals)):
+            raise MessageError(f"{what} is {show(x)}, not in the scale of {self.name}")
+        elif isinstance(x, int | float) and not isinstance(x, bool):
+            self._number(x)
+        elif isinstance(x, str):
+            if len(x) > MAX_TEXT:
+                raise MessageError(f"{what} is a string of {len(x)} characters (at most {MAX_TEXT})")
+        elif not isinstance(x, bool):
+            raise MessageError(f"{what} is {show(x)}, not a boolean, number or string")
         return x
 
 
@@ -215,6 +262,9 @@ def _entry(
         comparison=comparison,
         bands=bands,
     )
+    if kind == "measure" and measures is not None and name in measures:
+        spec_of = measures[name]
+        e = replace(e, measure_kind=spec_of.kind, literals=tuple(spec_of.literals))
     if kind == "event":
         if events is not None and name not in events:
             raise MappingError(f"{where}: the rules declare no event {name!r}")
@@ -243,7 +293,8 @@ class ListenerNode(Node):
 
     Run one per robot, next to the Manager node. The mapping's ``namespace``, when set,
     wins over ``namespace``. A message a mapping entry cannot read is rejected for that
-    entry; the other entries of the message still count.
+    entry; the other entries of the message still count. Whatever a message holds, the
+    node rejects it and goes on: no error leaves a typed topic's callback.
     """
 
     name = "listener"
@@ -265,13 +316,19 @@ class ListenerNode(Node):
 
     def _message(self, where: str, entries: list[Entry], message: dict[str, Any]) -> None:
         self._count("received")
+        try:
+            self._read(where, entries, message)
+        except Exception as err:  # never into the transport: its thread must go on delivering
+            self.reject_error(where, err, message)
+
+    def _read(self, where: str, entries: list[Entry], message: dict[str, Any]) -> None:
         values: dict[str, Any] = {}
         fired: list[str] = []
         for e in entries:
             try:
                 v = e.value(message)
-            except (ValueError, TypeError) as err:
-                self.reject(where, str(err), message)
+            except Exception as err:  # this entry cannot read it; the others may
+                self.reject_error(where, err, message)
                 continue
             if e.kind == "measure":
                 values[e.name] = v

@@ -9,9 +9,11 @@ processes, whatever the timing of the layer topic.
 
 from __future__ import annotations
 
+import math
+import sys
 from typing import Any
 
-from cosleec.nodes.base import MessageError, Node, context_values
+from cosleec.nodes.base import MessageError, Node, context_values, show
 from cosleec.nodes.recording import McapRecorder
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
 from cosleec.runtime import (
@@ -24,6 +26,9 @@ from cosleec.runtime import (
     RuntimeEvent,
     VirtualClock,
 )
+
+#: the longest event name (or request id) the Manager node takes; SLEEC names are identifiers
+MAX_NAME = 256
 
 
 class ManagerNode(Node):
@@ -84,13 +89,23 @@ class ManagerNode(Node):
             )
 
     # ------------------------------------------------------------------ inputs
+    # Each handler refuses what the runtime must not see by raising MessageError: the
+    # message is rejected, counted and reported (Node.on), and the node goes on.
     def _context(self, msg: dict[str, Any]) -> None:
-        self._feed(self.manager.update, context_values(msg))
+        values = context_values(msg)
+        for name, v in values.items():  # the runtime takes any int; a float it cannot be is refused here
+            if isinstance(v, int) and not isinstance(v, bool) and abs(v) > sys.float_info.max:
+                raise MessageError(
+                    f"{show(name)} is an integer too large for a float ({v.bit_length()} bits)"
+                )
+        self._feed(self.manager.update, values)
 
     def _event(self, msg: dict[str, Any]) -> None:
         name = msg.get("event")
         if not isinstance(name, str):
             raise MessageError("event message needs a string `event`")
+        if len(name) > MAX_NAME:  # unknown anyway; refused before the runtime echoes it in its records
+            raise MessageError(f"event name of {len(name)} characters (at most {MAX_NAME}): {show(name)}")
         self._feed(self.manager.event, name)
 
     def _feed(self, step: Any, arg: Any) -> None:
@@ -104,17 +119,34 @@ class ManagerNode(Node):
 
     def _request(self, msg: dict[str, Any]) -> None:
         name, rid = msg.get("event"), msg.get("id")
-        if not isinstance(name, str) or rid is None:
-            raise MessageError("request message needs `id` and a string `event`")
+        if not isinstance(name, str) or isinstance(rid, bool) or not isinstance(rid, str | int):
+            raise MessageError("request message needs an `id` (string or integer) and a string `event`")
+        if len(name) > MAX_NAME or len(str(rid)) > MAX_NAME:  # the reply echoes both
+            raise MessageError(f"request `id` or `event` longer than {MAX_NAME} characters")
         allowed = self.manager.request(name)
         self.publish("request_reply", {"id": rid, "event": name, "allowed": allowed})
 
     def _clock(self, msg: dict[str, Any]) -> None:
+        """Simulated time: ``t`` must be a finite number, and time never goes back.
+
+        A ``t`` earlier than now is rejected and counted, and time stays where it is
+        (silently keeping the later time would hide a simulator that restarted or a
+        stale publisher); ``t`` equal to now judges deadlines again, harmlessly.
+        """
         t = msg.get("t")
         if not isinstance(t, int | float) or isinstance(t, bool):
             raise MessageError("clock message needs a number `t`")
+        try:
+            seconds = float(t)
+        except OverflowError:  # an integer of hundreds of digits
+            raise MessageError("clock `t` is an integer too large for a float") from None
+        if not math.isfinite(seconds):
+            raise MessageError(f"clock `t` must be a finite number, not {t!r}")
         assert isinstance(self.clock, VirtualClock)
-        self.clock.set(max(float(t), self.clock.now()))
+        now = self.clock.now()
+        if seconds < now:
+            raise MessageError(f"clock went back from {now} to {seconds}: time does not go back")
+        self.clock.set(seconds)
         self.manager.tick()
         self._after_message()
 
@@ -128,7 +160,8 @@ class ManagerNode(Node):
         if ev.kind == "decision":
             if d["clause"] is not None:  # the task nodes first: they are on the critical path
                 self._count("obligations")
-                self.publish("obligations", d)
+                # task nodes run each (session, id) once: a duplicate on the wire is not re-run
+                self.publish("obligations", {**d, "session": self.session})
             self.publish("decisions", d)
         elif ev.kind == "obligation" and (d["status"] == "violated" or d["late"]):
             self.publish("violations", d)

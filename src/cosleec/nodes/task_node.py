@@ -4,19 +4,76 @@ A task node loads the same rules, binds tasks (paper style) and capabilities, an
 to ``obligations``. Each decision names its clause and layer; the node runs that variant
 on a worker thread (so a task may block, or ask whether an action is allowed, without
 stalling the middleware), and tasks report what they did on ``events``.
+
+Each decision runs at most once: the node remembers the ``(session, id)`` of the decisions
+it took (the Manager node stamps its obligations with its ``session``), so a message
+duplicated on the wire -- re-delivered, replayed from a recording, forged -- is counted in
+``duplicates`` and not run again.
 """
 
 from __future__ import annotations
 
 import itertools
+import logging
 import queue
 import threading
+from collections import OrderedDict, deque
 from collections.abc import Callable
 from typing import Any
 
-from cosleec.nodes.base import Node
+from cosleec.errors import ConfigurationError, UserError
+from cosleec.nodes.base import MessageError, Node
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
 from cosleec.runtime import Capability, Decision, Implementations, RuleSet, Task
+
+#: what :meth:`TaskNode.request` does when the Manager does not answer in time
+WHEN_MANAGER_DOWN = ("refuse", "raise")
+
+
+class ManagerUnavailable(UserError):
+    """The Manager did not answer a task node's request in time (``when_manager_down="raise"``).
+
+    Raised into the task code that called :meth:`TaskNode.request`; the task node counts the
+    task as failed, as for any exception of a task.
+    """
+
+
+class SeenDecisions:
+    """The ``(session, id)`` of the decisions a task node took, in bounded memory.
+
+    The last ``window`` keys are remembered exactly. When one is forgotten, every id of its
+    session up to it is from then on treated as seen: the Manager numbers its decisions
+    upwards, so only a decision that arrives after ``window`` later ones of its session
+    -- never in practice -- would be wrongly skipped, and a replay of old ones never runs.
+    A new session (a restarted Manager) starts afresh; the floors of the last
+    ``max_sessions`` sessions are kept. Not thread-safe: the caller holds a lock.
+    """
+
+    def __init__(self, window: int = 100_000, max_sessions: int = 64) -> None:
+        if window < 1:
+            raise ConfigurationError(f"the window of seen decisions must be at least 1, not {window}")
+        self.window = window
+        self.max_sessions = max_sessions
+        self._seen: OrderedDict[tuple[str, int], None] = OrderedDict()
+        self._floor: OrderedDict[str, int] = OrderedDict()  # session -> every id <= it counts as seen
+
+    def add(self, session: str, decision: int) -> bool:
+        """Remember that ``decision`` of ``session`` is taken; False if it was already (a duplicate)."""
+        key = (session, decision)
+        floor = self._floor.get(session)
+        if key in self._seen or (floor is not None and decision <= floor):
+            return False
+        self._seen[key] = None
+        if len(self._seen) > self.window:
+            (old_session, old), _ = self._seen.popitem(last=False)
+            self._floor[old_session] = max(old, self._floor.get(old_session, old))
+            self._floor.move_to_end(old_session)
+            if len(self._floor) > self.max_sessions:
+                self._floor.popitem(last=False)
+        return True
+
+    def __len__(self) -> int:
+        return len(self._seen)
 
 
 class TaskNode(Node):
@@ -25,6 +82,12 @@ class TaskNode(Node):
     Build it from the same rule set as the Manager, bind tasks and capabilities (an
     ``install(node)`` function of the ``--module``), then :meth:`start` it. It offers the
     part of the Manager's interface tasks use (``event``, ``request``).
+
+    ``when_manager_down`` says what :meth:`request` does when the Manager does not answer
+    within ``request_timeout`` seconds: ``"refuse"`` (the default) answers no, so the robot
+    does not act; ``"raise"`` raises :class:`ManagerUnavailable` into the task. There is
+    deliberately no "allow": without the Manager nobody checks the prohibitions.
+    ``handled`` holds the last ``keep_handled`` decisions run; status reports the total.
     """
 
     name = "task"
@@ -37,18 +100,31 @@ class TaskNode(Node):
         namespace: str = DEFAULT_NAMESPACE,
         name: str = "task",
         request_timeout: float = 2.0,
+        when_manager_down: str = "refuse",
         status_each: bool = False,
+        keep_handled: int = 1000,
+        seen_window: int = 100_000,
     ) -> None:
+        if when_manager_down not in WHEN_MANAGER_DOWN:
+            raise ConfigurationError(
+                f"when_manager_down must be one of {', '.join(WHEN_MANAGER_DOWN)}, not {when_manager_down!r}"
+            )
         super().__init__(transport, namespace)
         self.name = name
         self.status_each = status_each  # status after every handled obligation (harnesses)
         self.ruleset = rules
         self.implementations = Implementations(rules)
         self.request_timeout = request_timeout
+        self.when_manager_down = when_manager_down
         self._ids = itertools.count(1)
         self._replies: dict[str, tuple[threading.Event, list[bool]]] = {}
         self._work: queue.Queue[Decision | None] = queue.Queue()
-        self.handled: list[Decision] = []
+        self.handled: deque[Decision] = deque(maxlen=keep_handled)  # the most recent decisions run
+        self.handled_total = 0  # every decision run (status `handled`)
+        self._seen = SeenDecisions(seen_window)
+        self._seen_lock = threading.Lock()
+        for key in ("duplicates", "request_timeouts"):
+            self.counters[key] = 0
         for t in ("events", "request"):
             self.advertise(t)
         self._worker = threading.Thread(target=self._run, name=f"cosleec-{name}", daemon=True)
@@ -62,21 +138,44 @@ class TaskNode(Node):
         self.publish("events", {"event": name})
 
     def request(self, event: str) -> bool:
-        """Ask the Manager whether ``event`` is allowed now; no answer in time means no.
+        """Ask the Manager whether ``event`` is allowed now.
 
-        Blocks for up to ``request_timeout`` seconds. Call it from task code, which runs on
-        the node's worker thread, never from a transport callback: the reply may need that
-        very thread, and would then arrive only after the wait.
+        Blocks for up to ``request_timeout`` seconds. No answer in time (the Manager is
+        down, or the graph is not connected) is counted in ``request_timeouts`` and then
+        refused (returns False) or raises :class:`ManagerUnavailable`, as
+        ``when_manager_down`` says. Call it from task code, which runs on the node's worker
+        thread, never from a transport callback: the reply may need that very thread, and
+        would then arrive only after the wait.
         """
         rid = f"{self.name}-{next(self._ids)}"
         self._count("requested")
         done = threading.Event()
         box: list[bool] = []
         self._replies[rid] = (done, box)
-        self.publish("request", {"id": rid, "event": event})
-        done.wait(self.request_timeout)
-        self._replies.pop(rid, None)
-        return bool(box and box[0])
+        try:
+            self.publish("request", {"id": rid, "event": event})
+            done.wait(self.request_timeout)
+        finally:
+            self._replies.pop(rid, None)
+        if box:
+            return box[0]
+        self._count("request_timeouts")
+        self.limiter.log(
+            logging.WARNING,
+            "request_timeout",
+            "%s: no answer from the Manager within %.1f s to a request for %s: %s",
+            self.name,
+            self.request_timeout,
+            event,
+            "refused" if self.when_manager_down == "refuse" else "raising ManagerUnavailable",
+        )
+        if self.when_manager_down == "raise":
+            raise ManagerUnavailable(
+                f"the Manager did not answer within {self.request_timeout} s whether {event!r} is allowed",
+                hint="is the Manager node running, in the same namespace?",
+                where=self.topic("request"),
+            )
+        return False
 
     def bind(self, *tasks: Task) -> TaskNode:
         """Bind paper-style tasks (one per rule) to this node."""
@@ -104,14 +203,36 @@ class TaskNode(Node):
         return self
 
     def _obligation(self, msg: dict[str, Any]) -> None:
-        if msg.get("rule") not in self.rules:
+        rule = msg.get("rule")
+        if not isinstance(rule, str):
+            raise MessageError("obligation message needs a string `rule`")
+        if rule not in self.rules:
             return  # another task node's rule
-        self._work.put(Decision.from_json(msg))
+        d = Decision.from_json(msg)
+        session = msg.get("session", "")
+        if not isinstance(session, str):
+            raise MessageError("obligation `session` must be a string")
+        with self._seen_lock:
+            new = self._seen.add(session, d.id)
+        if not new:
+            self._count("duplicates")
+            self.limiter.log(
+                logging.WARNING,
+                "duplicate",
+                "%s: decision %s of %s already taken: not run again",
+                self.name,
+                d.id,
+                rule,
+            )
+            if self.status_each:
+                self.status()
+            return
+        self._work.put(d)
 
     def _reply(self, msg: dict[str, Any]) -> None:
         entry = self._replies.get(str(msg.get("id")))
         if entry is not None:
-            entry[1].append(bool(msg.get("allowed")))
+            entry[1].append(msg.get("allowed") is True)
             entry[0].set()
 
     def _run(self) -> None:
@@ -119,19 +240,31 @@ class TaskNode(Node):
             d = self._work.get()
             if d is None:
                 return
-            rule = self.ruleset.rule(d.rule)
-            if d.event == "otherwise":  # a fallback after a missed deadline
-                self.implementations.dispatch_fallback(rule, d)
-            else:
-                self.implementations.dispatch(rule, d)
-            self.handled.append(d)
+            try:
+                rule = self.ruleset.rule(d.rule)
+                if d.event == "otherwise":  # a fallback after a missed deadline
+                    self.implementations.dispatch_fallback(rule, d)
+                else:
+                    self.implementations.dispatch(rule, d)
+            except Exception as e:  # the dispatch guards task code; this guards the worker itself
+                self._count("errors")
+                self.limiter.log(
+                    logging.ERROR, "worker", "%s: decision %s failed to dispatch", self.name, d.id, exc_info=e
+                )
+            finally:
+                self.handled.append(d)
+                self.handled_total += 1
             if self.status_each:
                 self.status()
 
     def status(self, **extra: Any) -> None:
-        """Publish the counters with ``handled`` (decisions run) and ``failures`` (implementations raised)."""
+        """Publish the counters with ``handled`` (decisions run, in all) and ``failures`` (implementations raised).
+
+        The counters include ``duplicates`` (decisions received again, not run) and
+        ``request_timeouts`` (requests the Manager did not answer in time).
+        """
         with self._status_lock:
-            super().status(handled=len(self.handled), failures=self.implementations.failures, **extra)
+            super().status(handled=self.handled_total, failures=self.implementations.failures, **extra)
 
     def close(self) -> None:
         """Stop the worker once the decisions already queued have run (waits up to 5 s).
@@ -140,4 +273,3 @@ class TaskNode(Node):
         """
         self._work.put(None)
         self._worker.join(5)
-

@@ -13,6 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from cosleec.nodes import Handler
+from cosleec.ros.guard import CallbackGuard
 from cosleec.ros.messages import message_class, to_dict
 
 
@@ -22,6 +23,8 @@ class Ros1Transport:
     One per node process (see :func:`cosleec.ros.run.transport`); it needs the master of
     ``ROS_MASTER_URI``. rospy's signal handlers are off: the node's own loop owns
     SIGINT/SIGTERM. rospy calls handlers on its own threads, so they may run concurrently.
+    A handler that raises is counted in ``errors`` and logged rate-limited
+    (:class:`~cosleec.ros.guard.CallbackGuard`), not left to rospy's unbounded log.
     """
 
     def __init__(self, node_name: str) -> None:
@@ -36,6 +39,16 @@ class Ros1Transport:
         self._subs: list[Any] = []
         self._latched: set[str] = set()
         self._lock = threading.Lock()
+        self._guard = CallbackGuard()
+
+    @property
+    def errors(self) -> int:
+        """Callbacks that raised (and were caught): node status reports it as ``transport_errors``."""
+        return self._guard.errors
+
+    def alive(self) -> bool:
+        """False once rospy has shut down (stopped, or evicted by a node of the same name)."""
+        return not self._rospy.is_shutdown()
 
     def advertise(self, topic: str, latched: bool = False) -> None:
         """Create the publisher of ``topic``, latched when ``latched``; the first call decides.
@@ -64,7 +77,11 @@ class Ros1Transport:
         """
         self._subs.append(
             self._rospy.Subscriber(
-                topic, self._String, lambda m: handler(m.data), queue_size=1000, tcp_nodelay=True
+                topic,
+                self._String,
+                self._guard.wrap(topic, lambda m: handler(m.data)),
+                queue_size=1000,
+                tcp_nodelay=True,
             )
         )
 
@@ -74,7 +91,11 @@ class Ros1Transport:
         ValueError or ImportError for a message type that cannot be loaded.
         """
         cls = message_class(type_name)
-        self._subs.append(self._rospy.Subscriber(topic, cls, lambda m: handler(to_dict(m)), queue_size=1000))
+        self._subs.append(
+            self._rospy.Subscriber(
+                topic, cls, self._guard.wrap(topic, lambda m: handler(to_dict(m))), queue_size=1000
+            )
+        )
 
     def publish_typed(self, topic: str, type_name: str, fields: dict[str, Any]) -> None:
         """Publish a typed message (simulators, tests): ``std_msgs/Bool``, ``{"data": True}``."""
@@ -99,7 +120,7 @@ class Ros1Transport:
 
     def ok(self) -> bool:
         """False once rospy has shut down: :func:`cosleec.ros.serve` then stops the node."""
-        return not self._rospy.is_shutdown()
+        return self.alive()
 
     def close(self) -> None:
         """Unregister every subscriber and publisher, then shut rospy down for this process."""

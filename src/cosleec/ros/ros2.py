@@ -3,11 +3,17 @@
 Imported only when a ROS 2 transport is created, so the rest of cosleec runs without
 rclpy. Network safety is checked here, fail closed: the transport refuses to start unless
 DDS discovery is confined to this machine (:func:`check_network`).
+
+An exception raised into the executor would end ``spin()`` and leave the node deaf, so
+every callback is guarded (:class:`~cosleec.ros.guard.CallbackGuard`), and if the spin
+thread ends anyway the transport says so: :meth:`Ros2Transport.alive` and
+:meth:`Ros2Transport.ok` turn False and :func:`cosleec.ros.serve` stops the node.
 """
 
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import threading
 from collections.abc import Callable
@@ -15,7 +21,10 @@ from typing import Any
 
 from cosleec.errors import UserError
 from cosleec.nodes import Handler
+from cosleec.ros.guard import CallbackGuard
 from cosleec.ros.messages import message_class, to_dict
+
+log = logging.getLogger("cosleec.ros")
 
 
 class UnsafeNetworkError(UserError):
@@ -44,7 +53,9 @@ class Ros2Transport:
     One per node process (see :func:`cosleec.ros.run.transport`). It checks the network
     first (:class:`UnsafeNetworkError`), and initialises rclpy if needed without rclpy's
     signal handlers: the node's own loop owns SIGINT/SIGTERM. A single-threaded executor
-    runs every handler of this transport, one at a time, on the spin thread.
+    runs every handler of this transport, one at a time, on the spin thread; a handler
+    that raises is counted in ``errors`` and the executor goes on. ``spin_error`` holds
+    what ended the spin thread, if something did.
     """
 
     def __init__(self, node_name: str) -> None:
@@ -66,14 +77,35 @@ class Ros2Transport:
         self._subs: list[Any] = []
         self._latched: set[str] = set()
         self._lock = threading.Lock()
+        self._guard = CallbackGuard()
+        self._closing = False
+        self.spin_error: BaseException | None = None
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
         self._thread = threading.Thread(target=self._spin, name=f"{node_name}-spin", daemon=True)
         self._thread.start()
 
     def _spin(self) -> None:
-        with contextlib.suppress(Exception):  # shutdown races (context already invalid)
+        try:
             self.executor.spin()
+        except Exception as e:
+            if not self._closing:  # not a shutdown race: the node has gone deaf, say why
+                self.spin_error = e
+                log.error("the ROS 2 executor stopped: %s: %s", type(e).__name__, e, exc_info=e)
+        if not self._closing and self.spin_error is None:
+            log.error("the ROS 2 executor stopped (rclpy shut down?)")
+
+    @property
+    def errors(self) -> int:
+        """Callbacks that raised (and were caught): node status reports it as ``transport_errors``."""
+        return self._guard.errors
+
+    def alive(self) -> bool:
+        """Is the spin thread still delivering messages? False once it has ended, for whatever reason.
+
+        Node status reports it as ``executor_alive``.
+        """
+        return self._thread.is_alive()
 
     def _qos(self, latched: bool) -> Any:
         from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -119,7 +151,7 @@ class Ros2Transport:
         """
         is_latched = topic.rsplit("/", 1)[-1] == "layers" if latched is None else latched
         sub = self.node.create_subscription(
-            self._String, topic, lambda m: handler(m.data), self._qos(is_latched)
+            self._String, topic, self._guard.wrap(topic, lambda m: handler(m.data)), self._qos(is_latched)
         )
         self._subs.append(sub)
 
@@ -129,7 +161,9 @@ class Ros2Transport:
         ValueError or ImportError for a message type that cannot be loaded.
         """
         cls = message_class(type_name)
-        sub = self.node.create_subscription(cls, topic, lambda m: handler(to_dict(m)), self._qos(False))
+        sub = self.node.create_subscription(
+            cls, topic, self._guard.wrap(topic, lambda m: handler(to_dict(m))), self._qos(False)
+        )
         self._subs.append(sub)
 
     def publish_typed(self, topic: str, type_name: str, fields: dict[str, Any]) -> None:
@@ -156,14 +190,15 @@ class Ros2Transport:
         return pub.get_subscription_count() if pub is not None else 0
 
     def ok(self) -> bool:
-        """False once rclpy has shut down: :func:`cosleec.ros.serve` then stops the node."""
-        return bool(self._rclpy.ok())
+        """False once rclpy has shut down or the spin thread has ended: :func:`cosleec.ros.serve` then stops the node."""
+        return bool(self._rclpy.ok()) and self.alive()
 
     def close(self) -> None:
         """Shut down in the order that avoids aborts at exit: executor, spin thread, node, rclpy.
 
         Errors along the way (a context already invalid) are ignored.
         """
+        self._closing = True
         with contextlib.suppress(Exception):
             self.executor.shutdown()
         self._thread.join(5)

@@ -6,6 +6,7 @@ turns a missing middleware into a user error, and keeps the node's heartbeat goi
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import logging
 import signal
@@ -13,6 +14,8 @@ import threading
 from typing import Any
 
 from cosleec.errors import UserError
+
+log = logging.getLogger("cosleec.ros")
 
 
 class MiddlewareMissingError(UserError):
@@ -60,7 +63,11 @@ def serve(backend: str, kind: str, make: Any, node_name: str) -> int:
 
     ``make(transport)`` builds the node. Once it is up, ``ready`` is printed and the
     node's ``status()`` runs every 0.5 s as a heartbeat, so late joiners learn its state.
-    Returns 0; call it from the main thread.
+    Returns 0 after a requested stop. If the middleware stops under the node instead --
+    the ROS 2 executor ended, rospy shut down (a node of the same name took over) -- the
+    node would be deaf while its heartbeat said it was alive: the error is logged, a last
+    status goes out (``executor_alive`` false) if it still can, and it returns 1. Call it
+    from the main thread.
     """
     logging.basicConfig(level=logging.INFO, format=f"[{node_name}] %(levelname)s %(message)s")
     stop = threading.Event()
@@ -81,9 +88,20 @@ def serve(backend: str, kind: str, make: Any, node_name: str) -> int:
             stop.wait(0.5)
             if beat is not None and not stop.is_set():
                 beat()  # a heartbeat: late joiners learn the node's state
+        if not stop.is_set():
+            why = getattr(t, "spin_error", None)
+            log.error(
+                "the middleware stopped under the %s node%s; exiting",
+                kind,
+                f" ({type(why).__name__}: {why})" if why is not None else "",
+            )
+            if beat is not None:
+                with contextlib.suppress(Exception):  # tell whoever still listens, if anyone can
+                    beat()
+                stop.wait(0.5)  # ...and give that last word time to leave before the node goes
+            return 1
     finally:
         if node is not None and hasattr(node, "close"):
             node.close()
         t.close()
     return 0
-

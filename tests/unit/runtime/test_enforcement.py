@@ -448,3 +448,19 @@ def test_an_exception_inside_a_step_keeps_the_record_of_every_change_made(
     m2, _ = manager("R1 when E then F within 1 seconds", journal=db)
     (d,) = m2.event("E")
     assert d.id == 2  # the journal has the decision too: its id is not given again
+
+
+def test_a_fallback_carries_its_rule_and_clause_however_old_its_decision() -> None:
+    # before (in the first runtime): the clause was looked up in the last-10,000 window, so
+    # the fallback of an old decision reached no task node
+    m, clock = manager("R1 when E then F within 1 seconds otherwise Help unless a then G", history=1, dispatch=False)
+    m.update(a=False)
+    m.event("E")
+    m.update(a=True)
+    for _ in range(5):
+        m.event("E")  # pushes the first decision out of the history
+    m.update(a=False)
+    clock.advance(2)
+    fallbacks = m.tick()
+    assert [(d.rule, d.clause, d.violated) for d in fallbacks][:1] == [("R1", 0, 1)]
+    assert [d.id for d in m.decisions] == [fallbacks[-1].id]
