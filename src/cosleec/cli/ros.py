@@ -34,6 +34,11 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     add_clause_options(m)
     m.add_argument("--sim-time", action="store_true", help="take time from the clock topic")
     m.add_argument("--audit", metavar="FILE", help="append-only JSON Lines audit trail")
+    m.add_argument(
+        "--journal",
+        metavar="FILE",
+        help="keep the Manager's state in this SQLite journal: a restarted Manager restores it",
+    )
     m.add_argument("--record", metavar="FILE.mcap", help="record the decision stream (Foxglove opens it)")
     m.add_argument(
         "--status-each", action="store_true", help="publish status after every message (harnesses)"
@@ -129,6 +134,7 @@ def run(args: argparse.Namespace) -> int:
                 record=args.record,
                 status_each=args.status_each,
                 unknown=args.unknown,
+                journal=args.journal,
             )
         if node == "layers":
             assert rules is not None

@@ -11,7 +11,7 @@ from cosleec.nodes.layers_node import LayersNode
 from cosleec.nodes.listener import ListenerNode, Mapping, MappingError
 from cosleec.nodes.manager_node import ManagerNode
 from cosleec.nodes.recording import McapRecorder, read_recording
-from cosleec.nodes.task_node import TaskNode
+from cosleec.nodes.task_node import ManagerUnavailable, TaskNode
 from cosleec.nodes.transport import (
     DEFAULT_NAMESPACE,
     LATCHED,
@@ -32,6 +32,7 @@ __all__ = [
     "LocalBus",
     "LocalTransport",
     "ManagerNode",
+    "ManagerUnavailable",
     "Mapping",
     "MappingError",
     "McapRecorder",

@@ -13,6 +13,7 @@ import logging
 import threading
 import time
 import uuid
+from collections import OrderedDict
 from collections.abc import Callable, Hashable
 from typing import Any
 
@@ -121,6 +122,10 @@ def context_values(msg: dict[str, Any]) -> dict[str, Any]:
     return values
 
 
+#: senders remembered per topic for counting lost messages (the oldest is forgotten first)
+MAX_SENDERS = 256
+
+
 class Node:
     """A node publishes and subscribes JSON objects on ``<namespace>/<name>`` topics.
 
@@ -146,6 +151,9 @@ class Node:
         self._status_seq = 0
         self._advertised: list[str] = []  # what status reports subscriber counts for
         self.limiter = LogLimiter(log)
+        self._published: dict[str, int] = {}  # per topic: the number of the last message sent
+        self._publish_lock = threading.Lock()  # messages leave numbered in order
+        self._heard: dict[str, OrderedDict[str, int]] = {}  # per topic, per sender: last number heard
         for t in ("rejected", "status"):
             self.advertise(t)
 
@@ -163,9 +171,34 @@ class Node:
         self._advertised.append(name)
 
     def publish(self, name: str, message: dict[str, Any]) -> None:
-        """Send ``message`` as JSON on topic ``name`` and count it (values JSON lacks go as ``str``)."""
-        self.transport.publish(self.topic(name), dumps(message))
+        """Send ``message`` as JSON on topic ``name`` and count it (values JSON lacks go as ``str``).
+
+        Each message carries its sender (``_from``, this node's session) and its number on
+        the topic (``_n``, 1, 2, ...): a receiver counts the numbers it never saw as ``lost``
+        (a middleware that drops messages under load says so nowhere else).
+        """
+        full = self.topic(name)
+        with self._publish_lock:
+            n = self._published[full] = self._published.get(full, 0) + 1
+            self.transport.publish(full, dumps({**message, "_from": self.session, "_n": n}))
         self._count("published")
+
+    def _heard_from(self, where: str, message: dict[str, Any]) -> None:
+        """Count the messages of ``message``'s sender on ``where`` that never arrived (``lost``)
+        or arrived late or twice (``out_of_order``); takes the numbering fields out."""
+        sender, n = message.pop("_from", None), message.pop("_n", None)
+        if not isinstance(sender, str) or isinstance(n, bool) or not isinstance(n, int):
+            return  # not from a cosleec node (a hand-written message): nothing to check
+        with self._count_lock:
+            senders = self._heard.setdefault(where, OrderedDict())
+            last = senders.pop(sender, None)
+            if last is not None and n > last + 1:
+                self.counters["lost"] = self.counters.get("lost", 0) + n - last - 1
+            elif last is not None and n <= last:
+                self.counters["out_of_order"] = self.counters.get("out_of_order", 0) + 1
+            senders[sender] = max(n, last or 0)
+            if len(senders) > MAX_SENDERS:
+                senders.popitem(last=False)
 
     def on(self, name: str, handler: Callable[[dict[str, Any]], None]) -> None:
         """Call ``handler`` with every JSON object received on topic ``name``.
@@ -184,6 +217,7 @@ class Node:
                 message = json.loads(payload)
                 if not isinstance(message, dict):
                     raise MessageError("expected a JSON object")
+                self._heard_from(full, message)
                 handler(message)
             except Exception as e:
                 self.reject_error(full, e, payload)
@@ -249,7 +283,10 @@ class Node:
         ``extra`` fields join the message, with the subscriber count of every advertised
         topic when the transport can tell, and what the transport says of its own health:
         ``executor_alive`` (False once the thread that delivers messages has stopped: the
-        node is deaf) and ``transport_errors`` (callbacks that raised into the transport).
+        node is deaf), ``transport_errors`` (callbacks that raised into the transport) and
+        ``transport_lost`` (messages the middleware reports lost). The counters include
+        ``lost`` and ``out_of_order``: messages of cosleec senders that never arrived, or
+        arrived late or twice, by the numbers every node puts on what it publishes.
         :func:`cosleec.ros.serve` calls it every 0.5 s as a heartbeat.
         """
         with self._status_lock:
@@ -266,6 +303,9 @@ class Node:
             errors = getattr(self.transport, "errors", None)
             if isinstance(errors, int):
                 health["transport_errors"] = errors
+            lost = getattr(self.transport, "lost", None)
+            if isinstance(lost, int):
+                health["transport_lost"] = lost  # what the middleware itself says it dropped
             self._status_seq += 1
             message = {
                 "node": self.name,

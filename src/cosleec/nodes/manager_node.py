@@ -37,7 +37,9 @@ class ManagerNode(Node):
     It decides only; task nodes run the implementations. ``sim_time`` takes time from the
     ``clock`` topic and judges deadlines on each clock message (no timer thread);
     otherwise the monotonic clock and a timer thread do. ``audit`` and ``record`` name a
-    JSON Lines audit trail and an MCAP recording; ``manager_kw`` goes to :class:`Manager`.
+    JSON Lines audit trail and an MCAP recording; ``manager_kw`` goes to :class:`Manager`
+    (``journal=PATH`` keeps the state across a crash; in simulated time the clock then goes
+    on from the journal's last time).
     """
 
     name = "manager"
@@ -61,6 +63,9 @@ class ManagerNode(Node):
         self.status_each = status_each
         self.clock: Clock = VirtualClock() if sim_time else MonotonicClock()
         self.manager = Manager(rules, clock=self.clock, semantics=semantics, audit=audit, dispatch=False, **manager_kw)
+        # with a journal, decision ids go on across restarts: so does the session task nodes
+        # de-duplicate by, and a decision published again after a restart is not run twice
+        self.session = self.manager.lineage
         self.recorder = McapRecorder(record) if record else None
         for t in ("decisions", "obligations", "violations", "request_reply"):
             self.advertise(t)

@@ -78,6 +78,7 @@ class Ros2Transport:
         self._latched: set[str] = set()
         self._lock = threading.Lock()
         self._guard = CallbackGuard()
+        self._lost = 0
         self._closing = False
         self.spin_error: BaseException | None = None
         self.executor = SingleThreadedExecutor()
@@ -94,6 +95,21 @@ class Ros2Transport:
                 log.error("the ROS 2 executor stopped: %s: %s", type(e).__name__, e, exc_info=e)
         if not self._closing and self.spin_error is None:
             log.error("the ROS 2 executor stopped (rclpy shut down?)")
+
+    @property
+    def lost(self) -> int:
+        """Messages DDS reports lost on this transport's subscriptions (the middleware's own count)."""
+        return self._lost
+
+    def _events(self) -> Any:
+        """QoS event callbacks of a subscription: count what the middleware says it lost."""
+        from rclpy.event_handler import SubscriptionEventCallbacks
+
+        def lost(status: Any) -> None:
+            with self._lock:
+                self._lost += int(status.total_count_change)
+
+        return SubscriptionEventCallbacks(message_lost=lost)
 
     @property
     def errors(self) -> int:
@@ -151,7 +167,11 @@ class Ros2Transport:
         """
         is_latched = topic.rsplit("/", 1)[-1] == "layers" if latched is None else latched
         sub = self.node.create_subscription(
-            self._String, topic, self._guard.wrap(topic, lambda m: handler(m.data)), self._qos(is_latched)
+            self._String,
+            topic,
+            self._guard.wrap(topic, lambda m: handler(m.data)),
+            self._qos(is_latched),
+            event_callbacks=self._events(),
         )
         self._subs.append(sub)
 
@@ -162,7 +182,8 @@ class Ros2Transport:
         """
         cls = message_class(type_name)
         sub = self.node.create_subscription(
-            cls, topic, self._guard.wrap(topic, lambda m: handler(to_dict(m))), self._qos(False)
+            cls, topic, self._guard.wrap(topic, lambda m: handler(to_dict(m))), self._qos(False),
+            event_callbacks=self._events(),
         )
         self._subs.append(sub)
 

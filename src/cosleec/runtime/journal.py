@@ -49,6 +49,7 @@ class Saved:
 
     rules: str  # the digest of the rule set that wrote it
     run: str  # the run that wrote last
+    lineage: str  # the run that created the journal: one history across restarts
     counters: dict[str, int]
     clock: float  # clock time of the last commit
     wall: float  # Unix time of the last commit
@@ -103,6 +104,7 @@ class Journal:
         return Saved(
             rules=str(meta["rules"]),
             run=str(meta.get("run", "")),
+            lineage=str(meta.get("lineage", "")),
             counters={k: int(v) for k, v in meta.get("counters", {}).items()},
             clock=float(meta["clock"]),
             wall=float(meta["wall"]),

@@ -24,9 +24,14 @@ def bus() -> Iterator[LocalBus]:
     b.close()
 
 
+def unnumbered(message: dict[str, Any]) -> dict[str, Any]:
+    """A message without the sender's numbering (``_from``, ``_n``), as handlers see it."""
+    return {k: v for k, v in message.items() if k not in ("_from", "_n")}
+
+
 def collect(bus: LocalBus, topic: str) -> list[dict[str, Any]]:
     out: list[dict[str, Any]] = []
-    bus.transport().subscribe(topic, lambda p: out.append(json.loads(p)))
+    bus.transport().subscribe(topic, lambda p: out.append(unnumbered(json.loads(p))))
     return out
 
 

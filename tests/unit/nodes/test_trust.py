@@ -34,9 +34,14 @@ def bus() -> Iterator[LocalBus]:
     b.close()
 
 
+def unnumbered(message: dict[str, Any]) -> dict[str, Any]:
+    """A message without the sender's numbering (``_from``, ``_n``), as handlers see it."""
+    return {k: v for k, v in message.items() if k not in ("_from", "_n")}
+
+
 def collect(bus: LocalBus, topic: str) -> list[dict[str, Any]]:
     out: list[dict[str, Any]] = []
-    bus.transport().subscribe(topic, lambda p: out.append(json.loads(p)))
+    bus.transport().subscribe(topic, lambda p: out.append(unnumbered(json.loads(p))))
     return out
 
 
@@ -413,3 +418,23 @@ def test_node_names_carry_the_namespace(namespace: str, kind: str, name: str) ->
     from cosleec.cli.ros import node_name
 
     assert node_name(namespace, kind) == name
+
+
+def test_messages_a_sender_numbered_but_never_delivered_are_counted_lost() -> None:
+    # before: DDS dropped 85 % of a 10k msg/s stream and no counter anywhere said so
+    bus = LocalBus()
+    rules = RuleSet.from_text(
+        "def_start event E event F def_end rule_start R1 when E then F rule_end"
+    )
+    node = ManagerNode(bus.transport(), rules)
+    t = bus.transport()
+    for n in (1, 2, 5, 6, 6, 4, 10):  # 3, 4 and 7..9 missing; 6 twice; 4 after 6
+        t.publish("/cosleec/events", json.dumps({"event": "E", "_from": "robot-a", "_n": n}))
+    for n in (1, 3):  # another sender numbers on its own
+        t.publish("/cosleec/events", json.dumps({"event": "E", "_from": "robot-b", "_n": n}))
+    t.publish("/cosleec/events", json.dumps({"event": "E"}))  # hand-written: not numbered
+    assert bus.wait_idle()
+    assert node.counters["lost"] == 2 + 3 + 1 and node.counters["out_of_order"] == 2
+    assert node.manager.stats["events"] == 10  # every message that arrived was still handled
+    node.close()
+    bus.close()
