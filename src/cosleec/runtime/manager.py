@@ -52,7 +52,7 @@ from typing import Any, TypeVar
 from cosleec.cop import Snapshot
 from cosleec.lang import HedgeSemantics, Specification, Unknowns, candidates, choose
 from cosleec.runtime.audit import AuditLog
-from cosleec.runtime.clock import Clock, MonotonicClock
+from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
 from cosleec.runtime.context import Context
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.errors import ConfigurationError, ContextError
@@ -196,6 +196,8 @@ class Manager:
             "task_failures": 0,
         }
         self.run_id = uuid.uuid4().hex[:12]
+        # which history this Manager continues: its journal's (kept across restarts), else this run's
+        self.lineage = self.run_id
         self._lock = threading.RLock()
         # the next decision id, causal sequence number (occurrences and obligations) and record number
         self._next = {"decision": 1, "seq": 1, "record": 1}
@@ -421,6 +423,8 @@ class Manager:
             forbidding = self.tracker.forbidding(name, now)
             for t in forbidding:
                 t.refused += 1
+                if self.journal is not None:  # the count is the prohibition's state: it survives a restart
+                    step.change.obligations[t.id] = t.to_json()
             if forbidding:
                 self.stats["refused"] += 1
                 self._emit(
@@ -534,8 +538,13 @@ class Manager:
                 self._delivering.release()
 
     def _meta(self) -> dict[str, Any]:
-        counters = {**self._next, "obligation": self.tracker.next_id, "version": self.context.version}
-        return {"rules": self.ruleset.digest, "run": self.run_id, "counters": counters}
+        counters = {
+            **self._next,
+            "obligation": self.tracker.next_id,
+            "version": self.context.version,
+            "layers": self.layer_manager._version,  # the version of the next `layers` record goes on too
+        }
+        return {"rules": self.ruleset.digest, "run": self.run_id, "lineage": self.lineage, "counters": counters}
 
     # ------------------------------------------------------------------ internals (under the lock)
     def _known(self, name: str, what: str, step: _Step) -> bool:
@@ -820,6 +829,7 @@ class Manager:
                 self._emit(step, "restored", {"from": None, "rules_changed": False})
             return
         self._restored = saved
+        self.lineage = saved.lineage or saved.run
         with self._step() as step:
             self._restore(saved, step)
 
@@ -834,8 +844,11 @@ class Manager:
             if late:
                 self._next["record"] = max(self._next["record"], late[-1]["seq"] + 1)
         now = self.clock.now()
-        # the clock may have started again (a new process on a virtual clock, a reboot):
-        # shift saved clock times so that the time the Manager was down still passes
+        if isinstance(self.clock, VirtualClock) and now < saved.clock:
+            self.clock.set(saved.clock)  # virtual (simulated) time goes on from where it stopped
+            now = saved.clock
+        # a monotonic clock that started again (a reboot): shift saved clock times so that
+        # the time the Manager was down still passes
         down = max(0.0, time.time() - saved.wall)
         shift = 0.0 if now >= saved.clock else now - down - saved.clock
         changed = saved.rules != self.ruleset.digest
@@ -853,6 +866,7 @@ class Manager:
             self.context.stamps[name] = stamp + shift
         self.context.values.update(values)
         self.context.version = max(c.get("version", 0), 1 if values else 0)
+        self.layer_manager._version = max(self.layer_manager._version, c.get("layers", 0))
         self.layer_manager.update(set(values), self.context.values)
         kept = 0
         for rec in saved.obligations:
@@ -867,6 +881,8 @@ class Manager:
             t.hi = None if t.hi is None else t.hi + shift
             self.tracker.resume(t, c.get("obligation", 1))
             kept += 1
+        # obligation ids go on even when nothing was pending (resume sees only what it restores)
+        self.tracker._next = max(self.tracker.next_id, c.get("obligation", 1))
         for rec in saved.outbox:  # decided, but perhaps never run: recorded, not run again
             self._interrupted.append(rec)
             self._emit(step, "task-interrupted", {**rec, "reason": "the Manager stopped before it was known to have run"})
