@@ -594,8 +594,12 @@ class Manager:
         if self._recording:
             rec = t.to_json()
             self._emit(step, "obligation", rec)
-            if self.journal is not None:
-                step.change.obligations[t.id] = rec if t.status == PENDING else None
+            if self.journal is not None:  # pending, or missed and waiting for its late event
+                keep = t.status == PENDING or self.tracker.waits_late(t)
+                step.change.obligations[t.id] = rec if keep else None
+                for gone in self.tracker.forgotten:
+                    step.change.obligations[gone] = None
+                self.tracker.forgotten.clear()
 
     def _settle(
         self, out: Outcome, now: float, seq: int, step: _Step
@@ -879,10 +883,16 @@ class Manager:
             t.start += shift
             t.lo += shift
             t.hi = None if t.hi is None else t.hi + shift
-            self.tracker.resume(t, c.get("obligation", 1))
-            kept += 1
+            if t.status == PENDING:
+                self.tracker.resume(t, c.get("obligation", 1))
+                kept += 1
+            else:  # missed: its late event is still reported, once
+                self.tracker.missed(t)
         # obligation ids go on even when nothing was pending (resume sees only what it restores)
-        self.tracker._next = max(self.tracker.next_id, c.get("obligation", 1))
+        self.tracker.resume_ids(c.get("obligation", 1))
+        for gone in self.tracker.forgotten:
+            step.change.obligations[gone] = None
+        self.tracker.forgotten.clear()
         for rec in saved.outbox:  # decided, but perhaps never run: recorded, not run again
             self._interrupted.append(rec)
             self._emit(step, "task-interrupted", {**rec, "reason": "the Manager stopped before it was known to have run"})
@@ -907,7 +917,7 @@ class Manager:
                 if name not in values:
                     step.change.context[name] = None
             for rec in saved.obligations:
-                if not self.tracker.tracks(int(rec["id"])):
+                if not self.tracker.tracks(int(rec["id"])) and rec.get("status") == PENDING:
                     step.change.obligations[int(rec["id"])] = None
 
 

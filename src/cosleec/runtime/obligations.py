@@ -30,6 +30,7 @@ from typing import Any
 from cosleec.runtime.model import Obligation
 
 PENDING, FULFILLED, VIOLATED, RESPECTED = "pending", "fulfilled", "violated", "respected"
+MISSES_KEPT = 64  # per event: missed obligations a late occurrence is still reported for
 
 
 @dataclass(kw_only=True)
@@ -138,6 +139,7 @@ class Tracker:
         self._by_event: dict[str, dict[int, Tracked]] = {}
         self._heap: list[tuple[float, int]] = []
         self._missed: dict[str, deque[Tracked]] = {}  # per event: recent misses a late E may still report
+        self.forgotten: list[int] = []  # misses dropped from _missed since the owner last looked
         self.closed: deque[Tracked] = deque(maxlen=1000)  # the most recent outcomes, for inspection
         self._next = 1  # the next obligation id
 
@@ -155,6 +157,10 @@ class Tracker:
         """Track an obligation restored from a journal, as it was; later ids start at ``next_id``."""
         self._index(tracked)
         self._next = max(next_id, tracked.id + 1, self._next)
+
+    def resume_ids(self, next_id: int) -> None:
+        """Later obligation ids start at ``next_id`` at the least (a journal's counter)."""
+        self._next = max(self._next, next_id)
 
     def tracks(self, oid: int) -> bool:
         """Is obligation ``oid`` in force?"""
@@ -205,7 +211,23 @@ class Tracker:
                 bucket.pop(t.id, None)
         self.closed.append(t)
         if t.status == VIOLATED and not t.prohibition:
-            self._missed.setdefault(t.event, deque(maxlen=64)).append(t)
+            self._miss(t)
+
+    def _miss(self, t: Tracked) -> None:
+        """Keep a missed obligation for its late event; the oldest of its event is forgotten past 64."""
+        missed = self._missed.setdefault(t.event, deque(maxlen=MISSES_KEPT))
+        if len(missed) == MISSES_KEPT:
+            self.forgotten.append(missed[0].id)
+        missed.append(t)
+
+    def missed(self, t: Tracked) -> None:
+        """Keep a missed obligation restored from a journal: its late event is still reported once."""
+        self._miss(t)
+        self._next = max(self._next, t.id + 1)
+
+    def waits_late(self, t: Tracked) -> bool:
+        """Is ``t`` a missed obligation whose late event is still to be reported (journal: keep it)?"""
+        return t.status == VIOLATED and not t.prohibition and not t.late
 
     def occur(self, event: str, now: float, seq: int) -> Outcome:
         """Apply an occurrence of ``event`` at ``now``: what it fulfils, violates or arrives late for.
