@@ -79,3 +79,4 @@ _.until_relation  #
 _.for_relation  #
 measure_rel  #
 event_measure_rel  #
+REFUSE  # UnknownEvents.REFUSE: chosen by value (unknown_events="refuse")

@@ -144,6 +144,7 @@ class Node:
         self.transport = transport
         self.namespace = namespace
         self.session = uuid.uuid4().hex
+        self._sender = uuid.uuid4().hex[:16]  # numbers what this node object publishes (_from, _n)
         # errors: messages a handler failed on in a way no message should cause (our bugs)
         self.counters: dict[str, int] = {"received": 0, "rejected": 0, "published": 0, "errors": 0}
         self._count_lock = threading.Lock()
@@ -180,7 +181,7 @@ class Node:
         full = self.topic(name)
         with self._publish_lock:
             n = self._published[full] = self._published.get(full, 0) + 1
-            self.transport.publish(full, dumps({**message, "_from": self.session, "_n": n}))
+            self.transport.publish(full, dumps({**message, "_from": self._sender, "_n": n}))
         self._count("published")
 
     def _heard_from(self, where: str, message: dict[str, Any]) -> None:

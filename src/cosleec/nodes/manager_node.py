@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import sys
+import time
 from typing import Any
 
 from cosleec.nodes.base import MessageError, Node, context_values, show
@@ -26,6 +27,10 @@ from cosleec.runtime import (
     RuntimeEvent,
     VirtualClock,
 )
+
+#: how long the subscribers of ``obligations`` must stay the same before a restarted Manager
+#: node publishes again what it decided but perhaps never published (discovery settles)
+REPUBLISH_SETTLE_S = 1.0
 
 #: the longest event name (or request id) the Manager node takes; SLEEC names are identifiers
 MAX_NAME = 256
@@ -58,6 +63,8 @@ class ManagerNode(Node):
         **manager_kw: Any,
     ) -> None:
         super().__init__(transport, namespace)
+        self._republish: list[dict[str, Any]] = []
+        self._matched: tuple[int, float] | None = None  # obligations' subscriber count, and since when
         # status after every message lets a harness know when the system is quiet; in
         # deployment the heartbeat (every 0.5 s) is enough and keeps the hot path short
         self.status_each = status_each
@@ -70,6 +77,9 @@ class ManagerNode(Node):
         for t in ("decisions", "obligations", "violations", "request_reply"):
             self.advertise(t)
         self.manager.subscribe(self._runtime_event)
+        # decided before a crash, perhaps never published: published again once a task node listens
+        self._republish = list(self.manager.undelivered)
+        self.manager.undelivered.clear()
         self.manager.start(check=False, timer=not sim_time)
         self.on("context", self._context)
         self.on("events", self._event)
@@ -83,6 +93,7 @@ class ManagerNode(Node):
 
         The scenario driver reads these to know when the system is quiet.
         """
+        self._publish_again()  # the heartbeat: decisions a restart must publish again, once heard
         m = self.manager
         with self._status_lock:  # the extra fields are part of the same ordered snapshot
             super().status(
@@ -163,15 +174,41 @@ class ManagerNode(Node):
     def _runtime_event(self, ev: RuntimeEvent) -> None:
         d = ev.data
         if ev.kind == "decision":
-            if d["clause"] is not None:  # the task nodes first: they are on the critical path
-                self._count("obligations")
-                # task nodes run each (session, id) once: a duplicate on the wire is not re-run
-                self.publish("obligations", {**d, "session": self.session})
+            self._hand_on(d)
             self.publish("decisions", d)
         elif ev.kind == "obligation" and (d["status"] == "violated" or d["late"]):
             self.publish("violations", d)
         if self.recorder is not None:
             self.recorder.write(ev.kind, ev.time, d)
+
+    def _publish_again(self) -> None:
+        """Publish the decisions a journal held as perhaps never published, once someone listens.
+
+        A restarted node's publisher is new: what it sends before the task nodes have matched
+        it would be lost. The heartbeat calls this until they have.
+        """
+        if not self._republish:
+            return
+        count = getattr(self.transport, "subscribers", None)
+        if count is not None:  # wait until subscribers appeared and stayed the same for a second
+            now, n = time.monotonic(), count(self.topic("obligations"))
+            if n == 0 or self._matched is None or self._matched[0] != n:
+                self._matched = (n, now)
+                return
+            if now - self._matched[1] < REPUBLISH_SETTLE_S:
+                return
+        todo, self._republish = self._republish, []
+        for d in todo:
+            self._count("republished")
+            self._hand_on(d)
+
+    def _hand_on(self, d: dict[str, Any]) -> None:
+        """Publish a decision that chose a clause to the task nodes, then tell the Manager it left."""
+        if d["clause"] is not None:  # the task nodes first: they are on the critical path
+            self._count("obligations")
+            # task nodes run each (session, id) once: a duplicate on the wire is not re-run
+            self.publish("obligations", {**d, "session": self.session})
+        self.manager.delivered(int(d["id"]))
 
     def close(self) -> None:
         """Stop the Manager (timer, audit log) and finish the recording; the transport is the caller's."""

@@ -157,7 +157,7 @@ class Driver:
                 s = self.status.get(name, {})
                 c = s.get("counters", {})
                 task_msgs += c.get("reported", 0) + c.get("requested", 0)
-                handled += s.get("handled", 0)
+                handled += s.get("handled", 0) + c.get("duplicates", 0)  # a duplicate is handled too
             # every message to the Manager handled, and every obligation it sent handled by a task
             received: int = m["counters"]["received"]
             published: int = m["counters"].get("obligations", 0)

@@ -30,7 +30,6 @@ What happens when the runtime does not know (each a documented policy, fail clos
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import datetime
 import difflib
@@ -43,7 +42,7 @@ import threading
 import time
 import uuid
 from collections import deque
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
 from pathlib import Path
@@ -107,13 +106,51 @@ class RuntimeEvent:
     seq: int = 0
 
 
-@dataclass
 class _Step:
     """What one locked step changed: its records, in order, and the journal's share of it."""
 
-    events: list[RuntimeEvent] = field(default_factory=list)
-    change: Change = field(default_factory=Change)
-    more: bool = False  # a batched tick left deadlines for the next batch
+    __slots__ = ("_change", "events", "more")
+
+    def __init__(self) -> None:
+        self.events: list[RuntimeEvent] = []
+        self._change: Change | None = None  # made on first use: most steps without a journal need none
+        self.more = False  # a batched tick left deadlines for the next batch
+
+    @property
+    def change(self) -> Change:
+        """What the journal must keep of this step."""
+        if self._change is None:
+            self._change = Change()
+        return self._change
+
+    def changed(self) -> bool:
+        """Did the step change anything the journal keeps?"""
+        return self._change is not None and bool(self._change)
+
+
+class _Scope:
+    """``with manager._step() as step``: the lock, then the commit, then delivery to observers."""
+
+    __slots__ = ("manager", "step")
+
+    def __init__(self, manager: Manager) -> None:
+        self.manager = manager
+
+    def __enter__(self) -> _Step:
+        m = self.manager
+        if m._broken is not None:
+            raise m._broken
+        m._lock.acquire()
+        self.step = _Step()
+        return self.step
+
+    def __exit__(self, *exc: object) -> None:
+        m = self.manager
+        try:
+            m._commit(self.step)  # every change made, even by a step that raised, with its records
+        finally:
+            m._lock.release()
+            m._deliver()
 
 
 @dataclass
@@ -209,12 +246,14 @@ class Manager:
         self._timer: threading.Thread | None = None
         self._stop = threading.Event()
         self._broken: JournalError | None = None
-        self._interrupted: list[dict[str, Any]] = []
+        # decisions a journal held that were decided but perhaps never published (dispatch=False):
+        # the Manager node publishes them again after a restart (task nodes run each id once)
+        self.undelivered: list[dict[str, Any]] = []
+        self._delivered: deque[int] = deque()  # published since the last commit: leave the outbox
         self.audit = audit if isinstance(audit, AuditLog) else AuditLog(audit) if audit else None
         if self.audit is not None:  # sequence numbers go on from where the log ends
             self._next["record"] = self.audit.last_seq + 1
         self.journal = journal if isinstance(journal, Journal) else Journal(journal) if journal else None
-        self._restored: Saved | None = None
         if self.journal is not None:
             self._open_journal(self.journal)
 
@@ -307,6 +346,8 @@ class Manager:
             self._timer.join(5)
         with self._lock:
             if self.journal is not None:
+                if self._delivered and self._broken is None:
+                    self._commit(_Step())  # what was published leaves the outbox
                 self.journal.close()
             if self.audit is not None:
                 self.audit.close()
@@ -347,6 +388,16 @@ class Manager:
         if rejected is not None:
             raise rejected
         return result
+
+    def delivered(self, decision: int) -> None:
+        """A decision made with ``dispatch=False`` has been handed on (the Manager node published
+        it to the task nodes): with a journal, it leaves the outbox with the next step.
+
+        Until then a restart hands it on again (:attr:`undelivered`); task nodes run each
+        decision id once, so it runs once. Safe from any thread (observers call it).
+        """
+        if self.journal is not None:
+            self._delivered.append(decision)
 
     def values(self) -> dict[str, Any]:
         """Every measure's value as users see it (scale literals by name), None when unknown.
@@ -467,22 +518,11 @@ class Manager:
             return self.tracker.outstanding()
 
     # ------------------------------------------------------------------ steps
-    @contextlib.contextmanager
-    def _step(self) -> Iterator[_Step]:
+    def _step(self) -> _Scope:
         """One locked step: what it changes is committed with its records when it ends, even
         when it ends by an exception (every change made so far has its record); observers
         hear the records after the lock is released, in order."""
-        if self._broken is not None:
-            raise self._broken
-        try:
-            with self._lock:
-                step = _Step()
-                try:
-                    yield step
-                finally:
-                    self._commit(step)
-        finally:
-            self._deliver()
+        return _Scope(self)
 
     def _count(self, name: str) -> int:
         """The next number of counter ``name`` (decision, seq, record), used up."""
@@ -491,7 +531,9 @@ class Manager:
         return n
 
     def _commit(self, step: _Step) -> None:
-        if not step.events and not step.change:
+        while self._delivered:  # published decisions leave the journal's outbox with this step
+            step.change.outbox[self._delivered.popleft()] = None
+        if not step.events and not step.changed():
             return
         lines: list[tuple[int, str]] = []
         if self.audit is not None:
@@ -499,11 +541,15 @@ class Manager:
             mono = time.monotonic()
             head = f',"wall":"{wall}","mono":{mono!r},"run":"{self.run_id}","rules":"{self.ruleset.digest[:16]}"'
             for ev in step.events:
-                body = json.dumps(ev.data, default=str, separators=(",", ":"))
+                data, t = ev.data, ev.time
+                if "time" in data:  # a decision's own time (a fallback's is its deadline) is the record's:
+                    t = data["time"]  # one "time" key, as a dict of the record has it, never two
+                    data = {k: v for k, v in data.items() if k != "time"}
+                body = json.dumps(data, default=str, separators=(",", ":"))
                 lines.append(
                     (
                         ev.seq,
-                        f'{{"seq":{ev.seq},"kind":"{ev.kind}","time":{_number(ev.time)}{head}'
+                        f'{{"seq":{ev.seq},"kind":"{ev.kind}","time":{_number(t)}{head}'
                         + (f",{body[1:]}" if len(body) > 2 else "}"),
                     )
                 )
@@ -758,8 +804,11 @@ class Manager:
         if self._recording:
             rec = d.to_json()
             self._emit(step, "decision", rec)
-            if queue and self.journal is not None and self.dispatch_locally:
-                step.change.outbox[d.id] = {"decision": d.id, "rule": d.rule, "event": d.event}
+            if queue and self.journal is not None:
+                entry: dict[str, Any] = {"decision": d.id, "rule": d.rule, "event": d.event}
+                if not self.dispatch_locally:  # a Manager node publishes it: kept whole, to publish again
+                    entry["record"] = rec
+                step.change.outbox[d.id] = entry
 
     def _emit(self, step: _Step, kind: str, data: dict[str, Any]) -> None:
         """Add a record to the step; it is numbered now (every record of a step is committed)."""
@@ -832,7 +881,6 @@ class Manager:
             with self._step() as step:
                 self._emit(step, "restored", {"from": None, "rules_changed": False})
             return
-        self._restored = saved
         self.lineage = saved.lineage or saved.run
         with self._step() as step:
             self._restore(saved, step)
@@ -893,8 +941,11 @@ class Manager:
         for gone in self.tracker.forgotten:
             step.change.obligations[gone] = None
         self.tracker.forgotten.clear()
-        for rec in saved.outbox:  # decided, but perhaps never run: recorded, not run again
-            self._interrupted.append(rec)
+        for rec in saved.outbox:
+            if not self.dispatch_locally and isinstance(rec.get("record"), dict):
+                self.undelivered.append(rec["record"])  # the Manager node publishes it again
+                continue
+            # decided, but perhaps never run: recorded, not run again (at most once)
             self._emit(step, "task-interrupted", {**rec, "reason": "the Manager stopped before it was known to have run"})
             step.change.outbox[int(rec["decision"])] = None
         for what in dropped:
