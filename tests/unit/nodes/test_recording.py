@@ -1,6 +1,6 @@
 """The MCAP recorder: safe from several threads, and a killed recorder loses at most the last second.
 
-Needs the ``mcap`` package (installed in the ROS environments: run with .venv-ros2/bin/python)."""
+Needs the ``mcap`` package (the ``record`` extra, part of ``dev``)."""
 
 from __future__ import annotations
 
@@ -12,11 +12,7 @@ import threading
 import time
 from pathlib import Path
 
-import pytest
-
 from cosleec.nodes import McapRecorder, read_recording
-
-pytest.importorskip("mcap")
 
 ROOT = Path(__file__).resolve().parents[3]
 

@@ -80,3 +80,5 @@ def test_a_long_run_with_misses_stays_bounded(tmp_path: Path) -> None:
     assert late == misses - 1, report
     assert journal_mb < 8, report
     assert m.outstanding() == []
+    # what the runtime keeps for inspection is bounded, however long the run
+    assert len(m.tracker.closed) <= 1000 and len(m.decisions) <= 100
