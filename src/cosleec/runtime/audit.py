@@ -6,8 +6,10 @@ survives a crash of the machine, at a cost per record.
 
 A crash in the middle of a write leaves a torn last line. Opening the log sets it aside --
 appended to ``<log>.torn`` and cut from the log -- so it is never glued to the first
-record of the next run; with a journal, the Manager then writes the records that line
-held again, from the journal (each record carries its sequence number, ``seq``).
+record of the next run. With a journal, the Manager writes a step's records here first and
+then commits the step with the log's new length; records past the committed length on the
+next start belong to a step that never happened, and :meth:`AuditLog.cut` sets them aside
+to ``<log>.uncommitted`` (each record carries its sequence number, ``seq``).
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import os
 import threading
 from collections.abc import Iterable
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, BinaryIO
 
 from cosleec.errors import UserError
 
@@ -27,9 +29,9 @@ class AuditLog:
 
     Opening it creates missing parent directories and appends to an existing file, after
     setting aside a torn last line (``torn`` is its text, ``None`` when there was none).
-    ``last_seq`` is the ``seq`` of the last complete record found (0 if none). Thread-safe:
-    records are written whole, one per line, in the order of the calls. ``count`` is the
-    number of records this object wrote.
+    ``last_seq`` is the ``seq`` of the last complete record found (0 if none); ``size`` the
+    length of the log in bytes. Thread-safe: records are written whole, one per line, in the
+    order of the calls. ``count`` is the number of records this object wrote.
     """
 
     def __init__(self, path: str | Path, *, fsync: bool = False) -> None:
@@ -37,7 +39,8 @@ class AuditLog:
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self.torn, self.last_seq = _repair(self.path)
-            self._fh: TextIO = self.path.open("a", encoding="utf-8")
+            self._fh: BinaryIO = self.path.open("ab")
+            self.size = self._fh.seek(0, os.SEEK_END)
         except OSError as e:
             raise UserError(
                 f"cannot open the audit log: {e.strerror or e}", where=str(path), hint="give a writable path"
@@ -54,17 +57,43 @@ class AuditLog:
         """Append records in order with one flush (and one fsync) for all of them."""
         self.write_lines(json.dumps(r, default=str, separators=(",", ":")) for r in records)
 
-    def write_lines(self, lines: Iterable[str]) -> None:
-        """Append records already encoded as one-line JSON texts, in order, with one flush."""
-        text = "".join(f"{line}\n" for line in lines)
-        if not text:
-            return
+    def write_lines(self, lines: Iterable[str]) -> int:
+        """Append records already encoded as one-line JSON texts, in order, with one flush.
+
+        Returns the length of the log after them, in bytes (what a journal commits).
+        """
+        data = "".join(f"{line}\n" for line in lines).encode()
         with self._lock:
-            self._fh.write(text)
+            if data:
+                self._fh.write(data)
+                self._fh.flush()
+                if self._fsync:
+                    os.fsync(self._fh.fileno())
+                self.count += data.count(b"\n")
+                self.size += len(data)
+            return self.size
+
+    def cut(self, at: int) -> list[dict[str, Any]]:
+        """Set aside everything after byte ``at`` (appended to ``<log>.uncommitted``); return those records.
+
+        The Manager calls it on a restart with a journal: records written for a step whose
+        commit never happened are not part of the history. ``last_seq`` becomes that of the
+        last record kept.
+        """
+        with self._lock:
             self._fh.flush()
-            if self._fsync:
-                os.fsync(self._fh.fileno())
-            self.count += text.count("\n")
+            with self.path.open("rb+") as fh:
+                fh.seek(at)
+                tail = fh.read()
+                if tail:
+                    with self.path.with_name(self.path.name + ".uncommitted").open("ab") as aside:
+                        aside.write(tail)
+                    fh.truncate(at)
+            self.size = at
+            records = [json.loads(line) for line in tail.splitlines() if line.strip()]
+            if records:
+                self.last_seq = max(0, int(records[0].get("seq", 1)) - 1)
+            return records
 
     def close(self) -> None:
         """Close the file; later writes fail."""

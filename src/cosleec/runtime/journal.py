@@ -3,10 +3,11 @@
 ``Manager(..., journal="state.db")`` writes, in the same transaction as the state change
 that caused them, every measure value, every obligation and prohibition still in force
 (with its window), the counters that make ids unique (decisions, obligations, the causal
-sequence, audit records), the implementations not yet run, and the audit records not
-yet copied to the JSON Lines audit log. A Manager started on the same journal restores all
-of it (:class:`Saved`), so a ``kill -9`` loses no obligation, forgets no prohibition and
-reuses no id.
+sequence, audit records), the implementations not yet run, and the length of the JSON
+Lines audit log once the step's records are in it (written and flushed just before the
+commit). A Manager started on the same journal restores all of it (:class:`Saved`), so a
+``kill -9`` loses no obligation, forgets no prohibition and reuses no id; audit records
+past the committed length are of a step that never happened, and are set aside.
 
 SQLite in WAL mode with ``synchronous=NORMAL``: a commit survives the death of the
 process at any instant; a power cut can lose the last commits (pass ``fsync=True`` for
@@ -17,9 +18,8 @@ from __future__ import annotations
 
 import json
 import sqlite3
-import threading
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -31,7 +31,6 @@ CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS context (name TEXT PRIMARY KEY, value TEXT NOT NULL, stamp REAL NOT NULL);
 CREATE TABLE IF NOT EXISTS obligations (id INTEGER PRIMARY KEY, record TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS outbox (id INTEGER PRIMARY KEY, record TEXT NOT NULL);
-CREATE TABLE IF NOT EXISTS records (seq INTEGER PRIMARY KEY, record TEXT NOT NULL);
 """
 
 
@@ -56,7 +55,7 @@ class Saved:
     context: dict[str, tuple[Any, float]]  # measure -> (value as users see it, clock time set)
     obligations: list[dict[str, Any]]  # obligation records (Tracked.to_json), pending ones only
     outbox: list[dict[str, Any]]  # implementations decided but not known to have run
-    records: list[dict[str, Any]] = field(default_factory=list)  # audit records not yet in the audit log
+    audit: int | None = None  # the audit log's length (bytes) at the last commit; None: no log
 
 
 @dataclass
@@ -90,9 +89,6 @@ class Journal:
             raise JournalError(
                 f"cannot open the journal: {e}", where=str(path), hint="give a writable path to a journal file"
             ) from None
-        self._lock = threading.Lock()
-        self._exported = 0  # audit records up to this sequence number are in the audit log
-        self._deleted = 0  # ... and up to this one are deleted from the journal
 
     def load(self) -> Saved | None:
         """What the journal holds; None for a new journal."""
@@ -111,20 +107,13 @@ class Journal:
             context={n: (json.loads(v), float(s)) for n, v, s in db.execute("SELECT name, value, stamp FROM context")},
             obligations=[json.loads(r) for (r,) in db.execute("SELECT record FROM obligations ORDER BY id")],
             outbox=[json.loads(r) for (r,) in db.execute("SELECT record FROM outbox ORDER BY id")],
-            records=[json.loads(r) for (r,) in db.execute("SELECT record FROM records ORDER BY seq")],
+            audit=None if meta.get("audit") is None else int(meta["audit"]),
         )
 
-    def commit(
-        self,
-        change: Change,
-        records: Iterable[tuple[int, str]],
-        meta: Mapping[str, Any],
-        clock: float,
-    ) -> None:
-        """Write one step: its state change, its audit records ``(seq, JSON text)`` and ``meta``, atomically.
+    def commit(self, change: Change, meta: Mapping[str, Any], clock: float) -> None:
+        """Write one step: its state change and ``meta`` (counters, the audit log's length), atomically.
 
-        Audit records already copied to the audit log (:meth:`exported`) are deleted here,
-        in the same transaction. JournalError if the write fails (nothing of it is kept).
+        JournalError if the write fails (nothing of it is kept).
         """
         db = self._db
         try:
@@ -141,23 +130,14 @@ class Journal:
                     if rows:
                         marks = ", ".join("?" * len(rows[0]))
                         db.executemany(f"INSERT OR REPLACE INTO {table} VALUES ({marks})", rows)
-                db.executemany("INSERT INTO records VALUES (?, ?)", records)
-                exported = self._exported
-                if exported > self._deleted:
-                    db.execute("DELETE FROM records WHERE seq <= ?", (exported,))
                 state = _dumps({**meta, "clock": clock, "wall": time.time()})
                 db.execute("INSERT OR REPLACE INTO meta VALUES ('state', ?)", (state,))
                 db.execute("COMMIT")
-                self._deleted = exported
             except BaseException:
                 db.execute("ROLLBACK")
                 raise
         except sqlite3.Error as e:
             raise JournalError(f"cannot write the journal: {e}", where=str(self.path)) from None
-
-    def exported(self, seq: int) -> None:
-        """Audit records up to ``seq`` are safely in the audit log: the next commit deletes them."""
-        self._exported = max(self._exported, seq)
 
     def close(self) -> None:
         """Close the database; the journal keeps what was committed."""

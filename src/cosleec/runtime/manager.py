@@ -553,17 +553,17 @@ class Manager:
                         + (f",{body[1:]}" if len(body) > 2 else "}"),
                     )
                 )
+        end = self.audit.write_lines(text for _, text in lines) if self.audit is not None else None
         if self.journal is not None:
+            meta = self._meta()
+            if end is not None:
+                meta["audit"] = end  # the records just written belong to this commit
             try:
-                self.journal.commit(step.change, lines, self._meta(), self.clock.now())
+                self.journal.commit(step.change, meta, self.clock.now())
             except JournalError as e:
                 self._broken = e
                 log.error("journal failed, the Manager stops deciding: %s", e)
                 raise
-        if self.audit is not None and lines:
-            self.audit.write_lines(text for _, text in lines)
-            if self.journal is not None:
-                self.journal.exported(lines[-1][0])
         if self._observers:
             self._delivery.extend(step.events)
 
@@ -890,11 +890,18 @@ class Manager:
         c = saved.counters
         for name in ("decision", "seq", "record"):
             self._next[name] = max(self._next[name], c.get(name, 1))
-        if self.audit is not None:  # records committed but not yet in the audit log (a crash between)
-            late = [r for r in saved.records if r.get("seq", 0) > self.audit.last_seq]
-            self.audit.write_many(late)
-            if late:
-                self._next["record"] = max(self._next["record"], late[-1]["seq"] + 1)
+        uncommitted: list[dict[str, Any]] = []
+        if self.audit is not None and saved.audit is not None:
+            self._next["record"] = c.get("record", 1)  # the journal's count: seq goes on without a gap
+            if self.audit.size > saved.audit:  # written for a step whose commit never happened
+                uncommitted = self.audit.cut(saved.audit)
+            elif self.audit.size < saved.audit:
+                self._emit(
+                    step,
+                    "rejected",
+                    {"reason": f"the audit log is {saved.audit - self.audit.size} bytes shorter than "
+                     "the journal committed: it was changed outside cosleec"},
+                )
         now = self.clock.now()
         if isinstance(self.clock, VirtualClock) and now < saved.clock:
             self.clock.set(saved.clock)  # virtual (simulated) time goes on from where it stopped
@@ -948,6 +955,17 @@ class Manager:
             # decided, but perhaps never run: recorded, not run again (at most once)
             self._emit(step, "task-interrupted", {**rec, "reason": "the Manager stopped before it was known to have run"})
             step.change.outbox[int(rec["decision"])] = None
+        if uncommitted:
+            self._emit(
+                step,
+                "uncommitted",
+                {
+                    "records": len(uncommitted),
+                    "first": uncommitted[0].get("seq"),
+                    "last": uncommitted[-1].get("seq"),
+                    "to": f"{self.audit.path.name}.uncommitted" if self.audit is not None else None,
+                },
+            )
         for what in dropped:
             self._emit(step, "dropped", {"what": what})
         self._emit(

@@ -116,21 +116,27 @@ def test_an_implementation_cut_short_by_the_kill_is_recorded_not_run_again(tmp_p
     assert cut["decision"] == 1 and cut["rule"] == "R1"
 
 
-def test_records_lost_between_journal_and_audit_log_are_written_once(tmp_path: Path) -> None:
-    # the last step's records are committed to the journal before they reach the audit log:
-    # a kill in between leaves them missing or torn there, and the next start writes them
+def test_records_of_a_step_never_committed_are_set_aside(tmp_path: Path) -> None:
+    # a step's records are written to the audit log, then the step is committed with the
+    # log's length: a kill in between leaves records of a change that never happened (and
+    # perhaps a torn line); the next start sets them aside and numbers on without a gap
     die_after(tmp_path, 'm.update(consent=True); m.event("Watch")')
     log = tmp_path / "audit.jsonl"
     lines = log.read_text().splitlines(keepends=True)
     last = json.loads(lines[-1])
-    log.write_text("".join(lines[:-1]) + lines[-1][:10])  # the last record torn mid-line
+    ghost = [json.dumps({**last, "seq": last["seq"] + k, "kind": "decision", "id": 99}) + "\n" for k in (1, 2)]
+    log.write_text("".join(lines) + "".join(ghost) + '{"seq": 99, "ki')
     m = again(tmp_path, 101)
+    m.event("Watch")
     m.close()
     records = read_audit(log)
-    seqs = [r["seq"] for r in records]
-    assert seqs == list(range(1, len(records) + 1)) and seqs[-1] > last["seq"]
-    assert [r for r in records if r["seq"] == last["seq"]] == [last]
-    assert (tmp_path / "audit.jsonl.torn").read_text() == lines[-1][:10] + "\n"
+    assert [r["seq"] for r in records] == list(range(1, len(records) + 1))
+    assert records[: len(lines)] == [json.loads(x) for x in lines]  # the committed history, untouched
+    assert all(r.get("id") != 99 for r in records)
+    (aside,) = [r for r in records if r["kind"] == "uncommitted"]
+    assert aside["records"] == 2 and aside["first"] == last["seq"] + 1
+    assert (tmp_path / "audit.jsonl.uncommitted").read_text() == "".join(ghost)
+    assert (tmp_path / "audit.jsonl.torn").read_text() == '{"seq": 99, "ki\n'
 
 
 def test_a_changed_rule_set_keeps_what_it_still_names_and_records_what_it_drops(tmp_path: Path) -> None:
