@@ -75,7 +75,7 @@ POINTS = (
     "cap-exit",  # inside a capability, its action reported (or refused), not yet returned
     "journal-before",  # a step's commit is about to start
     "journal-inside",  # inside the SQLite transaction of a commit (a progress handler)
-    "journal-after",  # committed to the journal, not yet in the audit log
+    "journal-after",  # committed to the journal (its records already in the audit log)
     "audit-partial",  # part of a step's audit records written: the last line torn
     "audit-after",  # the audit records written, the step not yet over
 )

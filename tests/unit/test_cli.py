@@ -76,3 +76,24 @@ def test_a_bad_choice_lists_the_choices_as_the_user_types_them(capsys) -> None: 
     assert main(["decide", "examples/curtains.sleec", "--event", "X", "--semantics", "nestd"]) == 2
     err = capsys.readouterr().err
     assert "(choose from 'last-wins', 'nested')" in err and "HedgeSemantics" not in err
+
+
+def test_hostile_rule_files_are_user_errors_not_internal_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["check", str(empty)]) == 1  # before: 0, nothing checked
+    assert "no .sleec file" in capsys.readouterr().err
+    deep = tmp_path / "deep.sleec"
+    deep.write_text(
+        "def_start event E event F measure m : boolean def_end rule_start R1 when E and "
+        + "not " * 20_000
+        + "m then F rule_end"
+    )
+    assert main(["check", str(deep)]) == 1  # before: 70, RecursionError
+    assert "nested too deeply" in capsys.readouterr().err
+    long = tmp_path / "long.sleec"
+    long.write_text(
+        f"def_start event E event F def_end rule_start R1 when E then F within {'9' * 5000} seconds rule_end"
+    )
+    assert main(["check", str(long)]) == 1  # before: 70, Python's int() digit limit
+    assert "4,300 digits" in capsys.readouterr().err

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from rich.console import Console
 
+from cosleec.errors import UserError
 from cosleec.lang import HedgeSemantics, Unknowns
 
 
@@ -16,7 +17,10 @@ def expand(paths: list[str]) -> list[Path]:
     out: list[Path] = []
     for p in map(Path, paths):
         if p.is_dir():
-            out.extend(sorted(p.rglob("*.sleec")))
+            found = sorted(p.rglob("*.sleec"))
+            if not found:  # checking nothing must not look like a pass
+                raise UserError("no .sleec file in this directory", where=str(p), hint="give rule files or a directory of them")
+            out.extend(found)
         else:
             out.append(p)
     return out

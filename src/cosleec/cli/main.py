@@ -60,6 +60,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UserError as e:  # a mistake the user can fix: the message, where, and the hint
         print(e.render() if isinstance(e, SleecError) else f"cosleec: {e.render()}", file=sys.stderr)
         return 1
+    except RecursionError:  # only input nested past Python's limit gets here (20,000 `not`s)
+        print(
+            "cosleec: the input is nested too deeply to read (an expression thousands of levels deep)"
+            "\n  hint: split the expression, or name its parts as measures",
+            file=sys.stderr,
+        )
+        return 1
+    except ValueError as e:
+        if "integer string conversion" not in str(e):  # Python's 4,300-digit limit, met in the input
+            raise
+        print(
+            "cosleec: a number in the input has more than 4,300 digits"
+            "\n  hint: no deadline or measure needs that many; write a smaller number",
+            file=sys.stderr,
+        )
+        return 1
     except KeyboardInterrupt:
         return 130
     except BrokenPipeError:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import sys
+import threading
 import time
 from typing import Any
 
@@ -63,8 +64,12 @@ class ManagerNode(Node):
         **manager_kw: Any,
     ) -> None:
         super().__init__(transport, namespace)
-        self._republish: list[dict[str, Any]] = []
+        self._republish: list[dict[str, Any]] = []  # decisions held until the task nodes can hear them
         self._matched: tuple[int, float] | None = None  # obligations' subscriber count, and since when
+        # while starting (and, if decisions are held then, until the task nodes' subscriptions
+        # have settled), decisions are held rather than published to no one
+        self._settled = False
+        self._hand_lock = threading.Lock()
         # status after every message lets a harness know when the system is quiet; in
         # deployment the heartbeat (every 0.5 s) is enough and keeps the hot path short
         self.status_each = status_each
@@ -78,9 +83,13 @@ class ManagerNode(Node):
             self.advertise(t)
         self.manager.subscribe(self._runtime_event)
         # decided before a crash, perhaps never published: published again once a task node listens
-        self._republish = list(self.manager.undelivered)
+        self._republish = [{**d, "_again": True} for d in self.manager.undelivered]
         self.manager.undelivered.clear()
-        self.manager.start(check=False, timer=not sim_time)
+        self.manager.start(check=False, timer=not sim_time)  # may decide fallbacks: held, as above
+        with self._hand_lock:
+            # nothing held (a first start, a clean stop): publish as decided from now on; else
+            # what is decided later waits behind the held decisions, in order
+            self._settled = not self._republish
         self.on("context", self._context)
         self.on("events", self._event)
         self.on("request", self._request)
@@ -130,8 +139,6 @@ class ManagerNode(Node):
             step(arg)
         except ContextError as e:
             raise MessageError(str(e)) from e
-        finally:
-            self._after_message()
 
     def _request(self, msg: dict[str, Any]) -> None:
         name, rid = msg.get("event"), msg.get("id")
@@ -139,7 +146,11 @@ class ManagerNode(Node):
             raise MessageError("request message needs an `id` (string or integer) and a string `event`")
         if len(name) > MAX_NAME or len(str(rid)) > MAX_NAME:  # the reply echoes both
             raise MessageError(f"request `id` or `event` longer than {MAX_NAME} characters")
-        allowed = self.manager.request(name)
+        try:
+            allowed = self.manager.request(name)
+        except ContextError as e:  # an event no rule declares: refused, and the task learns why
+            self.publish("request_reply", {"id": rid, "event": name, "allowed": False, "reason": str(e)})
+            raise MessageError(str(e)) from e
         self.publish("request_reply", {"id": rid, "event": name, "allowed": allowed})
 
     def _clock(self, msg: dict[str, Any]) -> None:
@@ -164,9 +175,9 @@ class ManagerNode(Node):
             raise MessageError(f"clock went back from {now} to {seconds}: time does not go back")
         self.clock.set(seconds)
         self.manager.tick()
-        self._after_message()
 
-    def _after_message(self) -> None:
+    def after_message(self) -> None:
+        """With ``status_each``, a status after every message, once it is handled (harnesses)."""
         if self.status_each:
             self.status()
 
@@ -187,23 +198,34 @@ class ManagerNode(Node):
         A restarted node's publisher is new: what it sends before the task nodes have matched
         it would be lost. The heartbeat calls this until they have.
         """
-        if not self._republish:
-            return
-        count = getattr(self.transport, "subscribers", None)
-        if count is not None:  # wait until subscribers appeared and stayed the same for a second
-            now, n = time.monotonic(), count(self.topic("obligations"))
-            if n == 0 or self._matched is None or self._matched[0] != n:
-                self._matched = (n, now)
+        with self._hand_lock:
+            if self._settled:
                 return
-            if now - self._matched[1] < REPUBLISH_SETTLE_S:
-                return
-        todo, self._republish = self._republish, []
-        for d in todo:
-            self._count("republished")
-            self._hand_on(d)
+            count = getattr(self.transport, "subscribers", None)
+            if count is not None:  # wait until subscribers appeared and stayed the same for a second
+                now, n = time.monotonic(), count(self.topic("obligations"))
+                if n == 0 or self._matched is None or self._matched[0] != n:
+                    self._matched = (n, now)
+                    return
+                if now - self._matched[1] < REPUBLISH_SETTLE_S:
+                    return
+            self._settled = True
+            todo, self._republish = self._republish, []
+            for d in todo:
+                self._count("republished" if d.get("_again") else "obligations_held")
+                self._send(d)
 
     def _hand_on(self, d: dict[str, Any]) -> None:
+        """Publish a decision to the task nodes -- held until they can hear it after a start."""
+        with self._hand_lock:
+            if not self._settled:  # a new publisher: what it sent now could reach no one
+                self._republish.append(d)
+                return
+        self._send(d)
+
+    def _send(self, d: dict[str, Any]) -> None:
         """Publish a decision that chose a clause to the task nodes, then tell the Manager it left."""
+        d = {k: v for k, v in d.items() if k != "_again"}
         if d["clause"] is not None:  # the task nodes first: they are on the critical path
             self._count("obligations")
             # task nodes run each (session, id) once: a duplicate on the wire is not re-run

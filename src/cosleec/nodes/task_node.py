@@ -117,7 +117,7 @@ class TaskNode(Node):
         self.request_timeout = request_timeout
         self.when_manager_down = when_manager_down
         self._ids = itertools.count(1)
-        self._replies: dict[str, tuple[threading.Event, list[bool]]] = {}
+        self._replies: dict[str, tuple[threading.Event, list[bool], str]] = {}
         self._work: queue.Queue[Decision | None] = queue.Queue()
         self.handled: deque[Decision] = deque(maxlen=keep_handled)  # the most recent decisions run
         self.handled_total = 0  # every decision run (status `handled`)
@@ -147,11 +147,11 @@ class TaskNode(Node):
         thread, never from a transport callback: the reply may need that very thread, and
         would then arrive only after the wait.
         """
-        rid = f"{self.name}-{next(self._ids)}"
+        rid = f"{self.name}-{self.session[:12]}-{next(self._ids)}"  # unique: nodes may share a name
         self._count("requested")
         done = threading.Event()
         box: list[bool] = []
-        self._replies[rid] = (done, box)
+        self._replies[rid] = (done, box, event)
         try:
             self.publish("request", {"id": rid, "event": event})
             done.wait(self.request_timeout)
@@ -232,7 +232,8 @@ class TaskNode(Node):
     def _reply(self, msg: dict[str, Any]) -> None:
         entry = self._replies.get(str(msg.get("id")))
         if entry is not None:
-            entry[1].append(msg.get("allowed") is True)
+            # an answer about another event is no answer (a refusal), whatever it says
+            entry[1].append(msg.get("allowed") is True and msg.get("event") == entry[2])
             entry[0].set()
 
     def _run(self) -> None:

@@ -159,7 +159,8 @@ class Driver:
                 task_msgs += c.get("reported", 0) + c.get("requested", 0)
                 handled += s.get("handled", 0) + c.get("duplicates", 0)  # a duplicate is handled too
             # every message to the Manager handled, and every obligation it sent handled by a task
-            received: int = m["counters"]["received"]
+            # handled, not just received: a report still in its handler has changed nothing yet
+            received: int = m["counters"].get("processed", m["counters"]["received"])
             published: int = m["counters"].get("obligations", 0)
             # ...and every decision it counted published (obligations go out just before): a
             # report whose decision is still on its way is not yet in `published`

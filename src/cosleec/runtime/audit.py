@@ -14,6 +14,7 @@ to ``<log>.uncommitted`` (each record carries its sequence number, ``seq``).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import threading
@@ -65,10 +66,15 @@ class AuditLog:
         data = "".join(f"{line}\n" for line in lines).encode()
         with self._lock:
             if data:
-                self._fh.write(data)
-                self._fh.flush()
-                if self._fsync:
-                    os.fsync(self._fh.fileno())
+                try:
+                    self._fh.write(data)
+                    self._fh.flush()
+                    if self._fsync:
+                        os.fsync(self._fh.fileno())
+                except BaseException:
+                    with contextlib.suppress(OSError, ValueError):  # what really reached the file
+                        self.size = os.stat(self.path).st_size
+                    raise
                 self.count += data.count(b"\n")
                 self.size += len(data)
             return self.size
@@ -83,6 +89,10 @@ class AuditLog:
         with self._lock:
             self._fh.flush()
             with self.path.open("rb+") as fh:
+                if at > 0:  # only at a line boundary: a log edited by hand is not cut mid-record
+                    fh.seek(at - 1)
+                    if fh.read(1) != b"\n":
+                        raise ValueError(f"byte {at} of the audit log is not the start of a record")
                 fh.seek(at)
                 tail = fh.read()
                 if tail:
@@ -90,9 +100,16 @@ class AuditLog:
                         aside.write(tail)
                     fh.truncate(at)
             self.size = at
-            records = [json.loads(line) for line in tail.splitlines() if line.strip()]
-            if records:
-                self.last_seq = max(0, int(records[0].get("seq", 1)) - 1)
+            records = []
+            for line in tail.splitlines():
+                try:
+                    rec = json.loads(line)
+                except ValueError:
+                    continue  # a torn or foreign line: set aside all the same
+                if isinstance(rec, dict):
+                    records.append(rec)
+            if records and isinstance(records[0].get("seq"), int):
+                self.last_seq = max(0, records[0]["seq"] - 1)
             return records
 
     def close(self) -> None:

@@ -70,6 +70,11 @@ class VirtualClock:
             self._t = t
 
 
+#: the latest time a clock may show (about 31,700 years of seconds): past it ``t + 60 == t``
+#: is near (a float's precision), and nanoseconds sent as seconds are caught
+MAX_TIME = 1e12
+
+
 def _finite(t: object) -> None:
     """ValueError unless ``t`` is a finite real number (NaN and infinity would stop every deadline)."""
     if isinstance(t, bool) or not isinstance(t, int | float):
@@ -78,5 +83,5 @@ def _finite(t: object) -> None:
         ok = math.isfinite(t)
     except OverflowError:
         ok = False
-    if not ok:
-        raise ValueError("a time must be a finite number of seconds")
+    if not ok or abs(t) > MAX_TIME:
+        raise ValueError(f"a time must be a finite number of seconds, at most {MAX_TIME:g}")

@@ -23,9 +23,14 @@ class Context:
     def __init__(self, measures: Mapping[str, MeasureSpec], max_age: Mapping[str, float] | None = None) -> None:
         self.measures = dict(measures)
         ages = dict(max_age or {})
-        unknown = sorted(set(ages) - set(self.measures))
+        unknown = sorted(str(n) for n in set(ages) - set(self.measures))
         if unknown:
             raise ContextError(f"max_age names no measure: {', '.join(unknown)}")
+        for name, age in ages.items():  # a NaN would never expire: staleness would never fail closed
+            if isinstance(age, bool) or not isinstance(age, int | float) or not 0 < age < float("inf"):
+                raise ContextError(
+                    f"max_age of {name} must be a positive, finite number of seconds, not {age!r}"
+                )
         self.values: dict[str, Any] = {}
         self.stamps: dict[str, float] = {}
         self.version = 0
@@ -36,7 +41,9 @@ class Context:
         out: dict[str, Any] = {}
         measures = self.measures
         for name, value in updates.items():
-            spec = measures.get(name)
+            spec = measures.get(name) if isinstance(name, str) else None
+            if spec is None and not isinstance(name, str):
+                raise ContextError(f"a measure is named by a string, not {type(name).__name__}")
             if spec is None:
                 shown = repr(name) if len(name) <= 80 else f"{name[:80]!r}... ({len(name) - 80} more characters)"
                 raise ContextError(f"unknown measure {shown}")

@@ -122,7 +122,10 @@ def _because(d: Decision) -> str:
     """Why this clause: the conditions that decided it, with the values they read."""
     rule, clause = d.rule, d.clause
     if clause is None:
-        return f"{rule}: undetermined, no value for {', '.join(d.missing)}; nothing was done"
+        held = " and ".join(o.describe() for o in d.obligations)
+        return f"{rule}: undetermined, no value for {', '.join(d.missing)}; nothing was done" + (
+            f"; meanwhile {held}, as some reading of the rule requires" if held else ""
+        )
     what = " and ".join(o.describe() for o in d.obligations) if d.obligations else "nothing is required"
     hedges = [(c, t, v) for c, t, v in d.conditions if c > 0]
     if not hedges:

@@ -329,5 +329,8 @@ _RUNS: contextvars.ContextVar[list[Ran] | None] = contextvars.ContextVar("coslee
 
 def _describe(e: BaseException) -> str:
     """An exception in one bounded line: ``ValueError: no gripper`` (at most 300 characters)."""
-    text = f"{type(e).__name__}: {e}"
+    try:
+        text = f"{type(e).__name__}: {e}"
+    except Exception:  # an exception whose str() fails must not stop the next capability
+        text = f"{type(e).__name__}: <cannot be shown>"
     return text if len(text) <= 300 else text[:300] + f"... ({len(text) - 300} more characters)"

@@ -53,9 +53,13 @@ class Saved:
     clock: float  # clock time of the last commit
     wall: float  # Unix time of the last commit
     context: dict[str, tuple[Any, float]]  # measure -> (value as users see it, clock time set)
-    obligations: list[dict[str, Any]]  # obligation records (Tracked.to_json), pending ones only
-    outbox: list[dict[str, Any]]  # implementations decided but not known to have run
+    obligations: list[dict[str, Any]]  # obligation records (Tracked.to_json): pending, or missed and
+    # still waiting for their late event
+    outbox: list[dict[str, Any]]  # implementations decided but not known to have run, or (a
+    # Manager node, dispatch=False) decisions not known to have been published
     audit: int | None = None  # the audit log's length (bytes) at the last commit; None: no log
+    clock_kind: str = ""  # the class of the clock that wrote it (VirtualClock, MonotonicClock)
+    boot: str = ""  # the machine's boot id when it was written (a monotonic clock's origin)
 
 
 @dataclass
@@ -81,17 +85,46 @@ class Journal:
         self.path = Path(path)
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._db = sqlite3.connect(self.path, check_same_thread=False, isolation_level=None)
-            self._db.execute("PRAGMA journal_mode=WAL")
-            self._db.execute(f"PRAGMA synchronous={'FULL' if fsync else 'NORMAL'}")
-            self._db.executescript(_SCHEMA)
+            self._db = sqlite3.connect(self.path, check_same_thread=False, isolation_level=None, timeout=1.0)
         except (OSError, sqlite3.Error) as e:
             raise JournalError(
                 f"cannot open the journal: {e}", where=str(path), hint="give a writable path to a journal file"
             ) from None
+        try:
+            # one Manager per journal: the first write takes a lock held until close
+            self._db.execute("PRAGMA locking_mode=EXCLUSIVE")
+            self._db.execute("PRAGMA journal_mode=WAL")
+            self._db.execute(f"PRAGMA synchronous={'FULL' if fsync else 'NORMAL'}")
+            self._db.executescript(_SCHEMA)
+            self._db.execute("INSERT OR REPLACE INTO meta VALUES ('opened', ?)", (str(time.time()),))
+        except sqlite3.OperationalError as e:
+            self._db.close()
+            busy = "locked" in str(e)
+            raise JournalError(
+                "the journal is in use by another Manager" if busy else f"cannot use the journal: {e}",
+                where=str(path),
+                hint="stop the other Manager first, or give each Manager its own journal"
+                if busy
+                else "give the path of a cosleec journal, or a new file",
+            ) from None
+        except sqlite3.Error as e:
+            self._db.close()
+            raise JournalError(
+                f"this is not a cosleec journal: {e}", where=str(path), hint="give a new file for a new journal"
+            ) from None
 
     def load(self) -> Saved | None:
-        """What the journal holds; None for a new journal."""
+        """What the journal holds; None for a new journal; JournalError when it is damaged."""
+        try:
+            return self._load()
+        except (ValueError, KeyError, TypeError, AttributeError, sqlite3.Error) as e:
+            raise JournalError(
+                f"the journal is damaged ({type(e).__name__}: {str(e)[:200]}); nothing was restored",
+                where=str(self.path),
+                hint="restore it from a backup (with its -wal file), or give a new file to start afresh",
+            ) from None
+
+    def _load(self) -> Saved | None:
         db = self._db
         row = db.execute("SELECT value FROM meta WHERE key = 'state'").fetchone()
         if row is None:
@@ -108,6 +141,8 @@ class Journal:
             obligations=[json.loads(r) for (r,) in db.execute("SELECT record FROM obligations ORDER BY id")],
             outbox=[json.loads(r) for (r,) in db.execute("SELECT record FROM outbox ORDER BY id")],
             audit=None if meta.get("audit") is None else int(meta["audit"]),
+            clock_kind=str(meta.get("clock_kind", "")),
+            boot=str(meta.get("boot", "")),
         )
 
     def commit(self, change: Change, meta: Mapping[str, Any], clock: float) -> None:

@@ -120,7 +120,7 @@ class LayerManager:
                 self.index.setdefault(m, []).append(r)
         self.status: list[RuleStatus] = [self._compute(r, {}) for r in ruleset.rules]
         self._active: dict[int, str] = {}  # rule index -> active layer (rules at their default absent)
-        self._version = 0  # of the `layers` records (state())
+        self.version = 0  # of the last `layers` record (state()); a journal keeps it across restarts
         # each rule's COP composition: its active layer, none at the default, None undetermined
 
     def composition_of(self, rule: CompiledRule) -> Snapshot | None:
@@ -173,12 +173,12 @@ class LayerManager:
 
     def state(self, switches: Iterable[LayerSwitch] = ()) -> LayerState:
         """The ``layers`` record now, after ``switches``; each call is a new version."""
-        self._version += 1
+        self.version += 1
         return LayerState(
             active=tuple(self.active_layers()),
             switches=tuple(switches),
             semantics=self.semantics,
-            version=self._version,
+            version=self.version,
         )
 
     def active_layers(self) -> list[str]:

@@ -5,12 +5,14 @@ It plays the paper's *Manager* role (owns the rules and the context) and hosts t
 robot's topics (``cosleec.nodes``).
 
 Every state change happens in one *step* under one lock, so a trigger is always decided
-against a context that no update has half-changed. A step ends by committing what it
-changed together with its records -- to the journal (one SQLite transaction), then to the
-audit log -- still under the lock: no change without its record, no record without its
-change, and records in the order the changes were made. Observers then hear the records
-in that same order. Implementations run outside the lock, so a slow or failing task never
-blocks it; what they did is recorded by a step of its own (``task-done``/``task-failed``).
+against a context that no update has half-changed. A step ends, still under the lock, by
+writing its records to the audit log (flushed) and then committing what it changed to the
+journal (one SQLite transaction) together with the log's new length: a change is kept only
+with its records, and records past the committed length (a kill in between) are set aside
+on the next start -- no change without its record, no record without its change, and
+records in the order the changes were made. Observers then hear the records in that same
+order. Implementations run outside the lock, so a slow or failing task never blocks it;
+what they did is recorded by a step of its own (``task-done``/``task-failed``).
 
 What happens when the runtime does not know (each a documented policy, fail closed):
 
@@ -49,6 +51,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from cosleec.cop import Snapshot
+from cosleec.errors import CosleecError
 from cosleec.lang import HedgeSemantics, Specification, Unknowns, candidates, choose
 from cosleec.runtime.audit import AuditLog
 from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
@@ -58,7 +61,7 @@ from cosleec.runtime.errors import ConfigurationError, ContextError
 from cosleec.runtime.implementations import Capability, Implementations, Ran
 from cosleec.runtime.journal import Change, Journal, JournalError, Saved
 from cosleec.runtime.layers import LayerManager, LayerSwitch, evaluate
-from cosleec.runtime.model import MAX_WINDOW_S, CompiledRule, Obligation, ResponseSpec
+from cosleec.runtime.model import MAX_WINDOW_S, CompiledRule, ItemSpec, Obligation, ResponseSpec
 from cosleec.runtime.obligations import PENDING, Outcome, Tracked, Tracker
 from cosleec.runtime.ruleset import RuleSet
 from cosleec.runtime.tasks import Task
@@ -94,8 +97,9 @@ def _cut(text: str, n: int = 120) -> str:
 class RuntimeEvent:
     """What observers (terminal display, ROS publishers, the audit log, tests) are told, in order.
 
-    ``kind`` is one of event, context, layers, decision, obligation, refused, rejected,
-    task-done, task-failed, task-interrupted, restored, dropped. ``seq`` numbers the
+    ``kind`` is one of event, context, layers, semantics, decision, obligation, refused,
+    rejected, task-done, task-failed, task-interrupted, restored, dropped, uncommitted,
+    audit-mismatch. ``seq`` numbers the
     records of one Manager (continued across restarts with a journal, or from the audit
     log it appends to); 0 when nothing records.
     """
@@ -138,9 +142,12 @@ class _Scope:
 
     def __enter__(self) -> _Step:
         m = self.manager
-        if m._broken is not None:
-            raise m._broken
+        if m._broken is not None or m._closed:
+            raise m._refusal()
         m._lock.acquire()
+        if m._broken is not None or m._closed:  # the step it waited behind failed, or closed
+            m._lock.release()
+            raise m._refusal()
         self.step = _Step()
         return self.step
 
@@ -218,6 +225,8 @@ class Manager:
         self.tracker = Tracker(_untimed(untimed))
         self.implementations = Implementations(rules)
         self.dispatch_locally = dispatch
+        if isinstance(history, bool) or not isinstance(history, int) or history < 1:
+            raise ConfigurationError(f"history must be a whole number of at least 1, not {_cut(repr(history))}")
         if isinstance(max_depth, bool) or not isinstance(max_depth, int) or max_depth < 1:
             raise ConfigurationError(f"max_depth must be a whole number of at least 1, not {max_depth!r}")
         self.max_depth = max_depth
@@ -246,6 +255,7 @@ class Manager:
         self._timer: threading.Thread | None = None
         self._stop = threading.Event()
         self._broken: JournalError | None = None
+        self._closed = False
         # decisions a journal held that were decided but perhaps never published (dispatch=False):
         # the Manager node publishes them again after a restart (task nodes run each id once)
         self.undelivered: list[dict[str, Any]] = []
@@ -345,10 +355,13 @@ class Manager:
         if self._timer is not None:
             self._timer.join(5)
         with self._lock:
+            if self._closed:
+                return
             if self.journal is not None:
                 if self._delivered and self._broken is None:
                     self._commit(_Step())  # what was published leaves the outbox
                 self.journal.close()
+            self._closed = True
             if self.audit is not None:
                 self.audit.close()
 
@@ -362,6 +375,8 @@ class Manager:
         """
         updates = {**(values or {}), **kw}
         rejected: ContextError | None = None
+        followups: list[tuple[CompiledRule, Decision]] = []
+        self._catch_up()
         with self._step() as step:
             try:
                 stored = self.context.validate(updates)
@@ -373,7 +388,7 @@ class Manager:
             else:
                 now = self.clock.now()
                 self.stats["updates"] += 1
-                self._advance(now, step)
+                followups = self._advance(now, step)
                 changed = self.context.apply(stored, now)
                 if self.journal is not None:
                     step.change.context.update((n, (x, now)) for n, x in self.context.external(stored).items())
@@ -385,6 +400,8 @@ class Manager:
                         {"values": self.context.external(sorted(changed)), "version": self.context.version},
                     )
                 result = self._switched(switches, step)
+        if self.dispatch_locally:
+            self._fallbacks(followups)  # an otherwise whose deadline this update noticed
         if rejected is not None:
             raise rejected
         return result
@@ -415,8 +432,12 @@ class Manager:
 
     def set_semantics(self, semantics: HedgeSemantics | str) -> None:
         """Switch clause semantics at run time; every rule's layer is re-evaluated."""
-        with self._lock:
-            self.layer_manager.set_semantics(_option(HedgeSemantics, semantics, "semantics"), self.context.values)
+        chosen = _option(HedgeSemantics, semantics, "semantics")
+        with self._step() as step:
+            before = self.active_layers()
+            self.layer_manager.set_semantics(chosen, self.context.values)
+            if self._recording:
+                self._emit(step, "semantics", {"semantics": str(chosen), "before": before, "active": self.active_layers()})
 
     # ------------------------------------------------------------------ events
     def event(self, name: str) -> list[Decision]:
@@ -428,6 +449,7 @@ class Manager:
         """
         followups: list[tuple[CompiledRule, Decision]] = []
         decisions: list[tuple[CompiledRule, Decision, Snapshot | None]] = []
+        self._catch_up()
         with self._step() as step:
             if not self._known(name, "event", step):
                 return []
@@ -464,8 +486,9 @@ class Manager:
         Also False when the Manager cannot keep its state (a failed journal), and for an
         event no declaration names under ``unknown_events="refuse"``.
         """
-        if self._broken is not None:
+        if self._broken is not None or self._closed:
             return False
+        self._catch_up()
         with self._step() as step:
             if not self._known(name, "request", step):
                 return False
@@ -509,6 +532,12 @@ class Manager:
             self._fallbacks(followups)
         return [d for _, d in followups]
 
+    def _catch_up(self) -> None:
+        """Judge a backlog of due deadlines in batches (:meth:`tick`) before a step that would
+        otherwise judge them all while holding the lock (after a long pause, a restart)."""
+        if self.tracker.backlog(self.clock.now()) > 1000:
+            self.tick()
+
     def outstanding(self) -> list[Tracked]:
         """Pending obligations that require an event (prohibitions left out): what the robot still owes.
 
@@ -523,6 +552,12 @@ class Manager:
         when it ends by an exception (every change made so far has its record); observers
         hear the records after the lock is released, in order."""
         return _Scope(self)
+
+    def _refusal(self) -> CosleecError:
+        """Why this Manager takes no more steps (a failed journal or audit log, or closed)."""
+        if self._broken is not None:
+            return JournalError(str(self._broken), where=self._broken.where, hint=self._broken.hint)
+        return ConfigurationError("this Manager is closed", hint="make a new Manager (with its journal)")
 
     def _count(self, name: str) -> int:
         """The next number of counter ``name`` (decision, seq, record), used up."""
@@ -553,7 +588,16 @@ class Manager:
                         + (f",{body[1:]}" if len(body) > 2 else "}"),
                     )
                 )
-        end = self.audit.write_lines(text for _, text in lines) if self.audit is not None else None
+        try:
+            end = self.audit.write_lines(text for _, text in lines) if self.audit is not None else None
+        except (OSError, ValueError) as e:  # a full disk, a closed log: the state can no longer be kept
+            self._broken = JournalError(
+                f"cannot write the audit log: {getattr(e, 'strerror', None) or e}",
+                where=str(self.audit.path) if self.audit is not None else "",
+                hint="free space or give a writable path, then restart: the journal has the state",
+            )
+            log.error("audit log failed, the Manager stops deciding: %s", e)
+            raise self._broken from None
         if self.journal is not None:
             meta = self._meta()
             if end is not None:
@@ -563,6 +607,13 @@ class Manager:
             except JournalError as e:
                 self._broken = e
                 log.error("journal failed, the Manager stops deciding: %s", e)
+                raise
+            except BaseException as e:  # interrupted mid-commit: whether it landed is unknown
+                self._broken = JournalError(
+                    f"a journal commit was interrupted ({type(e).__name__})",
+                    where=str(self.journal.path),
+                    hint="restart the Manager: the journal has the last committed state",
+                )
                 raise
         if self._observers:
             self._delivery.extend(step.events)
@@ -588,15 +639,26 @@ class Manager:
             **self._next,
             "obligation": self.tracker.next_id,
             "version": self.context.version,
-            "layers": self.layer_manager._version,  # the version of the next `layers` record goes on too
+            "layers": self.layer_manager.version,  # the version of the next `layers` record goes on too
         }
-        return {"rules": self.ruleset.digest, "run": self.run_id, "lineage": self.lineage, "counters": counters}
+        return {
+            "rules": self.ruleset.digest,
+            "run": self.run_id,
+            "lineage": self.lineage,
+            "clock_kind": type(self.clock).__name__,
+            "boot": _boot(),  # a monotonic clock counts from boot: another boot, another origin
+            "counters": counters,
+        }
 
     # ------------------------------------------------------------------ internals (under the lock)
     def _known(self, name: str, what: str, step: _Step) -> bool:
         """Is ``name`` a declared event? If not, apply ``unknown_events`` (record, then raise or refuse)."""
-        if name in self.ruleset.events:
+        if isinstance(name, str) and name in self.ruleset.events:
             return True
+        if not isinstance(name, str):
+            self.stats["rejected"] += 1
+            self._emit(step, "rejected", {"reason": f"an event is named by a string, not {type(name).__name__}"})
+            raise ContextError(f"an event is named by a string, not {type(name).__name__} {_show(name)}")
         self.stats["rejected"] += 1
         close = difflib.get_close_matches(name, sorted(self.ruleset.events), n=3) if len(name) < 200 else []
         reason = f"unknown event {_cut(repr(name))}"
@@ -645,7 +707,7 @@ class Manager:
                 step.change.obligations[t.id] = rec if keep else None
                 for gone in self.tracker.forgotten:
                     step.change.obligations[gone] = None
-                self.tracker.forgotten.clear()
+        self.tracker.forgotten.clear()
 
     def _settle(
         self, out: Outcome, now: float, seq: int, step: _Step
@@ -695,6 +757,8 @@ class Manager:
         except KeyError:
             x = rule.trigger_kleene(v)
             fired = None if x is None else bool(x)
+            if fired is None and self.layer_manager.unknowns != Unknowns.UNDETERMINED:
+                fired = self.layer_manager.unknowns == Unknowns.TRUE  # the policy reads it so
             if fired is None:
                 missing = tuple(sorted(n for n in rule.trigger_reads if n not in v))
         if fired is False:
@@ -708,7 +772,7 @@ class Manager:
             if not issued.determined:  # an inner response's own `unless` is unknown
                 clause, missing = None, issued.missing
         else:
-            issued = self._forbidden(rule, status.values, fired)
+            issued = self._forbidden(rule, status.values)
         if clause is None:
             self.stats["undetermined"] += 1
         conds = ((0, rule.trigger_text, fired), *zip(rule.clause_ids, rule.clause_texts, status.values))
@@ -734,22 +798,22 @@ class Manager:
             unknowns=self.layer_manager.unknowns,
         )
 
-    def _forbidden(self, rule: CompiledRule, values: tuple[bool | None, ...], fired: bool | None) -> _Issued:
+    def _forbidden(self, rule: CompiledRule, values: tuple[bool | None, ...]) -> _Issued:
         """An undetermined decision's obligations: the prohibitions of every clause that could apply."""
         clauses = candidates(values, self.semantics) if values else frozenset({0})
         out: list[Obligation] = []
         for k in sorted(clauses):
             spec = rule.response_of(k)
             if spec is not None:
-                out += _prohibitions(self._issue(spec, rule.name, any_clause=True).obligations)
+                out += _prohibitions(self._issue(spec, rule.name).obligations)
         return _Issued(tuple(out), determined=False)
 
-    def _issue(self, spec: ResponseSpec | None, rule: str, *, any_clause: bool = False) -> _Issued:
+    def _issue(self, spec: ResponseSpec | None, rule: str) -> _Issued:
         """The concrete obligations of a response, starting now (deadlines on this snapshot).
 
         A braced inner response chooses among its own clauses here; when that choice is
         undetermined, the result is undetermined and holds the prohibitions of every inner
-        clause that could apply. ``any_clause`` collects every candidate's obligations.
+        clause that could apply.
         """
         if spec is None:
             return _Issued(())
@@ -757,14 +821,12 @@ class Manager:
         if spec.clauses:  # a braced inner response: its own hedges, read when it starts
             vals, missing = evaluate(spec.clauses, v)
             k = choose(vals, self.semantics, self.layer_manager.unknowns)
-            if k is None or any_clause:
-                ks = candidates(vals, self.semantics) if k is None else frozenset({k})
+            if k is None:
                 out: list[Obligation] = []
-                for j in sorted(ks):
-                    sub = self._issue(spec.clauses[j - 1].response, rule, any_clause=True) if j else None
+                for j in sorted(candidates(vals, self.semantics)):
+                    sub = self._issue(spec.clauses[j - 1].response, rule) if j else None
                     out += _prohibitions(sub.obligations if sub is not None else self._items(spec, rule))
-                if k is None:
-                    return _Issued(tuple(out), missing, determined=False)
+                return _Issued(tuple(out), missing, determined=False)
             if k:
                 return self._issue(spec.clauses[k - 1].response, rule)
         return _Issued(self._items(spec, rule))
@@ -779,9 +841,13 @@ class Manager:
                 hi = MAX_WINDOW_S if it.negated else 0.0
             try:
                 lo = it.lo(v) if it.lo is not None else None
-            except KeyError:
-                lo = 0.0  # the earliest start: the widest window either way
-            alts = tuple(a.event for a in it.alternative.items) if it.alternative is not None else ()
+            except KeyError:  # a prohibition from the earliest start; an obligation due now
+                lo = 0.0
+                if not it.negated:
+                    hi = 0.0
+            # an `else` event fulfils it; a prohibition in the `else` never does (reading it as
+            # one would let the forbidden event satisfy the rule)
+            alts = tuple(a.event for a in it.alternative.items if not a.negated) if it.alternative else ()
             out.append(
                 Obligation(
                     event=it.event,
@@ -873,6 +939,8 @@ class Manager:
                     self.tick()
                 except JournalError:
                     return  # logged where it happened; the Manager refuses from now on
+                except Exception:  # a bug must not stop deadlines from being judged
+                    log.exception("judging deadlines failed; the timer goes on")
 
     # ------------------------------------------------------------------ restoring from a journal
     def _open_journal(self, journal: Journal) -> None:
@@ -885,6 +953,23 @@ class Manager:
         with self._step() as step:
             self._restore(saved, step)
 
+    def _item_of(self, t: Tracked) -> ItemSpec | None:
+        """The response item a restored obligation came from: by its key, or -- when the rule
+        was edited around it -- the one item of its rule with the same event and sense."""
+        item = self.ruleset.items.get(t.obligation.item)
+        if item is not None and item.event == t.event and item.negated == t.prohibition:
+            return item
+        rule = self.ruleset.by_name.get(t.rule)
+        if rule is None:
+            return None
+        same = [
+            it
+            for resp in rule.responses()
+            for it in resp.walk()
+            if it.event == t.event and it.negated == t.prohibition
+        ]
+        return same[0] if len(same) == 1 else None
+
     def _restore(self, saved: Saved, step: _Step) -> None:
         """Take back what the journal kept (under the lock, as one step)."""
         c = saved.counters
@@ -894,22 +979,39 @@ class Manager:
         if self.audit is not None and saved.audit is not None:
             self._next["record"] = c.get("record", 1)  # the journal's count: seq goes on without a gap
             if self.audit.size > saved.audit:  # written for a step whose commit never happened
-                uncommitted = self.audit.cut(saved.audit)
+                try:
+                    uncommitted = self.audit.cut(saved.audit)
+                except ValueError as e:  # not where the journal says: edited by hand, or another log
+                    self._emit(step, "audit-mismatch", {"reason": f"{e}; nothing was set aside"})
             elif self.audit.size < saved.audit:
                 self._emit(
                     step,
-                    "rejected",
+                    "audit-mismatch",
                     {"reason": f"the audit log is {saved.audit - self.audit.size} bytes shorter than "
                      "the journal committed: it was changed outside cosleec"},
                 )
+        kind = type(self.clock).__name__
+        if saved.clock_kind and saved.clock_kind != kind:
+            raise JournalError(
+                f"the journal was written on a {saved.clock_kind} and this Manager runs on a {kind}: "
+                "every saved window would be misread",
+                where=str(self.journal.path) if self.journal is not None else "",
+                hint="restart with the same kind of clock, or give a new journal",
+            )
         now = self.clock.now()
         if isinstance(self.clock, VirtualClock) and now < saved.clock:
             self.clock.set(saved.clock)  # virtual (simulated) time goes on from where it stopped
             now = saved.clock
-        # a monotonic clock that started again (a reboot): shift saved clock times so that
-        # the time the Manager was down still passes
+        # a monotonic clock that started again (a reboot): shift saved clock times. How long
+        # the Manager was down is known only from the wall clock, which may be wrong: each
+        # reading is the stricter one -- obligations as if all that time passed (deadlines
+        # due sooner), prohibitions as if none did (still in force)
         down = max(0.0, time.time() - saved.wall)
-        shift = 0.0 if now >= saved.clock else now - down - saved.clock
+        restarted = not isinstance(self.clock, VirtualClock) and (
+            now < saved.clock or (bool(saved.boot) and saved.boot != _boot())
+        )
+        shift = now - down - saved.clock if restarted else 0.0
+        hold = now - saved.clock if restarted else 0.0  # for prohibitions
         changed = saved.rules != self.ruleset.digest
         dropped: list[str] = []
         values: dict[str, Any] = {}
@@ -925,19 +1027,22 @@ class Manager:
             self.context.stamps[name] = stamp + shift
         self.context.values.update(values)
         self.context.version = max(c.get("version", 0), 1 if values else 0)
-        self.layer_manager._version = max(self.layer_manager._version, c.get("layers", 0))
+        self.layer_manager.version = max(self.layer_manager.version, c.get("layers", 0))
         self.layer_manager.update(set(values), self.context.values)
         kept = 0
+        restored: list[Tracked] = []
         for rec in saved.obligations:
             t = Tracked.from_json(rec)
-            item = self.ruleset.items.get(t.obligation.item)
-            if t.rule not in self.ruleset.by_name or item is None or item.event != t.event:
+            item = self._item_of(t)
+            if item is None:
                 dropped.append(f"obligation {t.id} ({t.rule}: {t.obligation.describe()}): the rules no longer have it")
                 continue
-            t.obligation = dataclasses.replace(t.obligation, otherwise=item.otherwise)
-            t.start += shift
-            t.lo += shift
-            t.hi = None if t.hi is None else t.hi + shift
+            t.obligation = dataclasses.replace(t.obligation, otherwise=item.otherwise, item=item.key)
+            d = hold if t.prohibition else shift
+            t.start += d
+            t.lo += d
+            t.hi = None if t.hi is None else t.hi + d
+            restored.append(t)
             if t.status == PENDING:
                 self.tracker.resume(t, c.get("obligation", 1))
                 kept += 1
@@ -985,9 +1090,19 @@ class Manager:
             for name in saved.context:
                 if name not in values:
                     step.change.context[name] = None
+            kept_ids = {t.id for t in restored}
             for rec in saved.obligations:
-                if not self.tracker.tracks(int(rec["id"])) and rec.get("status") == PENDING:
+                if int(rec["id"]) not in kept_ids:
                     step.change.obligations[int(rec["id"])] = None
+
+
+@functools.cache
+def _boot() -> str:
+    """This boot of the machine (Linux's boot id), or "" where it cannot be told."""
+    try:
+        return Path("/proc/sys/kernel/random/boot_id").read_text().strip()
+    except OSError:
+        return ""
 
 
 def _number(x: float) -> str:
@@ -1006,7 +1121,61 @@ def _show(value: object) -> str:
 
 
 def _prohibitions(obligations: tuple[Obligation, ...]) -> list[Obligation]:
-    return [o for o in obligations if o.negated]
+    """What an undetermined decision enforces of ``obligations``: their prohibitions, and the
+    prohibitions their ``otherwise`` would start (nothing runs, so every obligation may be
+    missed), shifted to start at that deadline."""
+    out = [o for o in obligations if o.negated]
+    for o in obligations:
+        if not o.negated and o.otherwise is not None:
+            at = o.within_s or 0.0
+            out += _after(o.otherwise, at, at, o.rule)
+    return out
+
+
+def _after(spec: ResponseSpec, first: float, last: float, rule: str) -> list[Obligation]:
+    """The prohibitions ``spec`` (an ``otherwise``) could impose when it starts between ``first``
+    and ``last`` seconds from now, down its own ``otherwise`` chain and across its inner
+    clauses, read fail-closed: a bound that depends on an unknown value makes the window as
+    wide as it could be."""
+    out: list[Obligation] = []
+    for it in spec.items:
+        known = _seconds(it.hi)
+        if it.negated:
+            lo = _seconds(it.lo) if it.lo is not None else 0.0
+            hi = MAX_WINDOW_S if known is None and it.hi is not None else (known or 0.0)
+            out.append(
+                Obligation(
+                    event=it.event,
+                    negated=True,
+                    from_s=first + (lo or 0.0),
+                    within_s=min(MAX_WINDOW_S, last + hi),
+                    rule=rule,
+                    item=it.key,
+                )
+            )
+        elif it.otherwise is not None:
+            unknown = it.hi is not None and known is None
+            out += _after(
+                it.otherwise,
+                first + (known or 0.0),
+                MAX_WINDOW_S if unknown else min(MAX_WINDOW_S, last + (known or 0.0)),
+                rule,
+            )
+    for c in spec.clauses:
+        if c.response is not None:
+            out += _after(c.response, first, last, rule)
+    return out
+
+
+def _seconds(fn: Callable[[dict[str, Any]], float] | None) -> float | None:
+    """A window bound with no context to read (an ``otherwise`` not started yet): its constant
+    value, or None when it depends on a measure (the caller reads that fail-closed)."""
+    if fn is None:
+        return None
+    try:
+        return fn({})
+    except KeyError:
+        return None
 
 
 def _untimed(value: str | float) -> str | float:

@@ -162,10 +162,6 @@ class Tracker:
         """Later obligation ids start at ``next_id`` at the least (a journal's counter)."""
         self._next = max(self._next, next_id)
 
-    def tracks(self, oid: int) -> bool:
-        """Is obligation ``oid`` in force?"""
-        return oid in self._active
-
     def start(
         self, decision_id: int, clause: int | None, ob: Obligation, now: float, seq: int, depth: int = 0
     ) -> Tracked:
@@ -205,6 +201,9 @@ class Tracker:
 
     def _close(self, t: Tracked) -> None:
         del self._active[t.id]
+        if len(self._heap) > 2 * len(self._active) + 1024:  # closed early: drop their deadlines
+            self._heap[:] = [(hi, i) for hi, i in self._heap if i in self._active]  # in place: due() holds it
+            heapq.heapify(self._heap)
         for ev in (t.obligation.event, *t.obligation.alternatives):
             bucket = self._by_event.get(ev)
             if bucket is not None:
@@ -294,6 +293,11 @@ class Tracker:
             for t in self._by_event.get(event, {}).values()
             if t.prohibition and t.event == event and t.lo <= now and (t.hi is None or now <= t.hi)
         ]
+
+    def backlog(self, now: float) -> int:
+        """About how many windows are due at ``now`` (0 when none is); cheap, an upper bound."""
+        heap = self._heap
+        return len(heap) if heap and heap[0][0] < now else 0
 
     def next_deadline(self) -> float | None:
         """The earliest deadline still pending (clock time, seconds), or None; the timer sleeps until it."""

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import logging
 import math
+import threading
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -436,5 +437,59 @@ def test_messages_a_sender_numbered_but_never_delivered_are_counted_lost() -> No
     assert bus.wait_idle()
     assert node.counters["lost"] == 2 + 3 + 1 and node.counters["out_of_order"] == 2
     assert node.manager.stats["events"] == 10  # every message that arrived was still handled
+    node.close()
+    bus.close()
+
+
+def test_two_task_nodes_of_one_name_never_take_each_others_answers(bus: LocalBus) -> None:
+    manager = ManagerNode(bus.transport(), RS, sim_time=True)
+    manager.manager.update(userConsent=False)
+    manager.manager.event("UserFallen")  # R6: not RecordVideo for 10 minutes
+    a = TaskNode(bus.transport(), RS)
+    b = TaskNode(bus.transport(), RS)  # the same default name, `task`
+    assert a.request("RecordVideo") is False
+    assert b.request("OpenCurtains") is True
+    # an answer about another event is no answer: before, ids `task-1`... matched both nodes
+    rid = f"task-{a.session[:12]}-99"
+    a._replies[rid] = (threading.Event(), [], "RecordVideo")
+    bus.transport().publish("/cosleec/request_reply", json.dumps({"id": rid, "event": "OpenCurtains", "allowed": True}))
+    assert bus.wait_idle()
+    assert a._replies[rid][1] == [False]
+    a.close()
+    b.close()
+
+
+def test_a_request_for_an_undeclared_event_is_answered_no_with_the_reason(bus: LocalBus) -> None:
+    ManagerNode(bus.transport(), RS, sim_time=True)
+    replies = collect(bus, "/cosleec/request_reply")
+    node = TaskNode(bus.transport(), RS, when_manager_down="raise")
+    assert node.request("RecordVidoe") is False  # before: no reply at all, a timeout
+    assert node.counters["request_timeouts"] == 0
+    assert bus.wait_idle()
+    assert "did you mean" not in replies[-1]["reason"] or "RecordVideo" in replies[-1]["reason"]
+    assert replies[-1]["allowed"] is False and "unknown event" in replies[-1]["reason"]
+    node.close()
+
+
+def test_a_restarted_manager_node_publishes_again_what_it_may_never_have_published(tmp_path: Any) -> None:
+    from cosleec.runtime import VirtualClock
+
+    journal = tmp_path / "state.db"
+    m = Manager(RS, journal=journal, dispatch=False, clock=VirtualClock())
+    m.update(userUndressed=True, userDistressed="low")
+    m.event("CurtainOpenRequest")  # decided and committed; the node died before publishing
+    m.journal.close()  # type: ignore[union-attr]  # no close(): nothing of a clean stop
+    bus = LocalBus()
+    node = TaskNode(bus.transport(), RS)
+    task = Curtains()
+    node.bind(task).start(["R1"])
+    manager = ManagerNode(bus.transport(), RS, journal=str(journal), sim_time=True)
+    wait_for(lambda: node.handled_total == 1)
+    assert task.ran == ["R1.1"] and manager.counters["republished"] == 1
+    manager.close()
+    again = ManagerNode(bus.transport(), RS, journal=str(journal), sim_time=True)  # published: not again
+    assert bus.wait_idle()
+    assert again.counters.get("republished", 0) == 0 and node.handled_total == 1
+    again.close()
     node.close()
     bus.close()

@@ -20,6 +20,7 @@ from cosleec.runtime import (
     BindingError,
     ConfigurationError,
     ContextError,
+    JournalError,
     Manager,
     RuntimeEvent,
     VirtualClock,
@@ -256,7 +257,7 @@ def test_a_huge_measure_dependent_deadline_is_read_fail_closed() -> None:
     assert m.stats["violations"] == 1
 
 
-@pytest.mark.parametrize("bad", [float("nan"), float("inf"), -float("inf"), 10**400, "3", True])
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), -float("inf"), 10**400, 1e300, "3", True])
 def test_the_virtual_clock_accepts_only_finite_times(bad: Any) -> None:
     c = VirtualClock(5)
     with pytest.raises(ValueError):
@@ -445,6 +446,9 @@ def test_an_exception_inside_a_step_keeps_the_record_of_every_change_made(
     assert [d.id for d in m.decisions] == [1]
     kinds = [r["kind"] for r in read_audit(log)]
     assert kinds[-2:] == ["event", "decision"]
+    with pytest.raises(JournalError, match="in use by another Manager"):
+        manager("R1 when E then F within 1 seconds", journal=db)
+    m.close()
     m2, _ = manager("R1 when E then F within 1 seconds", journal=db)
     (d,) = m2.event("E")
     assert d.id == 2  # the journal has the decision too: its id is not given again
@@ -464,3 +468,146 @@ def test_a_fallback_carries_its_rule_and_clause_however_old_its_decision() -> No
     fallbacks = m.tick()
     assert [(d.rule, d.clause, d.violated) for d in fallbacks][:1] == [("R1", 0, 1)]
     assert [d.id for d in m.decisions] == [fallbacks[-1].id]
+
+
+def test_an_undetermined_decision_keeps_the_prohibitions_its_otherwise_would_start() -> None:
+    # nothing runs, so A may be missed: the otherwise's `not B` could apply from 5 s on
+    m, clock = manager("R1 when E then F within 5 seconds otherwise not Rec within 60 seconds unless a then F within 100 seconds")
+    (d,) = m.event("E")
+    assert d.undetermined and [o.describe() for o in d.obligations] == ["not Rec within [5 s, 65 s]"]
+    assert "meanwhile not Rec within [5 s, 65 s]" in d.explanation
+    assert m.request("Rec") is True  # before the fallback could start
+    clock.advance(6)
+    assert m.request("Rec") is False  # before: True (the otherwise's prohibition was not kept)
+    clock.advance(60)
+    assert m.request("Rec") is True
+
+
+def test_an_undetermined_decision_keeps_prohibitions_down_an_otherwise_chain() -> None:
+    m, clock = manager(
+        "R1 when E then F within 5 seconds otherwise G within 10 seconds otherwise not Rec within 60 seconds "
+        "unless a then F within 100 seconds",
+        defs="event G",
+    )
+    (d,) = m.event("E")
+    assert [o.describe() for o in d.obligations] == ["not Rec within [15 s, 75 s]"]
+    clock.advance(16)
+    assert m.request("Rec") is False
+
+
+# ---------------------------------------------------------------------------- review findings
+
+
+def test_an_update_that_notices_a_deadline_runs_its_otherwise() -> None:
+    m, clock = manager("R1 when E then F within 1 seconds otherwise Help")
+    helped: list[int] = []
+    m.capability("F")(lambda ob, d: None)
+    m.capability("Help")(lambda ob, d: helped.append(d.id))
+    m.start()
+    m.event("E")
+    clock.advance(2)
+    m.update(a=True)  # before: the fallback this update decided was never run
+    assert helped == [2]
+
+
+def test_a_prohibition_in_an_unknown_unless_clause_is_enforced() -> None:
+    m, _ = manager("R1 when E then F unless a then not Rec within 10 minutes")
+    (d,) = m.event("E")
+    assert d.undetermined and m.request("Rec") is False
+
+
+@pytest.mark.parametrize("cond", ["not (n > 3)", "(({n} + 1) > 3)", "(({n} * 2) = 4)", "not (3 < n)"])
+def test_comparisons_and_arithmetic_over_an_unknown_are_unknown(cond: str) -> None:
+    m, _ = manager(f"R1 when E then F unless {cond} then not Rec within 10 minutes", defs="measure n : numeric")
+    (d,) = m.event("E")
+    assert d.conditions[1][2] is None and d.undetermined and m.request("Rec") is False
+
+
+def test_the_unknown_policy_also_reads_trigger_conditions() -> None:
+    m, _ = manager("R1 when E and a then F", unknown="false")
+    assert m.event("E") == []  # before: undetermined whatever the policy
+    m, _ = manager("R1 when E and a then F", unknown="true")
+    (d,) = m.event("E")
+    assert d.clause == 0
+
+
+def test_tick_alone_judges_every_batch() -> None:
+    m, clock = manager("R1 when E then F within 1 seconds")
+    for _ in range(2500):
+        m.event("E")
+    clock.advance(2)
+    m.tick()
+    assert m.stats["violations"] == 2500 and m.outstanding() == []
+
+
+def test_an_obligation_whose_interval_start_is_unknown_is_due_now() -> None:
+    m, clock = manager("R1 when E then F within [{n} seconds, 100 seconds]", defs="measure n : numeric")
+    (d,) = m.event("E")
+    assert d.obligations[0].within_s == 0.0
+    clock.advance(1)
+    m.event("F")  # would have counted under an interval starting at 0
+    m.tick()
+    assert m.stats["violations"] == 1
+
+
+def test_a_prohibition_in_an_else_never_fulfils() -> None:
+    m, clock = manager("R1 when E then F within 5 seconds else not Rec within 10 seconds")
+    m.event("E")
+    clock.advance(1)
+    m.event("Rec")  # before: the forbidden event fulfilled the obligation
+    assert [t.event for t in m.outstanding()] == ["F"]
+
+
+@pytest.mark.parametrize("age", [float("nan"), "5", None, -1, 0, float("inf")])
+def test_max_age_must_be_a_positive_finite_number(age: Any) -> None:
+    with pytest.raises(ContextError, match="max_age of a"):
+        manager("R1 when E then F", max_age={"a": age})
+
+
+def test_a_capability_whose_error_cannot_be_shown_does_not_stop_the_next() -> None:
+    m, _ = manager("R1 when E then F and G")
+    ran: list[str] = []
+
+    def bad(ob: Any, d: Any) -> None:
+        raise KeyError(10**5000)
+
+    m.capability("F")(bad)
+    m.capability("G")(lambda ob, d: ran.append("G"))
+    m.start()
+    m.event("E")
+    assert ran == ["G"] and m.stats["task_failures"] == 1
+
+
+def test_bad_arguments_are_user_errors_and_a_closed_manager_refuses() -> None:
+    m, _ = manager("R1 when E then F")
+    with pytest.raises(ContextError, match="named by a string"):
+        m.event(None)  # type: ignore[arg-type]
+    with pytest.raises(ContextError, match="named by a string"):
+        m.update({1: True})  # type: ignore[dict-item]
+    with pytest.raises(ConfigurationError, match="history"):
+        manager("R1 when E then F", history=-1)
+    m.close()
+    m.close()  # twice is harmless
+    assert m.request("F") is False
+    with pytest.raises(ConfigurationError, match="closed"):
+        m.update(a=True)
+    assert m.values()["a"] is None  # nothing changed
+
+
+def test_switching_semantics_is_recorded(tmp_path: Path) -> None:
+    log = tmp_path / "a.jsonl"
+    m, _ = manager("R1 when E then F unless a then G unless b then Help", audit=log)
+    m.update(a=False, b=True)
+    assert m.active_layers() == ["R1.2"]
+    m.set_semantics("nested")
+    m.close()
+    (rec,) = [r for r in read_audit(log) if r["kind"] == "semantics"]
+    assert rec["before"] == ["R1.2"] and rec["active"] == [] and rec["semantics"] == "nested"
+
+
+def test_obligations_fulfilled_early_do_not_keep_their_deadlines_in_memory() -> None:
+    m, _ = manager("R1 when E then F within 1 days")
+    for _ in range(5000):
+        m.event("E")
+        m.event("F")
+    assert len(m.tracker._heap) < 2000  # before: 5000 entries until a day had passed

@@ -157,3 +157,113 @@ def test_an_unwritable_journal_is_a_user_error(tmp_path: Path) -> None:
     (tmp_path / "dir").mkdir()
     with pytest.raises(JournalError, match="cannot open the journal"):
         Manager.from_text(RULES, journal=tmp_path / "dir")
+
+
+# ---------------------------------------------------------------------------- review findings
+
+
+def test_one_journal_serves_one_manager_at_a_time(tmp_path: Path) -> None:
+    (tmp_path / "rules.sleec").write_text(RULES)
+    m = again(tmp_path, 100)
+    with pytest.raises(JournalError, match="in use by another Manager"):
+        again(tmp_path, 100)
+    m.close()
+    again(tmp_path, 100).close()
+
+
+def test_a_damaged_journal_is_a_user_error_and_restores_nothing(tmp_path: Path) -> None:
+    import sqlite3
+
+    die_after(tmp_path, 'm.event("Trigger")')
+    db = sqlite3.connect(tmp_path / "state.db")
+    db.execute("UPDATE meta SET value = '{not json' WHERE key = 'state'")
+    db.commit()
+    db.close()
+    with pytest.raises(JournalError, match="damaged"):
+        again(tmp_path, 110)
+
+
+def test_a_journal_written_on_another_kind_of_clock_is_refused(tmp_path: Path) -> None:
+    die_after(tmp_path, 'm.update(consent=False); m.event("Watch")')
+    with pytest.raises(JournalError, match="VirtualClock and this Manager runs on a MonotonicClock"):
+        Manager.from_file(tmp_path / "rules.sleec", journal=tmp_path / "state.db")
+
+
+def test_after_a_reboot_obligations_are_due_sooner_and_prohibitions_stay(tmp_path: Path) -> None:
+    import sqlite3
+
+    from cosleec.runtime import MonotonicClock
+
+    class Uptime(MonotonicClock):
+        """A monotonic clock reading ``t`` (a machine's uptime)."""
+
+        def __init__(self, t: float) -> None:
+            self.t = t
+
+        def now(self) -> float:
+            return self.t
+
+    (tmp_path / "rules.sleec").write_text(RULES)
+    m = Manager.from_file(tmp_path / "rules.sleec", clock=Uptime(100), journal=tmp_path / "state.db", dispatch=False)
+    m.update(consent=False)
+    m.event("Watch")  # not Rec until 700
+    m.event("Trigger")  # Act by 105
+    m.close()
+    db = sqlite3.connect(tmp_path / "state.db")
+    state = json.loads(db.execute("SELECT value FROM meta WHERE key = 'state'").fetchone()[0])
+    state.update(boot="another boot", wall=state["wall"] - 3600)  # down for an hour, then rebooted
+    db.execute("UPDATE meta SET value = ? WHERE key = 'state'", (json.dumps(state),))
+    db.commit()
+    db.close()
+    m = Manager.from_file(tmp_path / "rules.sleec", clock=Uptime(200), journal=tmp_path / "state.db", dispatch=False)
+    m.start()
+    assert m.stats["violations"] == 1  # before: uptime 200 > 100 looked like the same boot, no shift
+    assert m.request("Rec") is False  # the prohibition as if no time had passed: still in force
+    m.close()
+
+
+def test_an_audit_log_that_fails_stops_the_manager(tmp_path: Path) -> None:
+    (tmp_path / "rules.sleec").write_text(RULES)
+    m = again(tmp_path, 100)
+    assert m.audit is not None
+    m.audit._fh.close()  # as a full disk would: the next write fails
+    with pytest.raises(JournalError, match="cannot write the audit log"):
+        m.event("Watch")
+    assert m.request("Rec") is False  # fail closed from now on
+    with pytest.raises(JournalError):
+        m.update(consent=True)
+
+
+def test_an_audit_log_edited_by_hand_is_not_cut_mid_record(tmp_path: Path) -> None:
+    die_after(tmp_path, 'm.update(consent=True); m.event("Watch")')
+    log = tmp_path / "audit.jsonl"
+    log.write_text("# reviewed by Ann\n" + log.read_text())  # every committed offset moves
+    before = log.read_text()
+    m = again(tmp_path, 101)
+    m.close()
+    records = read_audit(log)
+    assert log.read_text().startswith(before)  # nothing of the history was cut or moved
+    assert any(r["kind"] == "audit-mismatch" for r in records)
+
+
+def test_a_dropped_obligation_is_reported_once(tmp_path: Path) -> None:
+    die_after(tmp_path, 'm.event("Trigger"); m.clock.set(110); m.tick()')  # Act missed: kept for its late event
+    (tmp_path / "rules.sleec").write_text(RULES.replace(" R1 when Trigger then Act within 5 seconds otherwise Help\n", ""))
+    for t in (111, 112):
+        Manager.from_file(
+            tmp_path / "rules.sleec", clock=VirtualClock(t), journal=tmp_path / "state.db", audit=tmp_path / "audit.jsonl"
+        ).close()
+    records = read_audit(tmp_path / "audit.jsonl")
+    dropped = [r for r in records if r["kind"] == "dropped"]
+    assert sorted(r["what"].split(" (")[0] for r in dropped) == ["obligation 1", "obligation 2"]  # missed Act, Help
+    assert {r["run"] for r in dropped} == {records[-1]["from"]}  # none again on the next restart (before: every time)
+
+
+def test_a_prohibition_survives_an_item_inserted_before_it(tmp_path: Path) -> None:
+    die_after(tmp_path, 'm.update(consent=False); m.event("Watch")')
+    (tmp_path / "rules.sleec").write_text(
+        RULES.replace("then not Rec within 10 minutes", "then Act within 1 minutes and not Rec within 10 minutes")
+    )
+    m = again(tmp_path, 160).start()
+    assert m.request("Rec") is False  # before: dropped, its key R2:0 now names `Act`
+    m.close()
