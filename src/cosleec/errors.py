@@ -10,7 +10,9 @@ library module never prints or calls ``sys.exit``.
 
 from __future__ import annotations
 
-__all__ = ["ConfigurationError", "CosleecError", "UserError"]
+from typing import Any
+
+__all__ = ["ConfigurationError", "CosleecError", "UserError", "clip", "show"]
 
 
 class CosleecError(Exception):
@@ -44,3 +46,25 @@ class ConfigurationError(UserError, ValueError):
 
     Also a ``ValueError``, for callers who catch that.
     """
+
+
+def clip(text: str, limit: int = 200) -> str:
+    """``text`` cut to ``limit`` characters, saying how many were cut: ``abc…(9997 more)``.
+
+    Use it wherever a message or record echoes what a user or a sender wrote: cut, a 10 MB
+    name makes a short line.
+    """
+    return text if len(text) <= limit else f"{text[:limit]}…({len(text) - limit} more)"
+
+
+def show(value: Any, limit: int = 80) -> str:
+    """``repr(value)`` cut to ``limit`` characters (:func:`clip`); never raises.
+
+    A value whose repr fails (nested too deep, an int of more digits than Python prints, a
+    broken ``__repr__``) is shown by its type.
+    """
+    try:
+        text = repr(value)
+    except Exception:  # RecursionError, ValueError (int digits limit), a broken __repr__
+        return f"<{type(value).__name__}>"
+    return clip(text, limit)

@@ -6,7 +6,7 @@ Each node is built from a :class:`~cosleec.runtime.RuleSet`
 (``RuleSet.from_file("rules.sleec")``).
 """
 
-from cosleec.nodes.base import MessageError, Node
+from cosleec.nodes.base import LogLimiter, MessageError, Node
 from cosleec.nodes.layers_node import LayersNode
 from cosleec.nodes.listener import ListenerNode, Mapping, MappingError
 from cosleec.nodes.manager_node import ManagerNode
@@ -31,6 +31,7 @@ __all__ = [
     "ListenerNode",
     "LocalBus",
     "LocalTransport",
+    "LogLimiter",
     "ManagerNode",
     "ManagerUnavailable",
     "Mapping",

@@ -17,7 +17,7 @@ from collections import OrderedDict
 from collections.abc import Callable, Hashable
 from typing import Any
 
-from cosleec.errors import UserError
+from cosleec.errors import UserError, clip
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, LATCHED, Transport, dumps, topic
 
 log = logging.getLogger("cosleec.nodes")
@@ -37,27 +37,6 @@ class MessageError(UserError, ValueError):
     Raise it from a topic handler: :meth:`Node.on` rejects the message -- logged, counted
     and published on ``rejected`` -- and the node keeps running.
     """
-
-
-def clip(text: str, limit: int = REASON_LIMIT) -> str:
-    """``text`` cut to ``limit`` characters, saying how many were cut: ``abc…(9997 more)``.
-
-    Reasons and excerpts echo what a sender wrote; cut, a 10 MB name makes a short log line.
-    """
-    return text if len(text) <= limit else f"{text[:limit]}…({len(text) - limit} more)"
-
-
-def show(value: Any, limit: int = 80) -> str:
-    """``repr(value)`` cut to ``limit`` characters, for reasons; never raises.
-
-    A value whose repr fails (nested too deep, an int of more digits than Python prints)
-    is shown by its type.
-    """
-    try:
-        text = repr(value)
-    except Exception:  # RecursionError, ValueError (int digits limit), a broken __repr__
-        return f"<{type(value).__name__}>"
-    return clip(text, limit)
 
 
 def excerpt(payload: Any, limit: int = PAYLOAD_LIMIT) -> str:
@@ -265,7 +244,7 @@ class Node:
         message follows at once.
         """
         self._count("rejected")
-        reason = clip(reason)
+        reason = clip(reason, REASON_LIMIT)
         level = logging.ERROR if exc_info is not None else logging.WARNING
         self.limiter.log(
             level,

@@ -36,8 +36,8 @@ from typing import Any
 
 import yaml
 
-from cosleec.errors import UserError
-from cosleec.nodes.base import MessageError, Node, show
+from cosleec.errors import UserError, show
+from cosleec.nodes.base import MessageError, Node
 from cosleec.runtime import MeasureSpec
 
 COMPARISONS = {

@@ -15,7 +15,8 @@ import threading
 import time
 from typing import Any
 
-from cosleec.nodes.base import MessageError, Node, context_values, show
+from cosleec.errors import show
+from cosleec.nodes.base import MessageError, Node, context_values
 from cosleec.nodes.recording import McapRecorder
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
 from cosleec.runtime import (

@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import logging
 import threading
-import time
 from collections.abc import Callable
 from typing import Any
+
+from cosleec.nodes import LogLimiter
 
 log = logging.getLogger("cosleec.ros")
 
@@ -22,13 +23,13 @@ log = logging.getLogger("cosleec.ros")
 class CallbackGuard:
     """Wraps a transport's callbacks so that an exception is counted and logged, never raised.
 
-    One per transport; thread-safe (rospy runs callbacks on several threads).
+    One per transport; thread-safe (rospy runs callbacks on several threads). Logging is
+    rate-limited per topic by the nodes' :class:`~cosleec.nodes.LogLimiter`.
     """
 
     def __init__(self, every: float = 10.0) -> None:
-        self.every = every
         self.errors = 0
-        self._last: dict[str, tuple[float, int]] = {}  # topic -> (last logged at, held back since)
+        self.limiter = LogLimiter(log, every)
         self._lock = threading.Lock()
 
     def wrap(self, topic: str, callback: Callable[[Any], None]) -> Callable[[Any], None]:
@@ -46,18 +47,11 @@ class CallbackGuard:
         """Count ``error``, raised by a callback for ``topic``; log it unless that topic logged lately."""
         with self._lock:
             self.errors += 1
-            now = time.monotonic()
-            last = self._last.get(topic)
-            if last is not None and now - last[0] < self.every:
-                self._last[topic] = (last[0], last[1] + 1)
-                return
-            self._last[topic] = (now, 0)
-            held = last[1] if last is not None else 0
-        log.error(
-            "a callback for %s raised %s (%d more in the last %.0f s not logged); the node goes on",
+        self.limiter.log(
+            logging.ERROR,
+            topic,
+            "a callback for %s raised %s; the node goes on",
             topic,
             type(error).__name__,
-            held,
-            self.every,
             exc_info=error,
         )

@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from cosleec.errors import show
 from cosleec.runtime.errors import ContextError
 from cosleec.runtime.values import MeasureSpec, Value
 
@@ -45,8 +46,7 @@ class Context:
             if spec is None and not isinstance(name, str):
                 raise ContextError(f"a measure is named by a string, not {type(name).__name__}")
             if spec is None:
-                shown = repr(name) if len(name) <= 80 else f"{name[:80]!r}... ({len(name) - 80} more characters)"
-                raise ContextError(f"unknown measure {shown}")
+                raise ContextError(f"unknown measure {show(name)}")
             if spec.kind == "boolean" and (value is True or value is False):
                 out[name] = value  # the common case, without a call
             else:

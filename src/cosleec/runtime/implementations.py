@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from cosleec.cop import Snapshot, activate, layered
+from cosleec.errors import clip
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.errors import BindingError
 from cosleec.runtime.model import CompiledRule, Obligation, ResponseSpec
@@ -333,4 +334,4 @@ def _describe(e: BaseException) -> str:
         text = f"{type(e).__name__}: {e}"
     except Exception:  # an exception whose str() fails must not stop the next capability
         text = f"{type(e).__name__}: <cannot be shown>"
-    return text if len(text) <= 300 else text[:300] + f"... ({len(text) - 300} more characters)"
+    return clip(text, 300)

@@ -51,7 +51,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from cosleec.cop import Snapshot
-from cosleec.errors import CosleecError
+from cosleec.errors import CosleecError, clip, show
 from cosleec.lang import HedgeSemantics, Specification, Unknowns, candidates, choose
 from cosleec.runtime.audit import AuditLog
 from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
@@ -85,12 +85,7 @@ def _option(kind: type[E], value: object, name: str) -> E:
         except ValueError:
             pass
     choices = ", ".join(repr(str(k)) for k in kind)
-    raise ConfigurationError(f"{name} must be one of {choices}, not {_cut(repr(value))}")
-
-
-def _cut(text: str, n: int = 120) -> str:
-    """``text`` cut to ``n`` characters: reasons never echo a huge input whole."""
-    return text if len(text) <= n else f"{text[:n]}... ({len(text) - n} more characters)"
+    raise ConfigurationError(f"{name} must be one of {choices}, not {show(value)}")
 
 
 @dataclass(frozen=True)
@@ -226,7 +221,7 @@ class Manager:
         self.implementations = Implementations(rules)
         self.dispatch_locally = dispatch
         if isinstance(history, bool) or not isinstance(history, int) or history < 1:
-            raise ConfigurationError(f"history must be a whole number of at least 1, not {_cut(repr(history))}")
+            raise ConfigurationError(f"history must be a whole number of at least 1, not {show(history)}")
         if isinstance(max_depth, bool) or not isinstance(max_depth, int) or max_depth < 1:
             raise ConfigurationError(f"max_depth must be a whole number of at least 1, not {max_depth!r}")
         self.max_depth = max_depth
@@ -382,8 +377,8 @@ class Manager:
                 stored = self.context.validate(updates)
             except ContextError as e:
                 self.stats["rejected"] += 1
-                shown = {_cut(str(k), 80): _show(v) for k, v in itertools.islice(updates.items(), 20)}
-                self._emit(step, "rejected", {"reason": _cut(str(e), 300), "update": shown})
+                shown = {clip(str(k), 80): show(v) for k, v in itertools.islice(updates.items(), 20)}
+                self._emit(step, "rejected", {"reason": clip(str(e), 300), "update": shown})
                 rejected = e
             else:
                 now = self.clock.now()
@@ -658,10 +653,10 @@ class Manager:
         if not isinstance(name, str):
             self.stats["rejected"] += 1
             self._emit(step, "rejected", {"reason": f"an event is named by a string, not {type(name).__name__}"})
-            raise ContextError(f"an event is named by a string, not {type(name).__name__} {_show(name)}")
+            raise ContextError(f"an event is named by a string, not {type(name).__name__} {show(name)}")
         self.stats["rejected"] += 1
         close = difflib.get_close_matches(name, sorted(self.ruleset.events), n=3) if len(name) < 200 else []
-        reason = f"unknown event {_cut(repr(name))}"
+        reason = f"unknown event {show(name)}"
         hint = f"did you mean {', '.join(close)}?" if close else "declare it in the rules' def block"
         self._emit(step, "rejected", {"reason": reason, "what": what, "hint": hint})
         if self.unknown_events == UnknownEvents.RAISE:
@@ -1110,16 +1105,6 @@ def _number(x: float) -> str:
     return repr(x) if isinstance(x, int | float) and math.isfinite(x) else "null"
 
 
-def _show(value: object) -> str:
-    """A value for a record, cut short; never fails (an int too long to print is described)."""
-    if isinstance(value, int) and value.bit_length() > 256:
-        return f"<an integer of {value.bit_length()} bits>"
-    try:
-        return _cut(repr(value), 80)
-    except Exception:  # a repr that raises must not lose the record
-        return f"<{type(value).__name__}>"
-
-
 def _prohibitions(obligations: tuple[Obligation, ...]) -> list[Obligation]:
     """What an undetermined decision enforces of ``obligations``: their prohibitions, and the
     prohibitions their ``otherwise`` would start (nothing runs, so every obligation may be
@@ -1186,5 +1171,5 @@ def _untimed(value: str | float) -> str | float:
         return float(value)
     raise ConfigurationError(
         f"untimed must be 'none', 'immediate' or a number of seconds from 0 to {MAX_WINDOW_S:g}, "
-        f"not {_cut(repr(value))}"
+        f"not {show(value)}"
     )

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from cosleec.cop import Layer, LayerGroup, Snapshot
-from cosleec.errors import ConfigurationError
+from cosleec.errors import ConfigurationError, clip
 from cosleec.lang import ast as A
 from cosleec.runtime.compile import Compiler, Values, text
 
@@ -254,16 +254,12 @@ def _duration(c: Compiler, d: A.Duration, where: str) -> Seconds:
             value = seconds({})
         except KeyError:
             raise DeadlineError(
-                f"the deadline {_cut(text(d.value))} {d.unit} is longer than the runtime can keep",
+                f"the deadline {clip(text(d.value), 40)} {d.unit} is longer than the runtime can keep",
                 where=f"{where}:{d.span}" if d.span.line else where,
                 hint=f"write a deadline of at most {MAX_WINDOW_S:.0e} seconds",
             ) from None
         return lambda v: value
     return seconds
-
-
-def _cut(s: str, n: int = 40) -> str:
-    return s if len(s) <= n else f"{s[:n]}... ({len(s) - n} more characters)"
 
 
 def _zero(v: Values) -> float:

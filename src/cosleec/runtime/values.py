@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from cosleec.errors import show
 from cosleec.lang import ast as A
 from cosleec.runtime.errors import ContextError
 
@@ -36,25 +37,25 @@ class MeasureSpec:
         if self.kind == "boolean":
             if isinstance(value, bool):
                 return value
-            raise ContextError(f"{self.name} is boolean; got {type(value).__name__} {_show(value)}")
+            raise ContextError(f"{self.name} is boolean; got {type(value).__name__} {show(value)}")
         if self.kind == "numeric":
             if isinstance(value, bool) or not isinstance(value, int | float):
-                raise ContextError(f"{self.name} is numeric; got {type(value).__name__} {_show(value)}")
+                raise ContextError(f"{self.name} is numeric; got {type(value).__name__} {show(value)}")
             try:
                 finite = math.isfinite(value)  # an int beyond float range overflows here
             except OverflowError:
                 finite = False
             if not finite:
-                raise ContextError(f"{self.name} must be a finite number of at most 1.8e308; got {_show(value)}")
+                raise ContextError(f"{self.name} must be a finite number of at most 1.8e308; got {show(value)}")
             return value
         if isinstance(value, str):
             try:
                 return self.literals.index(value)
             except ValueError:
                 raise ContextError(
-                    f"{_show(value)} is not in the scale of {self.name} ({', '.join(self.literals)})"
+                    f"{show(value)} is not in the scale of {self.name} ({', '.join(self.literals)})"
                 ) from None
-        raise ContextError(f"{self.name} is a scale ({', '.join(self.literals)}); got {_show(value)}")
+        raise ContextError(f"{self.name} is a scale ({', '.join(self.literals)}); got {show(value)}")
 
     def external(self, stored: bool | int | float) -> Value:
         """The value as users see it (scale positions back to literal names)."""
@@ -76,13 +77,5 @@ class MeasureSpec:
                 try:
                     return self.coerce(float(t))
                 except ValueError:
-                    raise ContextError(f"{self.name} is numeric: {_show(text)} is not a number") from None
+                    raise ContextError(f"{self.name} is numeric: {show(text)} is not a number") from None
         return self.coerce(t)
-
-
-def _show(value: object, n: int = 80) -> str:
-    """``repr(value)`` cut to ``n`` characters: a rejection never echoes a huge input whole."""
-    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 256:
-        return f"an integer of about {int(value.bit_length() * 0.30103)} digits"
-    text = repr(value)
-    return text if len(text) <= n else f"{text[:n]}... ({len(text) - n} more characters)"

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Iterator
-from typing import Any
 
 import pytest
 
@@ -14,25 +12,9 @@ from cosleec.demo.runner import rules_path
 from cosleec.nodes import LayersNode, ListenerNode, LocalBus, ManagerNode, Mapping, MappingError, TaskNode
 from cosleec.runtime import Manager, RuleSet
 
+from .support import collect
+
 RS = RuleSet.from_file(rules_path())
-
-
-@pytest.fixture
-def bus() -> Iterator[LocalBus]:
-    b = LocalBus()
-    yield b
-    b.close()
-
-
-def unnumbered(message: dict[str, Any]) -> dict[str, Any]:
-    """A message without the sender's numbering (``_from``, ``_n``), as handlers see it."""
-    return {k: v for k, v in message.items() if k not in ("_from", "_n")}
-
-
-def collect(bus: LocalBus, topic: str) -> list[dict[str, Any]]:
-    out: list[dict[str, Any]] = []
-    bus.transport().subscribe(topic, lambda p: out.append(unnumbered(json.loads(p))))
-    return out
 
 
 MAPPING = """

@@ -11,39 +11,21 @@ import logging
 import math
 import threading
 import time
-from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
 from cosleec.demo.runner import rules_path
-from cosleec.errors import ConfigurationError, UserError
-from cosleec.nodes import ListenerNode, LocalBus, ManagerNode, Mapping, Node, TaskNode
-from cosleec.nodes.base import LogLimiter, clip
+from cosleec.errors import ConfigurationError, UserError, clip
+from cosleec.nodes import ListenerNode, LocalBus, LogLimiter, ManagerNode, Mapping, Node, TaskNode
 from cosleec.nodes.task_node import ManagerUnavailable, SeenDecisions
 from cosleec.runtime import Manager, RuleSet, Task, hedge
+
+from .support import collect
 
 RS = RuleSet.from_file(rules_path())
 DEEP = "[" * 100_000  # json.loads raises RecursionError, not ValueError
 HUGE = "x" * 10_000_000  # a 10 MB name
-
-
-@pytest.fixture
-def bus() -> Iterator[LocalBus]:
-    b = LocalBus()
-    yield b
-    b.close()
-
-
-def unnumbered(message: dict[str, Any]) -> dict[str, Any]:
-    """A message without the sender's numbering (``_from``, ``_n``), as handlers see it."""
-    return {k: v for k, v in message.items() if k not in ("_from", "_n")}
-
-
-def collect(bus: LocalBus, topic: str) -> list[dict[str, Any]]:
-    out: list[dict[str, Any]] = []
-    bus.transport().subscribe(topic, lambda p: out.append(unnumbered(json.loads(p))))
-    return out
 
 
 def wait_for(predicate: Any, timeout: float = 5.0) -> None:
