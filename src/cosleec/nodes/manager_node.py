@@ -186,8 +186,11 @@ class ManagerNode(Node):
     def _runtime_event(self, ev: RuntimeEvent) -> None:
         d = ev.data
         if ev.kind == "decision":
-            self._hand_on(d)
+            if "dispatch" not in d:  # held or changed by a conflict: handed on by its `dispatch` record
+                self._hand_on(d)
             self.publish("decisions", d)
+        elif ev.kind == "dispatch":  # a held decision now allowed, or one a conflict changed
+            self._hand_on(d["decision"])
         elif ev.kind == "obligation" and (d["status"] == "violated" or d["late"]):
             self.publish("violations", d)
         if self.recorder is not None:

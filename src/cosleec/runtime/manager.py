@@ -28,6 +28,11 @@ What happens when the runtime does not know (each a documented policy, fail clos
   ContextError (``unknown_events="raise"``, the default) or refuse it and record why
   (``"refuse"``: ``event`` does nothing, ``request`` answers False).
 - *a failed journal*: the Manager stops deciding (JournalError), and ``request`` refuses.
+
+When rules demand E and forbid it at once (a *conflict*), the Manager records a
+``conflict`` and resolves it by the declared priorities, or else lets the prohibition win;
+an action that is forbidden for now is held until it is allowed, so ``request(E)`` and what
+the Manager dispatches never disagree (:mod:`cosleec.runtime.priorities`).
 """
 
 from __future__ import annotations
@@ -44,7 +49,7 @@ import threading
 import time
 import uuid
 from collections import deque
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
 from pathlib import Path
@@ -53,6 +58,7 @@ from typing import Any, TypeVar
 from cosleec.cop import Snapshot
 from cosleec.errors import CosleecError, clip, show
 from cosleec.lang import HedgeSemantics, Specification, Unknowns, candidates, choose
+from cosleec.lang.priorities import pairs as priority_pairs
 from cosleec.runtime.audit import AuditLog
 from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
 from cosleec.runtime.context import Context
@@ -62,7 +68,8 @@ from cosleec.runtime.implementations import Capability, Implementations, Ran
 from cosleec.runtime.journal import Change, Journal, JournalError, Saved
 from cosleec.runtime.layers import LayerManager, LayerSwitch, evaluate
 from cosleec.runtime.model import MAX_WINDOW_S, CompiledRule, ItemSpec, Obligation, ResponseSpec
-from cosleec.runtime.obligations import PENDING, Outcome, Tracked, Tracker
+from cosleec.runtime.obligations import CANCELLED, PENDING, REFUSED, Outcome, Tracked, Tracker
+from cosleec.runtime.priorities import CANCEL, CONFLICT_AWARE, Priorities, covers, forced
 from cosleec.runtime.ruleset import RuleSet
 from cosleec.runtime.tasks import Task
 
@@ -93,8 +100,8 @@ class RuntimeEvent:
     """What observers (terminal display, ROS publishers, the audit log, tests) are told, in order.
 
     ``kind`` is one of event, context, layers, semantics, decision, obligation, refused,
-    rejected, task-done, task-failed, task-interrupted, restored, dropped, uncommitted,
-    audit-mismatch. ``seq`` numbers the
+    rejected, conflict, cancelled, held, dispatch, withheld, task-done, task-failed,
+    task-interrupted, restored, dropped, uncommitted, audit-mismatch. ``seq`` numbers the
     records of one Manager (continued across restarts with a journal, or from the audit
     log it appends to); 0 when nothing records.
     """
@@ -155,6 +162,22 @@ class _Scope:
             m._deliver()
 
 
+@dataclass(eq=False)
+class _Job:
+    """A decision to hand to its implementation once the step is over (or once allowed).
+
+    ``composition`` is the rule's COP composition at the trigger (None: an ``otherwise``
+    fallback); ``items`` what the decision put in force; ``record`` its decision record,
+    annotated within the step when the dispatch differs from the decision.
+    """
+
+    rule: CompiledRule
+    decision: Decision
+    composition: Snapshot | None
+    items: list[Tracked]
+    record: dict[str, Any] | None = None
+
+
 @dataclass
 class _Issued:
     """The obligations of a response, or -- undetermined -- the prohibitions it might impose."""
@@ -179,7 +202,11 @@ class Manager:
     (``"undetermined"``, the fail-closed default, see the module docstring;
     ``"false"``/``"true"``); ``unknown_events`` -- ``"raise"`` or ``"refuse"``;
     ``untimed`` -- the deadline of an untimed response (``"none"``, ``"immediate"`` or
-    seconds); ``max_age`` -- seconds after which a measure's value is stale; ``audit`` --
+    seconds); ``priorities`` -- ``"H > L"`` strings or ``(H, L)`` pairs, added to the rule
+    file's ``priority`` block; ``priority_semantics`` -- ``"cancel"`` (the default) or
+    ``"conflict-aware"``; ``priority_lead`` -- seconds before the forcing deadline a
+    conflict-aware priority cancels the lower rule (0, as SLEEC-TK; give a real robot time
+    to act); ``max_age`` -- seconds after which a measure's value is stale; ``audit`` --
     a JSON Lines audit log; ``journal`` -- a SQLite file the state survives a crash in
     (:mod:`cosleec.runtime.journal`); ``history`` -- how many decisions :attr:`decisions`
     keeps; ``max_depth`` -- how deeply implementations may trigger rules whose
@@ -203,6 +230,9 @@ class Manager:
         history: int = 10_000,
         max_depth: int = 16,
         dispatch: bool = True,
+        priorities: Iterable[str | tuple[str, str]] = (),
+        priority_semantics: str = CANCEL,
+        priority_lead: float = 0.0,
     ) -> None:
         if not isinstance(rules, RuleSet):
             raise TypeError(
@@ -225,6 +255,13 @@ class Manager:
         if isinstance(max_depth, bool) or not isinstance(max_depth, int) or max_depth < 1:
             raise ConfigurationError(f"max_depth must be a whole number of at least 1, not {max_depth!r}")
         self.max_depth = max_depth
+        self.priorities = Priorities.build(
+            (r.name for r in rules.rules),
+            [*priority_pairs(rules.spec), *([priorities] if isinstance(priorities, str) else priorities)],
+            priority_semantics,
+            priority_lead,
+        )
+        self._held: dict[int, _Job] = {}  # decisions whose action is forbidden for now, by id
         self.decisions: deque[Decision] = deque(maxlen=history)
         self.stats = {
             "updates": 0,
@@ -235,6 +272,8 @@ class Manager:
             "violations": 0,
             "undetermined": 0,
             "task_failures": 0,
+            "conflicts": 0,
+            "cancelled": 0,
         }
         self.run_id = uuid.uuid4().hex[:12]
         # which history this Manager continues: its journal's (kept across restarts), else this run's
@@ -370,7 +409,7 @@ class Manager:
         """
         updates = {**(values or {}), **kw}
         rejected: ContextError | None = None
-        followups: list[tuple[CompiledRule, Decision]] = []
+        followups: list[_Job] = []
         self._catch_up()
         with self._step() as step:
             try:
@@ -395,8 +434,8 @@ class Manager:
                         {"values": self.context.external(sorted(changed)), "version": self.context.version},
                     )
                 result = self._switched(switches, step)
-        if self.dispatch_locally:
-            self._fallbacks(followups)  # an otherwise whose deadline this update noticed
+                followups = self._ready(followups, now, step)
+        self._dispatch(followups)  # an otherwise whose deadline this update noticed
         if rejected is not None:
             raise rejected
         return result
@@ -442,8 +481,8 @@ class Manager:
         might hold: an undetermined decision is returned too). An event no declaration
         names follows ``unknown_events``.
         """
-        followups: list[tuple[CompiledRule, Decision]] = []
-        decisions: list[tuple[CompiledRule, Decision, Snapshot | None]] = []
+        followups: list[_Job] = []
+        decisions: list[Decision] = []
         self._catch_up()
         with self._step() as step:
             if not self._known(name, "event", step):
@@ -456,6 +495,7 @@ class Manager:
                 self._emit(step, "event", {"event": name, "causal": seq})
             out = self.tracker.occur(name, now, seq)
             followups += self._settle(out, now, seq, step)
+            jobs: list[_Job] = []
             for rule in self.ruleset.by_trigger.get(name, ()):
                 d = self._decide(rule, name, now)
                 if d is None:
@@ -463,17 +503,16 @@ class Manager:
                 # the rule's composition as the Layer Manager has it at this trigger: the
                 # dispatch runs under it, whatever the context does in the meantime
                 composition = self.layer_manager.composition_of(rule) if d.clause is not None else None
-                decisions.append((rule, d, composition))
-                self._record(d, step, queue=composition is not None)
-                for ob in d.obligations:
-                    self._track(self.tracker.start(d.id, d.clause, ob, now, seq), step)
-        self._notify_timer()
-        if self.dispatch_locally:
-            for rule, d, composition in decisions:
+                decisions.append(d)
+                rec = self._record(d, step, queue=composition is not None)
+                job = _Job(rule, d, composition, [], rec)
+                followups += self._begin(job, d.obligations, now, seq, 0, d.id, step)
                 if composition is not None:
-                    self._run(rule, d, functools.partial(self.implementations.dispatch, rule, d, composition))
-            self._fallbacks(followups)
-        return [d for _, d, _ in decisions]
+                    jobs.append(job)
+            followups = self._ready(jobs + followups, now, step)
+        self._notify_timer()
+        self._dispatch(followups)
+        return decisions
 
     def request(self, name: str) -> bool:
         """May ``name`` happen now? False (and the attempt recorded) while a prohibition holds.
@@ -488,7 +527,7 @@ class Manager:
             if not self._known(name, "request", step):
                 return False
             now = self.clock.now()
-            followups = self._advance(now, step)
+            followups = self._ready(self._advance(now, step), now, step)
             forbidding = self.tracker.forbidding(name, now)
             for t in forbidding:
                 t.refused += 1
@@ -505,8 +544,7 @@ class Manager:
                         "obligations": [t.id for t in forbidding],
                     },
                 )
-        if self.dispatch_locally:
-            self._fallbacks(followups)
+        self._dispatch(followups)
         return not forbidding
 
     def tick(self) -> list[Decision]:
@@ -515,17 +553,17 @@ class Manager:
         Many deadlines due at once are judged in batches, releasing the lock between them,
         so triggers and requests are not held up. Returns the ``otherwise`` decisions started.
         """
-        followups: list[tuple[CompiledRule, Decision]] = []
+        followups: list[_Job] = []
         more = True
         while more:
             with self._step() as step:
                 now = self.clock.now()
                 batch = self._advance(now, step, limit=1000)
                 more = step.more
+                batch = self._ready(batch, now, step)
             followups += batch
-        if self.dispatch_locally:
-            self._fallbacks(followups)
-        return [d for _, d in followups]
+        self._dispatch(followups)
+        return [j.decision for j in followups if j.composition is None]
 
     def _catch_up(self) -> None:
         """Judge a backlog of due deadlines in batches (:meth:`tick`) before a step that would
@@ -663,9 +701,10 @@ class Manager:
             raise ContextError(reason, hint=hint)
         return False
 
-    def _advance(
-        self, now: float, step: _Step, limit: int | None = None
-    ) -> list[tuple[CompiledRule, Decision]]:
+    def _advance(self, now: float, step: _Step, limit: int | None = None) -> list[_Job]:
+        """Everything due up to ``now``, in time order: stale values, conflict-aware
+        cancellations (at times <= now) and closing windows (deadlines < now), one deadline
+        at a time so that each ``otherwise`` is in force before a later deadline is judged."""
         gone = self.context.expire(now)
         if gone:
             switches = self.layer_manager.update(gone, self.context.values)
@@ -673,9 +712,16 @@ class Manager:
             for n in gone:
                 step.change.context[n] = None
             self._switched(switches, step)
-        followups: list[tuple[CompiledRule, Decision]] = []
+        followups: list[_Job] = []
         judged = 0
-        for _ in range(1000):  # a chain of otherwise fallbacks can expire within one advance
+        while True:
+            cut = forced(self.tracker, self.priorities)
+            if cut is not None and cut[0] <= now:
+                nd = self.tracker.next_deadline()
+                if nd is None or not nd < now or cut[0] <= nd:
+                    at, victim, by = cut
+                    self._cancel(victim.instance, at, by, step, "conflict-aware")
+                    continue
             out = self.tracker.due(now, None if limit is None else limit - judged)
             if not out.changed:
                 break
@@ -704,10 +750,9 @@ class Manager:
                     step.change.obligations[gone] = None
         self.tracker.forgotten.clear()
 
-    def _settle(
-        self, out: Outcome, now: float, seq: int, step: _Step
-    ) -> list[tuple[CompiledRule, Decision]]:
-        followups = []
+    def _settle(self, out: Outcome, now: float, seq: int, step: _Step) -> list[_Job]:
+        """Record what ``out`` changed and start the ``otherwise`` of each miss, in order."""
+        followups: list[_Job] = []
         for t in out.changed:
             if t.status == "violated" and not t.late:
                 self.stats["violations"] += 1
@@ -737,12 +782,180 @@ class Manager:
                 context_version=self.context.version,
                 violated=t.id,
             )
-            self._record(d, step, queue=issued.determined)
-            for o in issued.obligations:
-                self._track(self.tracker.start(d.id, d.clause, o, start, seq, t.depth + 1), step)
+            rec = self._record(d, step, queue=issued.determined)
+            job = _Job(rule, d, None, [], rec)
+            more = self._begin(job, issued.obligations, start, seq, t.depth + 1, t.instance, step)
             if issued.determined:
-                followups.append((rule, d))
+                followups.append(job)
+            followups += more
         return followups
+
+    def _begin(
+        self,
+        job: _Job,
+        obligations: tuple[Obligation, ...],
+        now: float,
+        seq: int,
+        depth: int,
+        instance: int,
+        step: _Step,
+    ) -> list[_Job]:
+        """Put a decision's obligations in force at ``now``, then settle what they meet, in the
+        reference semantics' order: windows that close before they open, priorities (a new
+        instance), conflicts. Returns the ``otherwise`` fallbacks this started."""
+        d = job.decision
+        started = [self.tracker.start(d.id, d.clause, ob, now, seq, depth, instance) for ob in obligations]
+        job.items = started
+        followups: list[_Job] = []
+        for t in started:
+            self._track(t, step)
+        for t in started:
+            if t.status == PENDING and self.tracker.closed_at_start(t):
+                followups += self._settle(self.tracker.expire(t, now), now, seq, step)
+        if depth == 0 and self.priorities and self.priorities.semantics == CANCEL:
+            self._prioritise(instance, d.rule, now, step)
+        for t in started:
+            if t.status != PENDING:
+                continue
+            for other in self.tracker.of_event(t.event):
+                if other.prohibition == t.prohibition or other is t:
+                    continue
+                o, p = (other, t) if t.prohibition else (t, other)
+                if t.status == PENDING and o.status == PENDING:
+                    followups += self._clash(o, p, now, seq, step)
+        return followups
+
+    def _prioritise(self, instance: int, rule: str, now: float, step: _Step) -> None:
+        """Cancellation-based priority: a new instance against every active one."""
+        active = self.tracker.instances()
+        if instance not in active:
+            return  # it imposes nothing: it is not active
+        for other in sorted(active.keys() - {instance}):
+            higher = self.priorities.between(rule, active[other])
+            if higher == rule:
+                self._cancel(other, now, rule, step, CANCEL)
+            elif higher is not None:
+                self._cancel(instance, now, higher, step, CANCEL)
+                return
+
+    def _cancel(self, instance: int, at: float, by: str, step: _Step, how: str) -> None:
+        """Cancel everything activation ``instance`` has in force: priority ``by`` outranks it."""
+        items = self.tracker.of_instance(instance)
+        for t in items:
+            self.tracker.finish(t, CANCELLED, at, by)
+            self._track(t, step)
+        if items:
+            self.stats["cancelled"] += 1
+            self._emit(
+                step,
+                "cancelled",
+                {
+                    "instance": instance,
+                    "rule": items[0].rule,
+                    "by": by,
+                    "at": at,
+                    "priority": how,
+                    "obligations": [t.id for t in items],
+                },
+            )
+
+    def _clash(self, o: Tracked, p: Tracked, now: float, seq: int, step: _Step) -> list[_Job]:
+        """Obligation ``o`` meets prohibition ``p``: a conflict when ``p`` forbids all ``o`` has left."""
+        if not covers(o, p, now):
+            return []
+        higher = self.priorities.between(o.rule, p.rule)
+        aware = higher is not None and self.priorities.semantics == CONFLICT_AWARE
+        self.stats["conflicts"] += 1
+        self._emit(
+            step,
+            "conflict",
+            {
+                "event": o.event,
+                "at": now,
+                "obligation": o.id,
+                "prohibition": p.id,
+                "rules": [o.rule, p.rule],
+                "clauses": [o.clause, p.clause],
+                "resolution": CONFLICT_AWARE if aware else "prohibition-wins",
+                "winner": higher if aware else p.rule,
+                "explanation": (
+                    f"{o.rule} requires {o.obligation.describe()} and {p.rule} forbids {o.event} "
+                    + (
+                        f"until {_number(p.hi) if p.hi is not None else 'ever'}: {higher} has priority"
+                        f" ({CONFLICT_AWARE}), the other is kept as long as possible"
+                        if aware
+                        else "for the whole window: the prohibition wins, the obligation is refused"
+                    )
+                ),
+            },
+        )
+        if aware:
+            return []
+        self.tracker.finish(o, REFUSED, now, p.rule)
+        self.stats["violations"] += 1
+        self._track(o, step)
+        if o.obligation.otherwise is None:
+            return []
+        return self._settle(Outcome(fallbacks=[(o, now)]), now, seq, step)
+
+    # ------------------------------------------------------------------ dispatch, held until allowed
+    def _ready(self, jobs: list[_Job], now: float, step: _Step) -> list[_Job]:
+        """Of ``jobs`` (and those held before), what may run now; the rest is held.
+
+        A decision runs with the obligations still in force (refused and cancelled ones are
+        left out). While any of them names an event a prohibition forbids now, the whole
+        decision waits (a ``held`` record), so that nothing it does contradicts ``request``;
+        once allowed it runs (a ``dispatch`` record). One whose obligations all ended while
+        it waited never runs.
+        """
+        out: list[_Job] = []
+        for job in [*self._held.values(), *jobs]:
+            was_held = job.decision.id in self._held
+            items = [t for t in job.items if not t.prohibition]
+            live = [t for t in items if t.status == PENDING]
+            if items and not live:  # refused, cancelled, closed at once, or met while it waited
+                self._held.pop(job.decision.id, None)
+                self._emit(step, "withheld", {"decision": job.decision.id, "rule": job.decision.rule, "reason": "nothing it required is still owed"})
+                if self.journal is not None:
+                    step.change.outbox[job.decision.id] = None
+                continue
+            blocked = [t for t in live if self.tracker.forbidding(t.event, now)]
+            if blocked:
+                if not was_held:
+                    self._held[job.decision.id] = job
+                    if job.record is not None:
+                        job.record["dispatch"] = "held"
+                    self._emit(
+                        step,
+                        "held",
+                        {
+                            "decision": job.decision.id,
+                            "rule": job.decision.rule,
+                            "events": sorted({t.event for t in blocked}),
+                            "by": sorted({p.rule for t in blocked for p in self.tracker.forbidding(t.event, now)}),
+                        },
+                    )
+                continue
+            self._held.pop(job.decision.id, None)
+            kept = tuple(t.obligation for t in job.items if t.prohibition or t.status == PENDING)
+            if was_held or len(kept) != len(job.decision.obligations):
+                job.decision = dataclasses.replace(job.decision, obligations=kept)
+                if job.record is not None and not was_held:
+                    job.record["dispatch"] = "changed"
+                self._emit(step, "dispatch", {"decision": job.decision.to_json()})
+            out.append(job)
+        return out
+
+    def _dispatch(self, jobs: list[_Job]) -> None:
+        """Run each job's implementation (outside the lock), when this Manager dispatches."""
+        if not self.dispatch_locally:
+            return
+        for job in jobs:
+            if job.composition is not None:
+                call = functools.partial(self.implementations.dispatch, job.rule, job.decision, job.composition)
+            else:
+                call = functools.partial(self.implementations.dispatch_fallback, job.rule, job.decision)
+            self._run(job.rule, job.decision, call)
 
     def _decide(self, rule: CompiledRule, event: str, now: float) -> Decision | None:
         v = self.context.values
@@ -840,9 +1053,7 @@ class Manager:
                 lo = 0.0
                 if not it.negated:
                     hi = 0.0
-            # an `else` event fulfils it; a prohibition in the `else` never does (reading it as
-            # one would let the forbidden event satisfy the rule)
-            alts = tuple(a.event for a in it.alternative.items if not a.negated) if it.alternative else ()
+            alts = self._branch(it.alternative) if it.alternative is not None and not it.negated else None
             out.append(
                 Obligation(
                     event=it.event,
@@ -850,7 +1061,7 @@ class Manager:
                     within_s=hi,
                     from_s=lo or 0.0,
                     eventually=it.eventually,
-                    alternatives=alts,
+                    alternatives=(alts,) if alts else (),
                     otherwise=it.otherwise,
                     rule=rule,
                     item=it.key,
@@ -858,10 +1069,41 @@ class Manager:
             )
         return tuple(out)
 
-    def _record(self, d: Decision, step: _Step, *, queue: bool = False) -> None:
-        """Record a decision; ``queue`` puts its implementation in the journal's outbox until it ran."""
+    def _branch(self, spec: ResponseSpec) -> tuple[tuple[str, float, float | None], ...] | None:
+        """An ``else`` alternative as windows from now (its own clauses chosen now), or None when
+        it can never fulfil: it holds a prohibition, or an unknown value decides it (fail closed)."""
+        v = self.context.values
+        if spec.clauses:
+            vals, _ = evaluate(spec.clauses, v)
+            k = choose(vals, self.semantics, self.layer_manager.unknowns)
+            if k is None:
+                return None
+            if k:
+                sub = spec.clauses[k - 1].response
+                return None if sub is None else self._branch(sub)
+        out = []
+        for it in spec.items:
+            if it.negated:
+                return None  # reading a prohibition as fulfilment would let the forbidden event count
+            try:
+                lo = it.lo(v) if it.lo is not None else 0.0
+                hi = it.hi(v) if it.hi is not None else None
+            except KeyError:
+                return None
+            if hi is None and not it.eventually:
+                u = self.tracker.untimed
+                hi = None if u == "none" else self.tracker.tolerance if u == "immediate" else float(u)
+            out.append((it.event, lo, hi))
+        return tuple(out) or None
+
+    def _record(self, d: Decision, step: _Step, *, queue: bool = False) -> dict[str, Any] | None:
+        """Record a decision; ``queue`` puts its implementation in the journal's outbox until it ran.
+
+        Returns the record (None when nobody records), which the step may still annotate.
+        """
         self.decisions.append(d)
         self.stats["decisions"] += 1
+        rec = None
         if self._recording:
             rec = d.to_json()
             self._emit(step, "decision", rec)
@@ -870,6 +1112,7 @@ class Manager:
                 if not self.dispatch_locally:  # a Manager node publishes it: kept whole, to publish again
                     entry["record"] = rec
                 step.change.outbox[d.id] = entry
+        return rec
 
     def _emit(self, step: _Step, kind: str, data: dict[str, Any]) -> None:
         """Add a record to the step; it is numbered now (every record of a step is committed)."""
@@ -911,10 +1154,6 @@ class Manager:
             if self.journal is not None and self.dispatch_locally:
                 step.change.outbox[d.id] = None
 
-    def _fallbacks(self, followups: list[tuple[CompiledRule, Decision]]) -> None:
-        for rule, d in followups:
-            self._run(rule, d, functools.partial(self.implementations.dispatch_fallback, rule, d))
-
     def _notify_timer(self) -> None:
         if self._timer is not None:
             with self._wake:
@@ -925,7 +1164,8 @@ class Manager:
             with self._lock:
                 nxt = self.tracker.next_deadline()
                 exp = self.context.next_expiry()
-            times = [t for t in (nxt, exp) if t is not None]
+                cut = forced(self.tracker, self.priorities)
+            times = [t for t in (nxt, exp, cut[0] if cut else None) if t is not None]
             wait = None if not times else max(0.0, min(times) - self.clock.now() + 1e-3)
             with self._wake:
                 self._wake.wait(timeout=0.5 if wait is None else min(wait, 0.5))

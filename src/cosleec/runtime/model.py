@@ -32,6 +32,10 @@ from cosleec.runtime.compile import Compiler, Values, text
 Seconds = Callable[[Values], float]
 
 
+Window = tuple[str, float, float | None]  # (event, from_s, within_s): one item of an `else` branch
+Branch = tuple[Window, ...]
+
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Obligation:
     """What one decision requires: produce (or, negated, do not produce) ``event``.
@@ -47,7 +51,8 @@ class Obligation:
     within_s: float | None = None
     from_s: float = 0.0
     eventually: bool = False
-    alternatives: tuple[str, ...] = ()  # events of an `else` that also satisfy it
+    # an `else`: each branch is a list of (event, from_s, within_s) that together also satisfy it
+    alternatives: tuple[Branch, ...] = ()
     otherwise: ResponseSpec | None = field(default=None, compare=False, repr=False)
     rule: str = ""
     item: str = field(default="", compare=False)  # the response item it came from (ItemSpec.key)
@@ -60,7 +65,7 @@ class Obligation:
             "within_s": self.within_s,
             "from_s": self.from_s,
             "eventually": self.eventually,
-            "alternatives": list(self.alternatives),
+            "alternatives": [[list(w) for w in b] for b in self.alternatives],
             "rule": self.rule,
             "item": self.item,
             "otherwise": self.otherwise.first_json() if self.otherwise is not None else None,
@@ -76,7 +81,7 @@ class Obligation:
             within_s=None if within is None else float(within),
             from_s=float(d.get("from_s", 0.0)),
             eventually=bool(d.get("eventually", False)),
-            alternatives=tuple(str(a) for a in d.get("alternatives", ())),
+            alternatives=tuple(_branch(b, d) for b in d.get("alternatives", ())),
             rule=str(d.get("rule", "")),
             item=str(d.get("item", "")),
         )
@@ -93,6 +98,14 @@ class Obligation:
         elif self.eventually:
             s += " eventually"
         return s
+
+
+def _branch(b: Any, d: Mapping[str, Any]) -> Branch:
+    """An ``else`` branch read back; an older record's bare event name counts in the main window."""
+    if isinstance(b, str):
+        w = d.get("within_s")
+        return ((b, float(d.get("from_s", 0.0)), None if w is None else float(w)),)
+    return tuple((str(e), float(lo), None if hi is None else float(hi)) for e, lo, hi in b)
 
 
 def _fmt_s(x: float) -> str:

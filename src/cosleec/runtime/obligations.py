@@ -14,7 +14,13 @@ passing of time to it. The rules it applies:
 - ``not E within T`` holds while E is not reported in its window: a request for E is
   refused and recorded; an E reported anyway violates it (and starts its ``otherwise`` at
   that moment).
-- ``P else Q``: an occurrence of Q fulfils it too.
+- ``P else Q``: Q's items, each in its own window, fulfil it too; it is violated when
+  the last of the windows closes.
+- A window that ends before it starts (a negative deadline from measures) is closed at
+  once (:meth:`Tracker.expire`).
+- An obligation can also end ``refused`` (a prohibition forbids its whole window: a
+  conflict, see the Manager) or ``cancelled`` (a higher rule's priority); both are set
+  by the Manager through :meth:`Tracker.finish`.
 
 Causal order: an occurrence counts only for obligations created before it was handled.
 """
@@ -30,6 +36,7 @@ from typing import Any
 from cosleec.runtime.model import Obligation
 
 PENDING, FULFILLED, VIOLATED, RESPECTED = "pending", "fulfilled", "violated", "respected"
+REFUSED, CANCELLED = "refused", "cancelled"
 MISSES_KEPT = 64  # per event: missed obligations a late occurrence is still reported for
 
 
@@ -47,6 +54,10 @@ class Tracked:
     hi: float | None  # None: no deadline
     seq: int  # causal position: occurrences with a larger seq may count
     depth: int = 0  # 0: from a decision; n: the n-th otherwise down a chain
+    instance: int = 0  # the decision that started the chain (a rule's activation, for priorities)
+    own_hi: float | None = None  # the end of the event's own window (``hi`` is the last of all, `else` included)
+    branches: list[list[tuple[str, float, float | None]]] = field(default_factory=list)  # `else`, absolute
+    met: list[list[int]] = field(default_factory=list)  # per branch: the items already seen
     status: str = PENDING
     outcome_at: float | None = None
     by: str | None = None  # the event that fulfilled (or violated) it
@@ -80,19 +91,24 @@ class Tracked:
             "event": self.event,
             "negated": self.prohibition,
             "start": self.start,
-            "window": [self.lo, self.hi],
+            "window": [self.lo, self.own_hi],
+            "deadline": self.hi,
+            "instance": self.instance,
             "status": self.status,
             "at": self.outcome_at,
             "by": self.by,
             "late": list(self.late),  # a copy: a record must not change after it was emitted
             "refused": self.refused,
             "depth": self.depth,
+            "branches": [[list(w) for w in b] for b in self.branches],
+            "met": [list(m) for m in self.met],
         }
 
     @classmethod
     def from_json(cls, d: Mapping[str, Any]) -> Tracked:
         """An obligation record read back from :meth:`to_json`."""
-        lo, hi = d["window"]
+        lo, own = d["window"]
+        hi = d.get("deadline", own)
         at, clause = d.get("at"), d.get("clause")
         return cls(
             id=int(d["id"]),
@@ -105,6 +121,10 @@ class Tracked:
             hi=None if hi is None else float(hi),
             seq=int(d["causal"] if "causal" in d else d["seq"]),
             depth=int(d.get("depth", 0)),
+            instance=int(d.get("instance", d["decision"])),
+            own_hi=None if own is None else float(own),
+            branches=[[(str(e), float(a), None if b is None else float(b)) for e, a, b in br] for br in d.get("branches", ())],
+            met=[[int(i) for i in m] for m in d.get("met", ())],
             status=str(d["status"]),
             outcome_at=None if at is None else float(at),
             by=d.get("by"),
@@ -163,9 +183,20 @@ class Tracker:
         self._next = max(self._next, next_id)
 
     def start(
-        self, decision_id: int, clause: int | None, ob: Obligation, now: float, seq: int, depth: int = 0
+        self,
+        decision_id: int,
+        clause: int | None,
+        ob: Obligation,
+        now: float,
+        seq: int,
+        depth: int = 0,
+        instance: int | None = None,
     ) -> Tracked:
-        """Start tracking ``ob``, required by decision ``decision_id`` (of ``clause``) at ``now``."""
+        """Start tracking ``ob``, required by decision ``decision_id`` (of ``clause``) at ``now``.
+
+        ``instance`` is the activation it belongs to (default: the decision itself). A
+        window that ends before it starts is tracked too: :meth:`expire` closes it.
+        """
         hi = ob.within_s
         if hi is None and not ob.eventually:
             if ob.negated:
@@ -185,16 +216,48 @@ class Tracker:
             hi=None if hi is None else now + hi,
             seq=seq,
             depth=depth,
+            instance=decision_id if instance is None else instance,
         )
+        t.own_hi = t.hi
+        if ob.alternatives and not ob.negated:
+            t.branches = [[(e, now + a, None if b is None else now + b) for e, a, b in br] for br in ob.alternatives]
+            t.met = [[] for _ in t.branches]
+            ends = [t.hi, *(b for br in t.branches for _, _, b in br)]
+            t.hi = None if any(e is None for e in ends) else max(e for e in ends if e is not None)
         self._next += 1
-        if t.hi is not None and t.hi < t.lo:
-            t.hi = t.lo  # a negative deadline (LEGOS expression): already closed
         self._index(t)
         return t
 
+    def closed_at_start(self, t: Tracked) -> bool:
+        """Does ``t``'s window end before it starts (a negative deadline computed from measures)?"""
+        return t.hi is not None and t.hi < t.lo and not t.branches
+
+    def expire(self, t: Tracked, now: float) -> Outcome:
+        """Close ``t`` at once: an obligation violated (its ``otherwise`` starting ``now``), a
+        prohibition respected. For a window that closed before it opened."""
+        out = Outcome()
+        if t.prohibition:
+            t.status, t.outcome_at = RESPECTED, now
+        else:
+            t.status, t.outcome_at = VIOLATED, now
+            if t.obligation.otherwise is not None:
+                out.fallbacks.append((t, now))
+        out.changed.append(t)
+        self._close(t)
+        return out
+
+    def finish(self, t: Tracked, status: str, now: float, by: str) -> None:
+        """End ``t`` as ``refused`` or ``cancelled`` at ``now``, settled by rule ``by``."""
+        t.status, t.outcome_at, t.by = status, now, by
+        self._close(t)
+
+    def of_event(self, event: str) -> list[Tracked]:
+        """The obligations and prohibitions in force that name ``event``, oldest first."""
+        return sorted((t for t in self._by_event.get(event, {}).values() if t.event == event), key=lambda t: t.id)
+
     def _index(self, t: Tracked) -> None:
         self._active[t.id] = t
-        for ev in (t.obligation.event, *t.obligation.alternatives):
+        for ev in _events(t):
             self._by_event.setdefault(ev, {})[t.id] = t
         if t.hi is not None:
             heapq.heappush(self._heap, (t.hi, t.id))
@@ -204,7 +267,7 @@ class Tracker:
         if len(self._heap) > 2 * len(self._active) + 1024:  # closed early: drop their deadlines
             self._heap[:] = [(hi, i) for hi, i in self._heap if i in self._active]  # in place: due() holds it
             heapq.heapify(self._heap)
-        for ev in (t.obligation.event, *t.obligation.alternatives):
+        for ev in _events(t):
             bucket = self._by_event.get(ev)
             if bucket is not None:
                 bucket.pop(t.id, None)
@@ -248,7 +311,12 @@ class Tracker:
                     if ob.otherwise is not None:
                         out.fallbacks.append((t, now))
                     self._close(t)
-            elif now >= t.lo:  # before an interval opens it neither fulfils nor violates
+            elif ob.event == event and t.lo <= now and (t.own_hi is None or now <= t.own_hi):
+                # before an interval opens it neither fulfils nor violates
+                t.status, t.outcome_at, t.by = FULFILLED, now, event
+                out.changed.append(t)
+                self._close(t)
+            elif t.branches and _branch_met(t, event, now):
                 t.status, t.outcome_at, t.by = FULFILLED, now, event
                 out.changed.append(t)
                 self._close(t)
@@ -261,14 +329,18 @@ class Tracker:
         return out
 
     def due(self, now: float, limit: int | None = None) -> Outcome:
-        """Close every window that ended before ``now`` (at most ``limit`` of them).
+        """Close the windows that ended before ``now`` at the earliest such deadline (at most
+        ``limit`` of them); the caller starts their fallbacks, then calls again for the next.
 
-        A pending obligation is violated (its ``otherwise``, if any, is returned in
+        One deadline at a time, so that an ``otherwise`` starting at a deadline is in force
+        before a later deadline is judged (time order, as the reference semantics). A
+        pending obligation is violated (its ``otherwise``, if any, is returned in
         ``fallbacks``, starting at the deadline); a prohibition is respected.
         """
         out = Outcome()
         heap = self._heap
-        while heap and heap[0][0] < now and (limit is None or len(out.changed) < limit):
+        first = self.next_deadline()
+        while heap and heap[0][0] < now and heap[0][0] == first and (limit is None or len(out.changed) < limit):
             hi, tid = heapq.heappop(heap)
             t = self._active.get(tid)
             if t is None or t.hi != hi:
@@ -294,6 +366,14 @@ class Tracker:
             if t.prohibition and t.event == event and t.lo <= now and (t.hi is None or now <= t.hi)
         ]
 
+    def instances(self) -> dict[int, str]:
+        """The activations with something in force: instance -> rule."""
+        return {t.instance: t.rule for t in self._active.values()}
+
+    def of_instance(self, instance: int) -> list[Tracked]:
+        """What activation ``instance`` has in force, oldest first."""
+        return sorted((t for t in self._active.values() if t.instance == instance), key=lambda t: t.id)
+
     def backlog(self, now: float) -> int:
         """About how many windows are due at ``now`` (0 when none is); cheap, an upper bound."""
         heap = self._heap
@@ -309,3 +389,19 @@ class Tracker:
     def outstanding(self) -> list[Tracked]:
         """Pending obligations that require an event (prohibitions left out): what the robot still owes."""
         return [t for t in self._active.values() if not t.prohibition]
+
+
+def _events(t: Tracked) -> tuple[str, ...]:
+    """The events an occurrence of which can settle ``t``: its own and its `else` branches'."""
+    return (t.obligation.event, *(e for br in t.branches for e, _, _ in br))
+
+
+def _branch_met(t: Tracked, event: str, now: float) -> bool:
+    """Count an occurrence for ``t``'s `else` branches; True when one is now complete."""
+    for br, met in zip(t.branches, t.met):
+        for j, (e, lo, hi) in enumerate(br):
+            if e == event and lo <= now and (hi is None or now <= hi) and j not in met:
+                met.append(j)
+        if len(met) == len(br):
+            return True
+    return False

@@ -95,7 +95,12 @@ obligations = st.builds(
     within_s=st.none() | st.floats(0, 1e6, allow_nan=False),
     from_s=st.floats(0, 1e3, allow_nan=False),
     eventually=st.booleans(),
-    alternatives=st.lists(st.sampled_from(["A", "B"]), max_size=2).map(tuple),
+    alternatives=st.lists(
+        st.lists(
+            st.tuples(st.sampled_from(["A", "B"]), st.floats(0, 1e3), st.none() | st.floats(0, 1e6)), min_size=1, max_size=2
+        ).map(tuple),
+        max_size=1,
+    ).map(tuple),
     rule=st.sampled_from(["R1", "R2"]),
 )
 values = st.dictionaries(

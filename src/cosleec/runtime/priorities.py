@@ -1,0 +1,140 @@
+"""Rule priorities and conflicts: what the Manager does when rules demand E and not E.
+
+A *conflict* is an obligation to produce E whose whole remaining window lies inside the
+window of a prohibition of E in force: no behaviour meets both. Without a priority the
+prohibition wins (fail closed): the obligation is *refused* -- violated by conflict at that
+moment, its ``otherwise`` starting then -- and the action is never dispatched. A
+prohibition that forbids only part of the window is no conflict: the Manager holds the
+action until it is allowed (``request(E)`` and the dispatch never disagree).
+
+A priority ``H > L`` (declared in the rules' ``priority`` block, or given to the Manager;
+closed transitively) resolves clashes between the two rules' *instances* (one firing and
+its ``otherwise`` chain, active while anything of it is in force), as SLEEC-TK's
+``priority`` branch defines (``sleec-language.md`` §13):
+
+- ``cancel``: whenever an instance of H and one of L are active together, the L instance
+  is cancelled at once, whichever came first;
+- ``conflict-aware``: L is kept as long as possible and cancelled only when keeping it
+  would violate the other rule: at the deadline of an obligation of one rule that the
+  other's prohibition forbids at that deadline (``lead`` seconds earlier, so that a robot
+  on a real clock has time to act).
+
+A cancelled instance imposes nothing more: no violation, no ``otherwise``. The reference
+semantics (:mod:`cosleec.semantics`) defines the same, independently; the differential
+test holds the two equal.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from cosleec.errors import show
+from cosleec.lang.priorities import closure, cycle, parse_priority
+from cosleec.runtime.errors import ConfigurationError
+from cosleec.runtime.obligations import PENDING, Tracked, Tracker
+
+CANCEL = "cancel"
+CONFLICT_AWARE = "conflict-aware"
+SEMANTICS = (CANCEL, CONFLICT_AWARE)
+
+
+@dataclass(frozen=True)
+class Priorities:
+    """The declared priorities, closed transitively, and how they resolve clashes."""
+
+    above: frozenset[tuple[str, str]] = frozenset()  # (higher, lower)
+    semantics: str = CANCEL
+    lead: float = 0.0
+
+    @classmethod
+    def build(
+        cls,
+        rules: Iterable[str],
+        declared: Iterable[str | tuple[str, str]],
+        semantics: str = CANCEL,
+        lead: float = 0.0,
+    ) -> Priorities:
+        """Check and close ``declared`` (``"H > L"`` strings or pairs) over the rule names.
+
+        ConfigurationError, naming the fix, for an unknown rule (with the closest names),
+        a rule above itself, a cycle, an unknown ``semantics`` or a bad ``lead``.
+        """
+        if semantics not in SEMANTICS:
+            raise ConfigurationError(
+                f"priority_semantics must be one of {', '.join(SEMANTICS)}, not {show(semantics)}"
+            )
+        if isinstance(lead, bool) or not isinstance(lead, int | float) or not (0 <= lead < math.inf):
+            raise ConfigurationError(f"priority_lead must be a number of seconds >= 0, not {show(lead)}")
+        names = list(rules)
+        known = set(names)
+        pairs: list[tuple[str, str]] = []
+        for p in declared:
+            got = parse_priority(p) if isinstance(p, str) else [p]
+            for h, lo in got:
+                for n in (h, lo):
+                    if n not in known:
+                        close = difflib.get_close_matches(n, names, n=3)
+                        raise ConfigurationError(
+                            f"priority {h} > {lo}: there is no rule {show(n)}"
+                            + (f" (did you mean {', '.join(close)}?)" if close else "")
+                        )
+                if h == lo:
+                    raise ConfigurationError(f"priority {h} > {lo}: a rule cannot be above itself")
+                pairs.append((h, lo))
+        loop = cycle(pairs)
+        if loop:
+            raise ConfigurationError(
+                f"the priorities form a cycle: {' > '.join(loop)}", hint="remove one of the pairs"
+            )
+        return cls(closure(pairs), semantics, float(lead))
+
+    def __bool__(self) -> bool:
+        return bool(self.above)
+
+    def between(self, a: str, b: str) -> str | None:
+        """The rule of the two that is higher, or None when neither is declared above the other."""
+        if (a, b) in self.above:
+            return a
+        if (b, a) in self.above:
+            return b
+        return None
+
+
+def covers(obligation: Tracked, prohibition: Tracked, now: float) -> bool:
+    """Does ``prohibition`` forbid every instant left of ``obligation``'s window (a conflict)?"""
+    if obligation.branches:
+        return False  # an `else` alternative may still meet it
+    lo = max(obligation.lo, now)
+    hi = obligation.hi
+    return prohibition.lo <= lo and (prohibition.hi is None or (hi is not None and hi <= prohibition.hi))
+
+
+def forced(tracker: Tracker, priorities: Priorities) -> tuple[float, Tracked, str] | None:
+    """Conflict-aware: the earliest cancellation due -- (time, an item of the instance to
+    cancel, the higher rule) -- or None.
+
+    An obligation of one rule whose deadline finds a prohibition of the same event by a
+    rule it is prioritised against forces the lower of the two out at that deadline
+    (minus ``lead``).
+    """
+    if priorities.semantics != CONFLICT_AWARE or not priorities.above:
+        return None
+    best: tuple[float, int, Tracked, str] | None = None
+    for o in tracker.active:
+        d = o.own_hi
+        if o.prohibition or d is None or o.branches or o.status != PENDING:
+            continue
+        for p in tracker.of_event(o.event):
+            if not p.prohibition or p.instance == o.instance or not (p.lo <= d and (p.hi is None or d <= p.hi)):
+                continue
+            higher = priorities.between(o.rule, p.rule)
+            if higher is None:
+                continue
+            victim = p if higher == o.rule else o
+            at = max(d - priorities.lead, o.start)
+            if best is None or (at, victim.id) < best[:2]:
+                best = (at, victim.id, victim, higher)
+    return None if best is None else (best[0], best[2], best[3])

@@ -1,0 +1,14 @@
+"""The reference semantics of SLEEC: what a rule set requires of a timed trace.
+
+Small and slow on purpose: written from the language reference, sharing no code with
+:mod:`cosleec.runtime`, it is the oracle the runtime is tested against and what
+``cosleec conforms`` judges recorded runs with. Depends on :mod:`cosleec.lang` only.
+"""
+
+from __future__ import annotations
+
+from cosleec.semantics.reference import CANCEL, CONFLICT_AWARE, Options, judge
+from cosleec.semantics.trace import Step, Value
+from cosleec.semantics.verdicts import Conflict, Firing, Judgement, Verdict
+
+__all__ = ["CANCEL", "CONFLICT_AWARE", "Conflict", "Firing", "Judgement", "Options", "Step", "Value", "Verdict", "judge"]

@@ -1,0 +1,618 @@
+"""The reference semantics: a rule set's verdicts on a finite timed trace.
+
+Written straight from the language reference (``sleec-language.md`` §6, §7, §10, §13),
+sharing no code with :mod:`cosleec.runtime`, and slow on purpose: every step scans every
+obligation. It is the oracle the runtime is tested against and what ``cosleec conforms``
+runs. The conventions, each a decision of the reference:
+
+Time and order
+    Times are seconds. Steps are taken in trace order; steps at the same time are in
+    causal order. An occurrence counts for an obligation only if it comes *after* the step
+    that created the obligation (the trigger itself never fulfils its own response).
+
+Snapshots
+    A trigger reads the values set by earlier steps (a value set at the same time but
+    earlier in the trace is read). An ``otherwise`` that starts at a deadline ``h`` reads
+    the values set by every step at a time ``<= h``; one that starts at a prohibition's
+    violation reads the values as the violating occurrence found them. Deadlines are
+    computed once, on the snapshot of the moment their response starts.
+
+Clauses (§7)
+    ``last-wins``: the last clause whose condition holds; ``nested``: the longest prefix of
+    conditions that all hold. Braced inner responses choose among their own clauses in the
+    same way, when they start. A condition over a measure with no value is unknown
+    (Kleene logic); when the choice depends on it the firing is *undetermined* and imposes
+    nothing here (what a robot does then is runtime policy, not language semantics).
+
+Windows (§6.4, §10)
+    ``E within T`` started at ``t`` is fulfilled by an occurrence in ``[t, t+T]`` (closed at
+    both ends) and violated at ``t+T`` once time has passed it; ``within [a, b]`` ignores
+    occurrences before ``t+a``. Untimed ``E`` has no deadline (or ``Options.untimed``
+    seconds); ``E eventually`` none. ``not E within T`` is violated by an occurrence in
+    ``[t, t+T]`` and respected once time passes ``t+T``; untimed ``not E`` covers the
+    instant ``[t, t]``; ``not E eventually`` is never respected. A window whose end comes
+    before its start (a negative deadline computed from measures) is already closed: an
+    obligation is violated at once, a prohibition respected at once.
+
+``otherwise`` (§6.5)
+    Starts at the deadline of a missed obligation, or at the occurrence that violates a
+    prohibition; its windows count from there. ``otherwise`` after an untimed occurrence
+    reads it as ``within 0 seconds``.
+
+``else`` (§6.6)
+    ``P else Q``: Q's own clauses are chosen at the trigger; the obligation is fulfilled by
+    P in P's window, or when every item of Q has occurred in its own window (anchored at
+    the trigger). It is violated when the last of these windows has closed. A branch that
+    contains a prohibition never fulfils (fail closed); ``otherwise`` and ``else`` inside Q
+    are not read; the ``else`` of a prohibition is ignored (the prohibition binds).
+
+Conflicts (issue 12, no priority)
+    When an obligation's whole remaining window ``[max(lo, now), hi]`` lies inside the
+    window of a prohibition of the same event that is in force, the rules cannot both be
+    met: the prohibition wins. The obligation is *refused* at that moment (a violation by
+    conflict) and its ``otherwise`` starts then. Obligations with an ``else`` never
+    conflict (the alternative may meet them). A prohibition that covers only part of the
+    window is no conflict: the robot can wait.
+
+Priorities (§13; ``H > L``, closed transitively)
+    An *instance* is one firing of a rule, active while any of its obligations or
+    prohibitions (``otherwise`` included) is pending. ``cancel``: whenever an instance of H
+    and one of L are active together, the L instance is cancelled at once (whichever came
+    first). ``conflict-aware``: L is kept as long as possible; it is cancelled at the
+    deadline ``d`` of an obligation that one of the two owes and the other's prohibition
+    forbids at ``d`` (an H obligation forbidden by L; or an L obligation forbidden by H, so
+    that L is not violated by respecting H), minus ``Options.lead`` seconds, and before
+    anything else happens at that instant. A cancelled instance imposes nothing more: no
+    violation, no ``otherwise``.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+from cosleec.lang import HedgeSemantics, Specification
+from cosleec.lang import ast as A
+from cosleec.semantics.trace import Step, Value
+from cosleec.semantics.verdicts import (
+    CANCELLED,
+    FULFILLED,
+    PENDING,
+    REFUSED,
+    RESPECTED,
+    VIOLATED,
+    Conflict,
+    Firing,
+    Judgement,
+    Verdict,
+)
+
+CANCEL = "cancel"
+CONFLICT_AWARE = "conflict-aware"
+PRIORITY_SEMANTICS = (CANCEL, CONFLICT_AWARE)
+
+
+@dataclass(frozen=True)
+class Options:
+    """How to read the rules.
+
+    ``semantics``: how ``unless`` clauses combine; ``untimed``: the deadline of an untimed
+    obligation in seconds (None: none, the default); ``priorities``: declared ``(higher,
+    lower)`` pairs (the file's and the command line's); ``priority_semantics``: ``cancel``
+    or ``conflict-aware``; ``lead``: how long before the forcing deadline a conflict-aware
+    priority cancels the lower rule (0: at the deadline, as SLEEC-TK).
+    """
+
+    semantics: HedgeSemantics = HedgeSemantics.LAST_WINS
+    untimed: float | None = None
+    priorities: frozenset[tuple[str, str]] = frozenset()
+    priority_semantics: str = CANCEL
+    lead: float = 0.0
+
+
+class _Unknown(Exception):
+    """A measure the expression reads has no value."""
+
+
+def judge(spec: Specification, trace: Iterable[Step], options: Options = Options()) -> Judgement:
+    """The verdicts of ``spec`` on ``trace`` up to the trace's last time.
+
+    ``spec`` must be checked (names resolved: :func:`cosleec.lang.load`); the trace's names
+    are taken as given (:func:`cosleec.semantics.trace.check_trace` checks them).
+    """
+    if options.priority_semantics not in PRIORITY_SEMANTICS:
+        raise ValueError(f"priority_semantics must be one of {PRIORITY_SEMANTICS}")
+    return _Judge(spec, options).run(list(trace))
+
+
+# ---------------------------------------------------------------------------- expressions
+class _Eval:
+    """Three-valued evaluation of conditions and durations on one snapshot."""
+
+    def __init__(self, spec: Specification) -> None:
+        self.measures = {m.name: m.type for m in spec.measures}
+        raw = {c.name: c.value for c in spec.definitions if isinstance(c, A.ConstantDecl)}
+        self.constants: dict[str, int] = {}
+        for name in raw:
+            seen: set[str] = set()
+            v: int | str = raw[name]
+            while isinstance(v, str) and v not in seen:
+                seen.add(v)
+                v = raw.get(v, v)
+            if isinstance(v, int):
+                self.constants[name] = v
+
+    def truth(self, e: A.Expr | None, values: Mapping[str, Value]) -> bool | None:
+        """True, False, or None when an unknown value decides it (Kleene)."""
+        if e is None:
+            return True
+        if isinstance(e, A.Not):
+            x = self.truth(e.operand, values)
+            return None if x is None else not x
+        if isinstance(e, A.BinOp) and e.op in ("and", "or"):
+            a, b = self.truth(e.left, values), self.truth(e.right, values)
+            if e.op == "and":
+                if a is False or b is False:
+                    return False
+                return None if a is None or b is None else True
+            if a is True or b is True:
+                return True
+            return None if a is None or b is None else False
+        try:
+            return bool(self.value(e, values))
+        except _Unknown:
+            return None
+
+    def value(self, e: A.Expr, values: Mapping[str, Value], scale: str | None = None) -> object:
+        """The value of ``e``; a scale measure or literal is its position (lowest 0)."""
+        if isinstance(e, A.BoolLit | A.IntLit):
+            return e.value
+        if isinstance(e, A.Name):
+            if e.name in self.measures:
+                if values.get(e.name) is None:
+                    raise _Unknown(e.name)
+                x = values[e.name]
+                t = self.measures[e.name]
+                return t.literals.index(str(x)) if isinstance(t, A.ScaleType) else x
+            if e.name in self.constants:
+                return self.constants[e.name]
+            assert scale is not None, f"{e.name} is neither a measure, a constant nor a literal"
+            t = self.measures[scale]
+            assert isinstance(t, A.ScaleType)
+            return t.literals.index(e.name)
+        if isinstance(e, A.Not | A.BinOp) and (not isinstance(e, A.BinOp) or e.op in ("and", "or")):
+            x = self.truth(e, values)
+            if x is None:
+                raise _Unknown("")
+            return x
+        if isinstance(e, A.BinOp):
+            a, b = self.value(e.left, values), self.value(e.right, values)
+            assert isinstance(a, int | float) and isinstance(b, int | float)
+            return a + b if e.op == "+" else a - b if e.op == "-" else a * b
+        if isinstance(e, A.Compare):
+            s = self._scale(e.left) or self._scale(e.right)
+            a, b = self.value(e.left, values, s), self.value(e.right, values, s)
+            ops = {
+                "<": lambda: a < b,  # type: ignore[operator]
+                "<=": lambda: a <= b,  # type: ignore[operator]
+                ">": lambda: a > b,  # type: ignore[operator]
+                ">=": lambda: a >= b,  # type: ignore[operator]
+                "=": lambda: a == b,
+                "<>": lambda: a != b,
+            }
+            return ops[e.op]()
+        raise AssertionError(f"cannot evaluate {e!r}")
+
+    def _scale(self, e: A.Expr) -> str | None:
+        if isinstance(e, A.Name) and isinstance(self.measures.get(e.name), A.ScaleType):
+            return e.name
+        return None
+
+    def seconds(self, d: A.Duration, values: Mapping[str, Value]) -> float:
+        """A duration in seconds (raises _Unknown)."""
+        x = self.value(d.value, values)
+        assert isinstance(x, int | float)
+        return float(x * A.TIME_UNITS[d.unit])
+
+    def reads(self, e: A.Expr | None) -> set[str]:
+        """The measures ``e`` reads."""
+        if e is None:
+            return set()
+        if isinstance(e, A.Name):
+            return {e.name} if e.name in self.measures else set()
+        if isinstance(e, A.Not):
+            return self.reads(e.operand)
+        if isinstance(e, A.BinOp | A.Compare):
+            return self.reads(e.left) | self.reads(e.right)
+        return set()
+
+
+def choose(values: Sequence[bool | None], semantics: HedgeSemantics) -> int | None:
+    """§7: the clause that applies (0: the default), None when an unknown value decides it."""
+    if semantics == HedgeSemantics.LAST_WINS:
+        for i in range(len(values), 0, -1):  # the last clause whose condition holds
+            if values[i - 1] is None:
+                return None
+            if values[i - 1]:
+                return i
+        return 0
+    k = 0  # nested: the longest prefix of conditions that all hold
+    for x in values:
+        if x is None:
+            return None
+        if not x:
+            break
+        k += 1
+    return k
+
+
+# ---------------------------------------------------------------------------- the judge
+@dataclass(eq=False)
+class _Item:
+    """An obligation or prohibition in force: its verdict plus what the judge needs."""
+
+    v: Verdict
+    created: int  # causal position: occurrences after it count
+    otherwise: A.Response | None
+    branches: list[list[tuple[str, float, float | None]]] = field(default_factory=list)
+    met: list[set[int]] = field(default_factory=list)
+
+    @property
+    def deadline(self) -> float | None:
+        """When the item is judged if nothing settles it first (None: never)."""
+        his: list[float | None] = [self.v.window[1]]
+        for b in self.branches:
+            his += [hi for _, _, hi in b]
+        return None if any(h is None for h in his) else max(h for h in his if h is not None)
+
+
+class _Undetermined(Exception):
+    def __init__(self, missing: set[str]) -> None:
+        self.missing = missing
+
+
+class _Judge:
+    def __init__(self, spec: Specification, options: Options) -> None:
+        self.spec = spec
+        self.options = options
+        self.eval = _Eval(spec)
+        self.rules = {r.name: r for r in spec.rules}
+        self.above = _closure(options.priorities)
+        self.values: dict[str, Value] = {}
+        self.items: list[_Item] = []
+        self.seq = 0
+        self.ids = itertools.count(1)
+        self.instances = itertools.count(1)
+        self.instance_rule: dict[int, str] = {}
+        self.keys: dict[int, str] = {}  # an otherwise response (by id) -> its item key prefix
+        self.out = Judgement(end=0.0)
+
+    # -------------------------------------------------------------- driver
+    def run(self, steps: list[Step]) -> Judgement:
+        end = 0.0
+        for n, step in enumerate(steps):
+            end = step.t
+            self.advance(step.t)
+            for name, x in step.values.items():
+                if x is None:
+                    self.values.pop(name, None)
+                else:
+                    self.values[name] = x
+            if step.event is not None:
+                self.occur(n, step.t, step.event)
+        self.advance(end)
+        self.out.end = end
+        self.out.verdicts = [i.v for i in self.items]
+        return self.out
+
+    def pending(self) -> list[_Item]:
+        return [i for i in self.items if i.v.status == PENDING]
+
+    # -------------------------------------------------------------- time passing
+    def advance(self, now: float) -> None:
+        """Everything that happens at times up to ``now`` before the step at ``now``:
+        conflict-aware cancellations at times <= now, windows closing at times < now."""
+        while True:
+            best: tuple[float, int, int] | None = None
+            action: tuple[str, _Item, str] | None = None
+            for item in self.pending():
+                d = item.deadline
+                if d is not None and d < now and (best is None or (d, 1, item.v.id) < best):
+                    best, action = (d, 1, item.v.id), ("close", item, "")
+            for at, victim, by in self.forced():
+                if at <= now and (best is None or (at, 0, victim.v.id) < best):
+                    best, action = (at, 0, victim.v.id), ("cancel", victim, by)
+            if best is None or action is None:
+                return
+            kind, item, by = action
+            if kind == "cancel":
+                self.cancel(item.v.instance, best[0], by)
+            else:
+                self.close(item)
+
+    def close(self, item: _Item) -> None:
+        v = item.v
+        d = item.deadline
+        assert d is not None
+        if v.negated:
+            v.status, v.at = RESPECTED, d
+            return
+        v.status, v.at = VIOLATED, d
+        if item.otherwise is not None:
+            self.seq += 1
+            self.start(item.otherwise, d, self.seq, v.instance, v.rule, v.clause, v.depth + 1)
+
+    def forced(self) -> list[tuple[float, _Item, str]]:
+        """Conflict-aware: (time, an item of the lower instance, the higher rule) for every
+        obligation whose deadline finds it forbidden by a prioritised rule's prohibition."""
+        if self.options.priority_semantics != CONFLICT_AWARE or not self.above:
+            return []
+        out = []
+        live = self.pending()
+        for o in live:
+            d = o.v.window[1]
+            if o.v.negated or d is None or o.branches:
+                continue
+            for p in live:
+                if not p.v.negated or p.v.event != o.v.event or p.v.instance == o.v.instance:
+                    continue
+                lo, hi = p.v.window
+                if not (lo <= d and (hi is None or d <= hi)):
+                    continue
+                at = max(d - self.options.lead, o.v.start)
+                if (o.v.rule, p.v.rule) in self.above:
+                    out.append((at, p, o.v.rule))
+                elif (p.v.rule, o.v.rule) in self.above:
+                    out.append((at, o, p.v.rule))
+        return out
+
+    def cancel(self, instance: int, at: float, by: str) -> None:
+        for i in self.pending():
+            if i.v.instance == instance:
+                i.v.status, i.v.at, i.v.by = CANCELLED, at, by
+
+    # -------------------------------------------------------------- occurrences
+    def occur(self, step: int, now: float, event: str) -> None:
+        self.seq += 1
+        seq = self.seq
+        broken = []
+        for item in self.pending():
+            if item.created >= seq:
+                continue
+            v = item.v
+            lo, hi = v.window
+            inside = lo <= now and (hi is None or now <= hi)
+            if v.negated:
+                if v.event == event and inside:
+                    v.status, v.at, v.by = VIOLATED, now, event
+                    broken.append(item)
+                continue
+            if v.event == event and inside:
+                v.status, v.at, v.by = FULFILLED, now, event
+                continue
+            for b, met in zip(item.branches, item.met):
+                for j, (ev, blo, bhi) in enumerate(b):
+                    if ev == event and blo <= now and (bhi is None or now <= bhi):
+                        met.add(j)
+                if len(met) == len(b):
+                    v.status, v.at, v.by = FULFILLED, now, event
+                    break
+        for item in broken:  # the otherwise of each prohibition it broke starts now, in order
+            v = item.v
+            if item.otherwise is not None:
+                self.start(item.otherwise, now, seq, v.instance, v.rule, v.clause, v.depth + 1)
+        for rule in self.spec.rules:
+            if rule.trigger.event == event:
+                self.fire(step, now, seq, rule)
+
+    def fire(self, step: int, now: float, seq: int, rule: A.Rule) -> None:
+        fired = self.eval.truth(rule.trigger.condition, self.values)
+        if fired is None:
+            missing = self.eval.reads(rule.trigger.condition) - self.values.keys()
+            self.out.firings.append(Firing(step, now, rule.name, rule.trigger.event, None, None, None, _sorted(missing)))
+            return
+        if not fired:
+            self.out.firings.append(Firing(step, now, rule.name, rule.trigger.event, False, None, None))
+            return
+        top = rule.response
+        k = choose([self.eval.truth(d.condition, self.values) for d in top.defeaters], self.options.semantics)
+        if k is None:
+            missing = set().union(*(self.eval.reads(d.condition) for d in top.defeaters)) - self.values.keys()
+            self.out.firings.append(Firing(step, now, rule.name, rule.trigger.event, True, None, None, _sorted(missing)))
+            return
+        if k == 0:
+            response: A.Response | None = A.Response(top.items, ())
+            key = rule.name
+        else:
+            response, key = top.defeaters[k - 1].response, f"{rule.name}.{k}"
+        instance = next(self.instances)
+        try:
+            planned = self.plan(response, key, now)
+        except _Undetermined as u:
+            self.out.firings.append(
+                Firing(step, now, rule.name, rule.trigger.event, True, None, None, _sorted(u.missing))
+            )
+            return
+        self.out.firings.append(Firing(step, now, rule.name, rule.trigger.event, True, k, instance))
+        self.instance_rule[instance] = rule.name
+        self.add(planned, now, seq, instance, rule.name, k, 0)
+
+    # -------------------------------------------------------------- responses
+    def start(
+        self, response: A.Response, now: float, seq: int, instance: int, rule: str, clause: int, depth: int
+    ) -> None:
+        """Start an ``otherwise`` at ``now`` (its key prefix is carried in the plan)."""
+        try:
+            planned = self.plan(response, "", now)
+        except _Undetermined as u:
+            self.out.undetermined.append(
+                f"{rule}: the otherwise starting at {now:g} needs {', '.join(_sorted(u.missing))}"
+            )
+            return
+        self.add(planned, now, seq, instance, rule, clause, depth)
+
+    def plan(self, response: A.Response | None, key: str, now: float) -> list[tuple[str, _Item]]:
+        """The items ``response`` imposes when it starts at ``now`` (inner clauses chosen now).
+
+        ``key`` is the runtime's name for the response (``R1``, ``R1.2``); an ``otherwise``
+        carries its own key in ``self.keys``.
+        """
+        if response is None:
+            return []
+        if not key:
+            key = self.keys[id(response)]
+        if response.defeaters:
+            vals = [self.eval.truth(d.condition, self.values) for d in response.defeaters]
+            k = choose(vals, self.options.semantics)
+            if k is None:
+                raise _Undetermined(
+                    set().union(*(self.eval.reads(d.condition) for d in response.defeaters)) - self.values.keys()
+                )
+            if k:
+                return self.plan(response.defeaters[k - 1].response, f"{key}~{k}", now)
+        out = []
+        for n, it in enumerate(response.items):
+            k = f"{key}:{n}"
+            occ = it.occurrence
+            lo, hi = self.window(occ, it.otherwise is not None, now)
+            branches: list[list[tuple[str, float, float | None]]] = []
+            if it.alternative is not None and not occ.negated:
+                branch = self.branch(it.alternative, f"{k}/e", now)
+                if branch is not None:
+                    branches.append(branch)
+            if it.otherwise is not None:
+                self.keys[id(it.otherwise)] = f"{k}/o"
+            verdict = Verdict(
+                id=0, instance=0, rule="", clause=0, key=k, event=occ.event, negated=occ.negated,
+                start=now, window=(lo, hi),
+            )  # fmt: skip
+            out.append((k, _Item(verdict, 0, it.otherwise, branches, [set() for _ in branches])))
+        return out
+
+    def branch(self, response: A.Response, key: str, now: float) -> list[tuple[str, float, float | None]] | None:
+        """An ``else`` alternative's windows (its clauses chosen now); None when it can never fulfil."""
+        if response.defeaters:
+            k = choose([self.eval.truth(d.condition, self.values) for d in response.defeaters], self.options.semantics)
+            if k is None:
+                return None  # unknown: it cannot be counted on (fail closed)
+            if k:
+                sub = response.defeaters[k - 1].response
+                return None if sub is None else self.branch(sub, f"{key}~{k}", now)
+        out = []
+        for it in response.items:
+            if it.occurrence.negated:
+                return None
+            lo, hi = self.window(it.occurrence, False, now)
+            out.append((it.occurrence.event, lo, hi))
+        return out or None
+
+    def window(self, occ: A.Occurrence, has_otherwise: bool, now: float) -> tuple[float, float | None]:
+        """The absolute window of an occurrence starting at ``now``."""
+        try:
+            if occ.limit is not None:
+                hi = now + self.eval.seconds(occ.limit.hi, self.values)
+                lo = now + self.eval.seconds(occ.limit.lo, self.values) if occ.limit.lo is not None else now
+                return lo, hi
+        except _Unknown:
+            assert occ.limit is not None
+            reads = self.eval.reads(occ.limit.hi.value)
+            if occ.limit.lo is not None:
+                reads |= self.eval.reads(occ.limit.lo.value)
+            raise _Undetermined(reads - self.values.keys()) from None
+        if occ.eventually:
+            return now, None
+        if occ.negated:
+            return now, now  # untimed `not E`: the trigger instant
+        if has_otherwise:
+            return now, now  # `otherwise` after an untimed occurrence: within 0 seconds
+        return now, None if self.options.untimed is None else now + self.options.untimed
+
+    def add(
+        self, planned: list[tuple[str, _Item]], now: float, seq: int, instance: int, rule: str, clause: int, depth: int
+    ) -> None:
+        """Put a response's items in force, then apply priorities and conflicts."""
+        fresh = []
+        for _, item in planned:
+            item.v.id, item.v.instance, item.v.rule, item.v.clause, item.v.depth = (
+                next(self.ids), instance, rule, clause, depth,
+            )  # fmt: skip
+            item.created = seq
+            self.items.append(item)
+            fresh.append(item)
+        for item in fresh:  # a window that ends before it starts is already closed
+            hi = item.deadline
+            if item.v.status == PENDING and hi is not None and hi < item.v.window[0] and not item.branches:
+                if item.v.negated:
+                    item.v.status, item.v.at = RESPECTED, now
+                else:
+                    item.v.status, item.v.at = VIOLATED, now
+                    item.v.note = "its window closed before it opened (a negative deadline)"
+                    if item.otherwise is not None:
+                        self.start(item.otherwise, now, seq, instance, rule, clause, depth + 1)
+        if depth == 0 and self.options.priority_semantics == CANCEL:
+            self.prioritise(instance, rule, now)
+        for item in fresh:
+            if item.v.status == PENDING:
+                self.conflicts(item, now, seq)
+
+    def prioritise(self, instance: int, rule: str, now: float) -> None:
+        """Cancellation-based priority: a new instance meets every active one."""
+        active = {i.v.instance for i in self.pending()}
+        if instance not in active:
+            return  # it imposes nothing: it is not active
+        for other in sorted(active - {instance}):
+            orule = self.instance_rule[other]
+            if (rule, orule) in self.above:
+                self.cancel(other, now, rule)
+            elif (orule, rule) in self.above:
+                self.cancel(instance, now, orule)
+                return
+
+    def conflicts(self, item: _Item, now: float, seq: int) -> None:
+        """A new item against those in force: an obligation whose whole window is forbidden."""
+        if item.v.negated:
+            for o in self.pending():
+                if not o.v.negated and o.v.event == item.v.event and o is not item:
+                    self.clash(o, item, now, seq)
+        else:
+            for p in self.pending():
+                if p.v.negated and p.v.event == item.v.event and item.v.status == PENDING:
+                    self.clash(item, p, now, seq)
+
+    def clash(self, o: _Item, p: _Item, now: float, seq: int) -> None:
+        if o.branches or o.v.status != PENDING:
+            return
+        olo, ohi = o.v.window
+        plo, phi = p.v.window
+        lo = max(olo, now)
+        if not (plo <= lo and (phi is None or (ohi is not None and ohi <= phi))):
+            return  # some instant of the obligation's window is allowed: the robot can wait
+        pair = (o.v.rule, p.v.rule)
+        if self.options.priority_semantics == CONFLICT_AWARE and (pair in self.above or pair[::-1] in self.above):
+            winner = o.v.rule if pair in self.above else p.v.rule
+            self.out.conflicts.append(
+                Conflict(now, o.v.event, o.v.id, p.v.id, pair, (o.v.clause, p.v.clause), CONFLICT_AWARE, winner)
+            )
+            return
+        self.out.conflicts.append(
+            Conflict(now, o.v.event, o.v.id, p.v.id, pair, (o.v.clause, p.v.clause), "prohibition-wins", p.v.rule)
+        )
+        o.v.status, o.v.at, o.v.by = REFUSED, now, p.v.rule
+        o.v.note = f"{p.v.rule} forbids {p.v.event} for the whole window"
+        if o.otherwise is not None:
+            self.start(o.otherwise, now, seq, o.v.instance, o.v.rule, o.v.clause, o.v.depth + 1)
+
+
+def _closure(pairs: Iterable[tuple[str, str]]) -> frozenset[tuple[str, str]]:
+    """``H > L`` closed transitively."""
+    out = set(pairs)
+    while True:
+        more = {(a, d) for a, b in out for c, d in out if b == c} - out
+        if not more:
+            return frozenset(out)
+        out |= more
+
+
+def _sorted(names: Iterable[str]) -> tuple[str, ...]:
+    return tuple(sorted(names))
