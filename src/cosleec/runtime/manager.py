@@ -488,9 +488,9 @@ class Manager:
             if not self._known(name, "event", step):
                 return []
             now = self.clock.now()
-            seq = self._count("seq")
             self.stats["events"] += 1
             followups += self._advance(now, step)
+            seq = self._count("seq")  # after what time's passing started: this occurrence counts for it
             if self._recording:
                 self._emit(step, "event", {"event": name, "causal": seq})
             out = self.tracker.occur(name, now, seq)

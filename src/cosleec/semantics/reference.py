@@ -311,37 +311,37 @@ class _Judge:
 
     # -------------------------------------------------------------- time passing
     def advance(self, now: float) -> None:
-        """Everything that happens at times up to ``now`` before the step at ``now``:
-        conflict-aware cancellations at times <= now, windows closing at times < now."""
+        """Everything that happens at times up to ``now`` before the step at ``now``, earliest
+        first: conflict-aware cancellations at times <= now (before anything else at their
+        instant), and windows closing at times < now -- every window that ends at the same
+        instant closes together, then the ``otherwise`` of each miss starts, in order."""
         while True:
-            best: tuple[float, int, int] | None = None
-            action: tuple[str, _Item, str] | None = None
-            for item in self.pending():
-                d = item.deadline
-                if d is not None and d < now and (best is None or (d, 1, item.v.id) < best):
-                    best, action = (d, 1, item.v.id), ("close", item, "")
-            for at, victim, by in self.forced():
-                if at <= now and (best is None or (at, 0, victim.v.id) < best):
-                    best, action = (at, 0, victim.v.id), ("cancel", victim, by)
-            if best is None or action is None:
-                return
-            kind, item, by = action
-            if kind == "cancel":
-                self.cancel(item.v.instance, best[0], by)
+            ends = [d for i in self.pending() if (d := i.deadline) is not None and d < now]
+            first = min(ends) if ends else None
+            cuts = sorted((at, victim.v.id, victim, by) for at, victim, by in self.forced() if at <= now)
+            if cuts and (first is None or cuts[0][0] <= first):
+                at, _, victim, by = cuts[0]
+                self.cancel(victim.v.instance, at, by)
+            elif first is not None:
+                self.close([i for i in self.pending() if i.deadline == first], first)
             else:
-                self.close(item)
+                return
 
-    def close(self, item: _Item) -> None:
-        v = item.v
-        d = item.deadline
-        assert d is not None
-        if v.negated:
-            v.status, v.at = RESPECTED, d
-            return
-        v.status, v.at = VIOLATED, d
-        if item.otherwise is not None:
-            self.seq += 1
-            self.start(item.otherwise, d, self.seq, v.instance, v.rule, v.clause, v.depth + 1)
+    def close(self, items: list[_Item], d: float) -> None:
+        """The windows of ``items`` ended at ``d`` and time has passed it."""
+        missed = []
+        for item in items:
+            v = item.v
+            if v.negated:
+                v.status, v.at = RESPECTED, d
+            else:
+                v.status, v.at = VIOLATED, d
+                missed.append(item)
+        self.seq += 1
+        for item in missed:
+            if item.otherwise is not None:
+                v = item.v
+                self.start(item.otherwise, d, self.seq, v.instance, v.rule, v.clause, v.depth + 1)
 
     def forced(self) -> list[tuple[float, _Item, str]]:
         """Conflict-aware: (time, an item of the lower instance, the higher rule) for every
