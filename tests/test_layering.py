@@ -21,14 +21,15 @@ ALLOWED: dict[str, set[str]] = {
     "errors": set(),
     "lang": {"errors"},
     "cop": set(),
+    "semantics": {"errors", "lang"},
     "runtime": {"errors", "lang", "cop"},
     "nodes": {"errors", "lang", "runtime"},
     "testing": {"errors", "lang", "cop", "runtime", "nodes"},
     "demo": {"errors", "lang", "runtime", "nodes", "testing"},
     "ros": {"errors", "lang", "runtime", "nodes", "testing", "demo"},
-    "cli": {"errors", "lang", "cop", "runtime", "nodes", "testing", "demo", "ros"},
+    "cli": {"errors", "lang", "cop", "semantics", "runtime", "nodes", "testing", "demo", "ros"},
 }
-NO_FUNCTION_IMPORTS = {"errors", "lang", "cop", "runtime"}
+NO_FUNCTION_IMPORTS = {"errors", "lang", "cop", "semantics", "runtime"}
 
 
 def modules() -> Iterator[tuple[str, Path]]:

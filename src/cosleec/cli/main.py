@@ -12,7 +12,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from cosleec.cli import check, decide, demo, fmt, ros
+from cosleec.cli import check, conforms, decide, demo, fmt, ros
 from cosleec.errors import UserError
 from cosleec.lang import SleecError
 
@@ -35,6 +35,7 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_parser(sub)
     fmt.add_parser(sub)
     decide.add_parser(sub)
+    conforms.add_parser(sub)
     demo.add_parser(sub)
     ros.add_parser(sub, "ros2")
     ros.add_parser(sub, "ros1")

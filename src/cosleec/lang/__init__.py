@@ -8,12 +8,16 @@ Typical use::
     result = analyse_file("rules.sleec")  # never raises for bad input
     print(result.render())
 
+Rule priorities (cosleec's extension, a file's ``priority_start`` block) are
+``spec.priorities``; priorities from elsewhere go through ``parse_priority("Rule21 > Rule3")``,
+and ``closure`` and ``cycle`` answer questions about any set of pairs (priorities.py).
+
 Other packages import from here only; the pipeline itself is in frontend.py.
 """
 
 from __future__ import annotations
 
-from cosleec.lang import ast
+from cosleec.lang import ast, priorities
 from cosleec.lang.ast import Dialect, Specification
 from cosleec.lang.checker import Options, SymbolTable, check
 from cosleec.lang.diagnostics import Diagnostic, DiagnosticSink, Severity, SleecError
@@ -21,6 +25,7 @@ from cosleec.lang.frontend import DIALECTS, CheckResult, analyse, analyse_file, 
 from cosleec.lang.hedges import HedgeSemantics, Unknowns, candidates, choose, decisive
 from cosleec.lang.infer import infer_definitions
 from cosleec.lang.printer import Printer, format_spec
+from cosleec.lang.priorities import closure, cycle, pairs, parse_priority
 
 __all__ = [
     "DIALECTS",
@@ -42,10 +47,15 @@ __all__ = [
     "candidates",
     "check",
     "choose",
+    "closure",
+    "cycle",
     "decisive",
     "format_spec",
     "infer_definitions",
     "load",
+    "pairs",
     "parse",
+    "parse_priority",
+    "priorities",
     "read_source",
 ]

@@ -34,7 +34,7 @@ NO_SPAN = Span(0, 0, 0, 0)
 
 
 def _span() -> Span:
-    return field(default=NO_SPAN, compare=False, repr=False, kw_only=True)  # type: ignore[return-value]
+    return field(default=NO_SPAN, compare=False, repr=False, kw_only=True)
 
 
 class Dialect(StrEnum):
@@ -358,7 +358,28 @@ class ForRelation:
 
 Relation: TypeAlias = EventRelation | MeasureRelation | EventMeasureRelation | UntilRelation | ForRelation
 
-BlockKind: TypeAlias = Literal["def", "rule", "concern", "purpose", "relation"]
+# ---------------------------------------------------------------------------- priorities
+
+
+@dataclass(frozen=True, slots=True)
+class Priority:
+    """One declared pair of the priority block: rule ``higher`` takes precedence over ``lower``.
+
+    A cosleec extension (docs/reference/sleec-language.md §13.4): when an instance of
+    ``higher`` and one of ``lower`` are active together, the runtime cancels the ``lower`` one
+    (or, conflict-aware, only when keeping it would make ``higher`` impossible). A chain
+    ``A > B > C`` in the file is read as two pairs, ``A > B`` and ``B > C``. ``span`` covers
+    ``higher > lower``; ``higher_span`` and ``lower_span`` each name, for diagnostics.
+    """
+
+    higher: str
+    lower: str
+    span: Span = _span()
+    higher_span: Span = _span()
+    lower_span: Span = _span()
+
+
+BlockKind: TypeAlias = Literal["def", "rule", "concern", "purpose", "relation", "priority"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -378,6 +399,7 @@ class Specification:
     concerns: tuple[Situation, ...] = ()
     purposes: tuple[Situation, ...] = ()
     relations: tuple[Relation, ...] = ()
+    priorities: tuple[Priority, ...] = ()  # cosleec's extension: pairs in file order, chains expanded
     dialect: Dialect = field(default=Dialect.TK, compare=False)
     path: str = field(default="<string>", compare=False)
     blocks: tuple[BlockMark, ...] = field(default=(), compare=False, repr=False)

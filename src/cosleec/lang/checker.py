@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from cosleec.lang import ast as A
 from cosleec.lang import hedges
 from cosleec.lang.diagnostics import QUOTE_LIMIT, DiagnosticSink, clip
+from cosleec.lang.priorities import check_priorities
 
 # Names SLEEC-TK rejects because they clash with its CSP encoding (§3).
 TK_RESERVED = frozenset({"STOP", "P", "Q", "c", "d"})
@@ -38,7 +39,7 @@ class Options:
     """What the checker should be strict about."""
 
     strict_precedence: bool = False  # mixed and/or without parentheses is an error
-    strict_extensions: bool = False  # cosleec extensions (response conjunction) are errors
+    strict_extensions: bool = False  # cosleec extensions (response conjunction, priorities) are errors
     lint: bool = False  # naming conventions and style suggestions
     tk_names: bool = False  # warn about names SLEEC-TK rejects
     semantics: hedges.HedgeSemantics = hedges.HedgeSemantics.LAST_WINS  # for the hedge lint
@@ -104,6 +105,13 @@ class Checker:
         self._rules()
         self._situations()
         self._relations()
+        check_priorities(
+            spec,
+            self.sink,
+            kind=self.table.kind,
+            strict=self.opt.strict_extensions,
+            repeat_limit=self.opt.repeat_limit,
+        )
         return self.table
 
     # ------------------------------------------------------------------ declarations

@@ -29,12 +29,14 @@ class DialectFacts:
     ``legos`` lists the constructs only LEGOS-SLEEC has, in the order detection cites them
     (blocks, then conditions, deadlines, constants, responses); ``tk`` the constructs
     LEGOS-SLEEC's grammar rejects; ``tk_rejects`` what else SLEEC-TK's grammar rejects,
-    as complete messages.
+    as complete messages; ``extensions`` cosleec's own constructs, which neither tool
+    accepts and which therefore say nothing about the dialect (the priority block).
     """
 
     legos: tuple[Feature, ...]
     tk: tuple[Feature, ...]
     tk_rejects: tuple[Feature, ...]
+    extensions: tuple[Feature, ...] = ()
 
 
 def collect(spec: A.Specification, text: str) -> DialectFacts:
@@ -77,7 +79,10 @@ def collect(spec: A.Specification, text: str) -> DialectFacts:
         *w.deadline[1],
         *w.tk_other,
     )
-    return DialectFacts(legos, tk, tuple(w.tk_rejects))
+    extensions = tuple(
+        ("a priority block (`priority_start`)", b.span) for b in spec.blocks if b.kind == "priority"
+    )
+    return DialectFacts(legos, tk, tuple(w.tk_rejects), extensions)
 
 
 def detect(facts: DialectFacts) -> tuple[A.Dialect, Feature | None]:
@@ -103,8 +108,14 @@ def check_mixed(facts: DialectFacts, evidence: Feature, sink: DiagnosticSink) ->
         )
 
 
-def check_strict(facts: DialectFacts, dialect: A.Dialect, sink: DiagnosticSink) -> None:
-    """Report what ``dialect``'s own tool would reject."""
+def check_strict(
+    facts: DialectFacts, dialect: A.Dialect, sink: DiagnosticSink, *, extensions: bool = True
+) -> None:
+    """Report what ``dialect``'s own tool would reject.
+
+    ``extensions=False`` leaves out cosleec's extensions: for a caller whose checker already
+    rejects them (``--strict``), so that one construct does not draw two errors.
+    """
     if dialect is A.Dialect.TK:
         for what, span in facts.legos:
             sink.error("dialect", f"{what} is not TK syntax (SLEEC-TK rejects it)", span)
@@ -113,6 +124,15 @@ def check_strict(facts: DialectFacts, dialect: A.Dialect, sink: DiagnosticSink) 
     elif dialect is A.Dialect.LEGOS:
         for what, span in facts.tk:
             sink.error("dialect", f"{what} is not LEGOS syntax (LEGOS-SLEEC rejects it)", span)
+    if extensions and dialect in (A.Dialect.TK, A.Dialect.LEGOS):
+        tool = "SLEEC-TK" if dialect is A.Dialect.TK else "LEGOS-SLEEC"
+        for what, span in facts.extensions:
+            sink.error(
+                "dialect",
+                f"{what} is a cosleec extension, not {dialect.name} syntax ({tool} rejects it)",
+                span,
+                hint=f"leave out --dialect {dialect} to use cosleec's extensions",
+            )
 
 
 def _text_features(text: str) -> list[Feature]:

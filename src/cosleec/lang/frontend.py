@@ -112,7 +112,8 @@ def analyse(
         facts = collect(spec, text)
         detected, evidence = detect(facts)
         if dialect in ("tk", "legos"):
-            check_strict(facts, A.Dialect(dialect), sink)
+            # under --strict the checker reports cosleec's extensions itself: not twice
+            check_strict(facts, A.Dialect(dialect), sink, extensions=not opts.strict_extensions)
         elif evidence is not None:
             check_mixed(facts, evidence, sink)
         spec = replace(spec, dialect=detected)

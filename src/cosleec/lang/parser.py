@@ -124,15 +124,21 @@ def _parse(g: Grammar, text: str, sink: DiagnosticSink) -> Any:
 
 
 _ORDER: tuple[A.BlockKind, ...] = ("def", "rule", "concern", "purpose", "relation")
+"""The blocks of standard SLEEC, in the order a file has them."""
 
 
 def assemble(blocks: list[Block], path: str, sink: DiagnosticSink) -> A.Specification:
-    """Blocks -> Specification, checking that each block appears once and in order."""
+    """Blocks -> Specification, checking that each block appears once and in order.
+
+    The priority block (cosleec's extension, docs/reference/sleec-language.md §13.4) stands
+    outside the standard order: anywhere after the rule block, whose rules it names.
+    """
     seen: dict[str, A.Span] = {}
-    parts: dict[str, list[Any]] = {k: [] for k in _ORDER}
+    parts: dict[str, list[Any]] = {k: [] for k in (*_ORDER, "priority")}
     last_rank = -1
     marks = []
-    for b in blocks:
+    first_rule = next((i for i, b in enumerate(blocks) if b.kind == "rule"), len(blocks))
+    for i, b in enumerate(blocks):
         marks.append(A.BlockMark(b.kind, span=b.span))
         if b.kind in seen:
             sink.error(
@@ -143,6 +149,16 @@ def assemble(blocks: list[Block], path: str, sink: DiagnosticSink) -> A.Specific
             )
         else:
             seen[b.kind] = b.span
+        if b.kind == "priority":
+            if i < first_rule:
+                sink.error(
+                    "block-order",
+                    "the `priority_start` block is out of order; it names rules, so it comes after "
+                    "the rule block",
+                    b.span,
+                )
+            parts["priority"].extend(b.items)
+            continue
         rank = _ORDER.index(b.kind)
         if rank < last_rank:
             sink.error(
@@ -161,6 +177,7 @@ def assemble(blocks: list[Block], path: str, sink: DiagnosticSink) -> A.Specific
         concerns=tuple(parts["concern"]),
         purposes=tuple(parts["purpose"]),
         relations=tuple(parts["relation"]),
+        priorities=tuple(parts["priority"]),
         path=path,
         blocks=tuple(marks),
     )
@@ -222,7 +239,8 @@ def _special_message(
         )
     if value == "not" and values == {"a name"}:
         return ("negated-trigger", "a trigger is a single event and cannot be negated", None)
-    if value in g.rel_ops and not (values & g.rel_ops):
+    # where only a name may come (a priority block's `A > > B`), a `>` is no comparison
+    if value in g.rel_ops and not (values & g.rel_ops) and not values <= {"a name", "priority_end"}:
         return (
             "comparison-chain",
             f"a comparison cannot be chained (`a < b {value} c`)",

@@ -33,7 +33,8 @@ class Printer:
 
     # ------------------------------------------------------------------ whole file
     def specification(self) -> str:
-        """The whole file: def and rule blocks (always), then non-empty concern, purpose, relation blocks."""
+        """The whole file: def and rule blocks (always), then non-empty concern, purpose,
+        relation and priority blocks (the last one pair a line, chains written as pairs)."""
         spec = self.spec
         out = ["def_start"]
         for d in spec.definitions:
@@ -55,6 +56,10 @@ class Printer:
             out += ["    " + self.relation(r) for r in spec.relations]
             self.reserved = KEYWORDS
             out.append("relation_end")
+        if spec.priorities:
+            out += ["", "priority_start"]
+            out += [f"    {self.name(p.higher)} > {self.name(p.lower)}" for p in spec.priorities]
+            out.append("priority_end")
         return "\n".join(out) + "\n"
 
     def definition(self, d: A.Definition) -> str:

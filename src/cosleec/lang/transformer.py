@@ -12,6 +12,7 @@ plain Lark and the fast driver (lalr.py), and the cross-check test compares the 
 from __future__ import annotations
 
 from dataclasses import replace
+from itertools import pairwise
 from typing import Any
 
 from lark import Token, Transformer
@@ -89,6 +90,21 @@ class ToAst(Transformer[Token, Any]):
 
     def relation_block(self, c: list[Any]) -> Block:
         return Block("relation", tok_span(c[0]), c[1:])
+
+    def priority_block(self, c: list[Any]) -> Block:
+        """The block's chains (lists of name tokens) expanded into consecutive pairs."""
+        pairs = []
+        for chain in c[1] or ():
+            for hi, lo in pairwise(chain):
+                hs, ls = tok_span(hi), tok_span(lo)
+                pairs.append(
+                    A.Priority(ident(hi), ident(lo), span=join(hs, ls), higher_span=hs, lower_span=ls)
+                )
+        return Block("priority", tok_span(c[0]), pairs)
+
+    def chain_first(self, c: list[Any]) -> list[Any]:
+        """``A > B``: the first two name tokens of a chain (``list_more`` adds the others)."""
+        return [c[0], c[1]]
 
     # -- definitions
     def event_decl(self, c: list[Any]) -> A.EventDecl:

@@ -102,7 +102,6 @@ class Compiler:
             self._cache[src] = fn
         return fn, frozenset(reads), src
 
-
     def kleene(self, e: A.Expr | None) -> Callable[[Values], Any]:
         """The three-valued form of ``e``: True, False, a number, or None when unknown.
 

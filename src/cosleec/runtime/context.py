@@ -21,7 +21,9 @@ class Context:
     Not thread-safe: the Manager serialises access.
     """
 
-    def __init__(self, measures: Mapping[str, MeasureSpec], max_age: Mapping[str, float] | None = None) -> None:
+    def __init__(
+        self, measures: Mapping[str, MeasureSpec], max_age: Mapping[str, float] | None = None
+    ) -> None:
         self.measures = dict(measures)
         ages = dict(max_age or {})
         unknown = sorted(str(n) for n in set(ages) - set(self.measures))

@@ -100,7 +100,9 @@ class Decision:
             layer=d.get("layer"),
             semantics=HedgeSemantics(d.get("semantics", HedgeSemantics.LAST_WINS)),
             values=dict(d.get("values", {})),
-            conditions=tuple((int(c["clause"]), str(c["condition"]), c["value"]) for c in d.get("conditions", [])),
+            conditions=tuple(
+                (int(c["clause"]), str(c["condition"]), c["value"]) for c in d.get("conditions", [])
+            ),
             obligations=tuple(Obligation.from_json(o) for o in d.get("obligations", [])),
             missing=tuple(d.get("missing", ())),
             reason=str(d.get("reason", "")),
@@ -139,8 +141,10 @@ def _because(d: Decision) -> str:
         return f"{t} was {_fmt(v)}" + (f" ({shown})" if shown else "")
 
     because = "; ".join(reason(t, v) for c, t, v in hedges if c in chosen)
-    head = "default" if clause == 0 else f"clause {clause}" + (
-        f" (unless {hedges[clause - 1][1]})" if clause <= len(hedges) else ""
+    head = (
+        "default"
+        if clause == 0
+        else f"clause {clause}" + (f" (unless {hedges[clause - 1][1]})" if clause <= len(hedges) else "")
     )
     return f"{rule}: {what} [{head}], because {because}"
 

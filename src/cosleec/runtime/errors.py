@@ -30,4 +30,3 @@ class BindingError(UserError):
             "incomplete implementation:\n  - " + "\n  - ".join(missing),
             hint="implement each listed clause in its task (@hedge(i)) or register a capability for the event",
         )
-

@@ -228,7 +228,9 @@ class Implementations:
                 out.append(Ran("capability", ob.event))
             except Exception as e:
                 self.failures += 1
-                log.exception("capability %s failed on decision %s of %s", ob.event, decision.id, decision.rule)
+                log.exception(
+                    "capability %s failed on decision %s of %s", ob.event, decision.id, decision.rule
+                )
                 out.append(Ran("capability", ob.event, _describe(e)))
         runs = _RUNS.get()
         if runs is not None:
@@ -285,7 +287,9 @@ class Implementations:
         fallback = getattr(self.tasks.get(rule.name), "fallback", None)
         handled: set[str] = set()
         out = self._capabilities(decision, handled)
-        if fallback is not None and any(not o.negated and o.event not in handled for o in decision.obligations):
+        if fallback is not None and any(
+            not o.negated and o.event not in handled for o in decision.obligations
+        ):
 
             def run() -> None:
                 fallback(decision)
@@ -293,7 +297,9 @@ class Implementations:
             out += self._guarded("fallback", rule, decision, run)
         return out
 
-    def _guarded(self, what: str, rule: CompiledRule, decision: Decision, run: Callable[[], None]) -> list[Ran]:
+    def _guarded(
+        self, what: str, rule: CompiledRule, decision: Decision, run: Callable[[], None]
+    ) -> list[Ran]:
         """Run a task's code; a failure is logged and counted, never raised into the caller.
 
         Capabilities composed inside it report their own outcomes; a task method's outcome

@@ -88,7 +88,9 @@ class Journal:
             self._db = sqlite3.connect(self.path, check_same_thread=False, isolation_level=None, timeout=1.0)
         except (OSError, sqlite3.Error) as e:
             raise JournalError(
-                f"cannot open the journal: {e}", where=str(path), hint="give a writable path to a journal file"
+                f"cannot open the journal: {e}",
+                where=str(path),
+                hint="give a writable path to a journal file",
             ) from None
         try:
             # one Manager per journal: the first write takes a lock held until close
@@ -110,7 +112,9 @@ class Journal:
         except sqlite3.Error as e:
             self._db.close()
             raise JournalError(
-                f"this is not a cosleec journal: {e}", where=str(path), hint="give a new file for a new journal"
+                f"this is not a cosleec journal: {e}",
+                where=str(path),
+                hint="give a new file for a new journal",
             ) from None
 
     def load(self) -> Saved | None:
@@ -137,7 +141,10 @@ class Journal:
             counters={k: int(v) for k, v in meta.get("counters", {}).items()},
             clock=float(meta["clock"]),
             wall=float(meta["wall"]),
-            context={n: (json.loads(v), float(s)) for n, v, s in db.execute("SELECT name, value, stamp FROM context")},
+            context={
+                n: (json.loads(v), float(s))
+                for n, v, s in db.execute("SELECT name, value, stamp FROM context")
+            },
             obligations=[json.loads(r) for (r,) in db.execute("SELECT record FROM obligations ORDER BY id")],
             outbox=[json.loads(r) for (r,) in db.execute("SELECT record FROM outbox ORDER BY id")],
             audit=None if meta.get("audit") is None else int(meta["audit"]),
@@ -155,7 +162,11 @@ class Journal:
             db.execute("BEGIN IMMEDIATE")
             try:
                 for table, key, rows in (
-                    ("context", "name", [(n, json.dumps(cv[0]), cv[1]) for n, cv in change.context.items() if cv]),
+                    (
+                        "context",
+                        "name",
+                        [(n, json.dumps(cv[0]), cv[1]) for n, cv in change.context.items() if cv],
+                    ),
                     ("obligations", "id", [(k, _dumps(r)) for k, r in change.obligations.items() if r]),
                     ("outbox", "id", [(k, _dumps(r)) for k, r in change.outbox.items() if r]),
                 ):

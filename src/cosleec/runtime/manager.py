@@ -58,7 +58,7 @@ from typing import Any, TypeVar
 from cosleec.cop import Snapshot
 from cosleec.errors import CosleecError, clip, show
 from cosleec.lang import HedgeSemantics, Specification, Unknowns, candidates, choose
-from cosleec.lang.priorities import pairs as priority_pairs
+from cosleec.lang import pairs as priority_pairs
 from cosleec.runtime.audit import AuditLog
 from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
 from cosleec.runtime.context import Context
@@ -425,7 +425,9 @@ class Manager:
                 followups = self._advance(now, step)
                 changed = self.context.apply(stored, now)
                 if self.journal is not None:
-                    step.change.context.update((n, (x, now)) for n, x in self.context.external(stored).items())
+                    step.change.context.update(
+                        (n, (x, now)) for n, x in self.context.external(stored).items()
+                    )
                 switches = self.layer_manager.update(changed, self.context.values) if changed else []
                 if changed and self._recording:
                     self._emit(
@@ -471,7 +473,11 @@ class Manager:
             before = self.active_layers()
             self.layer_manager.set_semantics(chosen, self.context.values)
             if self._recording:
-                self._emit(step, "semantics", {"semantics": str(chosen), "before": before, "active": self.active_layers()})
+                self._emit(
+                    step,
+                    "semantics",
+                    {"semantics": str(chosen), "before": before, "active": self.active_layers()},
+                )
 
     # ------------------------------------------------------------------ events
     def event(self, name: str) -> list[Decision]:
@@ -607,7 +613,9 @@ class Manager:
         if self.audit is not None:
             wall = datetime.datetime.now(datetime.UTC).isoformat(timespec="microseconds")
             mono = time.monotonic()
-            head = f',"wall":"{wall}","mono":{mono!r},"run":"{self.run_id}","rules":"{self.ruleset.digest[:16]}"'
+            head = (
+                f',"wall":"{wall}","mono":{mono!r},"run":"{self.run_id}","rules":"{self.ruleset.digest[:16]}"'
+            )
             for ev in step.events:
                 data, t = ev.data, ev.time
                 if "time" in data:  # a decision's own time (a fallback's is its deadline) is the record's:
@@ -690,7 +698,9 @@ class Manager:
             return True
         if not isinstance(name, str):
             self.stats["rejected"] += 1
-            self._emit(step, "rejected", {"reason": f"an event is named by a string, not {type(name).__name__}"})
+            self._emit(
+                step, "rejected", {"reason": f"an event is named by a string, not {type(name).__name__}"}
+            )
             raise ContextError(f"an event is named by a string, not {type(name).__name__} {show(name)}")
         self.stats["rejected"] += 1
         close = difflib.get_close_matches(name, sorted(self.ruleset.events), n=3) if len(name) < 200 else []
@@ -874,7 +884,7 @@ class Manager:
                 "at": now,
                 "obligation": o.id,
                 "prohibition": p.id,
-                "rules": [o.rule, p.rule],
+                "between": [o.rule, p.rule],  # the obligation's rule, the prohibition's
                 "clauses": [o.clause, p.clause],
                 "resolution": CONFLICT_AWARE if aware else "prohibition-wins",
                 "winner": higher if aware else p.rule,
@@ -915,7 +925,15 @@ class Manager:
             live = [t for t in items if t.status == PENDING]
             if items and not live:  # refused, cancelled, closed at once, or met while it waited
                 self._held.pop(job.decision.id, None)
-                self._emit(step, "withheld", {"decision": job.decision.id, "rule": job.decision.rule, "reason": "nothing it required is still owed"})
+                self._emit(
+                    step,
+                    "withheld",
+                    {
+                        "decision": job.decision.id,
+                        "rule": job.decision.rule,
+                        "reason": "nothing it required is still owed",
+                    },
+                )
                 if self.journal is not None:
                     step.change.outbox[job.decision.id] = None
                 continue
@@ -932,7 +950,9 @@ class Manager:
                             "decision": job.decision.id,
                             "rule": job.decision.rule,
                             "events": sorted({t.event for t in blocked}),
-                            "by": sorted({p.rule for t in blocked for p in self.tracker.forbidding(t.event, now)}),
+                            "by": sorted(
+                                {p.rule for t in blocked for p in self.tracker.forbidding(t.event, now)}
+                            ),
                         },
                     )
                 continue
@@ -952,7 +972,9 @@ class Manager:
             return
         for job in jobs:
             if job.composition is not None:
-                call = functools.partial(self.implementations.dispatch, job.rule, job.decision, job.composition)
+                call = functools.partial(
+                    self.implementations.dispatch, job.rule, job.decision, job.composition
+                )
             else:
                 call = functools.partial(self.implementations.dispatch_fallback, job.rule, job.decision)
             self._run(job.rule, job.decision, call)
@@ -1150,7 +1172,9 @@ class Manager:
         with self._step() as step:
             for r in ran:
                 kind = "task-done" if r.ok else "task-failed"
-                self._emit(step, kind, {"rule": rule.name, "decision": d.id, "clause": d.clause, **r.to_json()})
+                self._emit(
+                    step, kind, {"rule": rule.name, "decision": d.id, "clause": d.clause, **r.to_json()}
+                )
             if self.journal is not None and self.dispatch_locally:
                 step.change.outbox[d.id] = None
 
@@ -1222,8 +1246,10 @@ class Manager:
                 self._emit(
                     step,
                     "audit-mismatch",
-                    {"reason": f"the audit log is {saved.audit - self.audit.size} bytes shorter than "
-                     "the journal committed: it was changed outside cosleec"},
+                    {
+                        "reason": f"the audit log is {saved.audit - self.audit.size} bytes shorter than "
+                        "the journal committed: it was changed outside cosleec"
+                    },
                 )
         kind = type(self.clock).__name__
         if saved.clock_kind and saved.clock_kind != kind:
@@ -1270,7 +1296,9 @@ class Manager:
             t = Tracked.from_json(rec)
             item = self._item_of(t)
             if item is None:
-                dropped.append(f"obligation {t.id} ({t.rule}: {t.obligation.describe()}): the rules no longer have it")
+                dropped.append(
+                    f"obligation {t.id} ({t.rule}: {t.obligation.describe()}): the rules no longer have it"
+                )
                 continue
             t.obligation = dataclasses.replace(t.obligation, otherwise=item.otherwise, item=item.key)
             d = hold if t.prohibition else shift
@@ -1293,7 +1321,11 @@ class Manager:
                 self.undelivered.append(rec["record"])  # the Manager node publishes it again
                 continue
             # decided, but perhaps never run: recorded, not run again (at most once)
-            self._emit(step, "task-interrupted", {**rec, "reason": "the Manager stopped before it was known to have run"})
+            self._emit(
+                step,
+                "task-interrupted",
+                {**rec, "reason": "the Manager stopped before it was known to have run"},
+            )
             step.change.outbox[int(rec["decision"])] = None
         if uncommitted:
             self._emit(

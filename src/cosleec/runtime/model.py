@@ -301,9 +301,13 @@ def compile_response(c: Compiler, r: A.Response, key: str, where: str = "") -> R
                 lo=lo,
                 hi=hi,
                 eventually=occ.eventually,
-                otherwise=compile_response(c, it.otherwise, f"{k}/o", where) if it.otherwise is not None else None,
+                otherwise=compile_response(c, it.otherwise, f"{k}/o", where)
+                if it.otherwise is not None
+                else None,
                 alternative=(
-                    compile_response(c, it.alternative, f"{k}/e", where) if it.alternative is not None else None
+                    compile_response(c, it.alternative, f"{k}/e", where)
+                    if it.alternative is not None
+                    else None
                 ),
             )
         )
@@ -329,7 +333,9 @@ def _clause(c: Compiler, d: A.Defeater, layer: str, index: int, where: str) -> C
 def _all_clauses(clauses: tuple[Clause, ...]) -> Callable[[Values], tuple[bool, ...]]:
     """One function that evaluates every clause condition of a rule in a single call."""
     body = ", ".join(f"bool({cl.source})" for cl in clauses)
-    fn: Callable[[Values], tuple[bool, ...]] = eval(compile(f"lambda v: ({body},)", "<sleec clauses>", "eval"))
+    fn: Callable[[Values], tuple[bool, ...]] = eval(
+        compile(f"lambda v: ({body},)", "<sleec clauses>", "eval")
+    )
     return fn
 
 

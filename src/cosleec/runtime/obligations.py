@@ -55,7 +55,9 @@ class Tracked:
     seq: int  # causal position: occurrences with a larger seq may count
     depth: int = 0  # 0: from a decision; n: the n-th otherwise down a chain
     instance: int = 0  # the decision that started the chain (a rule's activation, for priorities)
-    own_hi: float | None = None  # the end of the event's own window (``hi`` is the last of all, `else` included)
+    own_hi: float | None = (
+        None  # the end of the event's own window (``hi`` is the last of all, `else` included)
+    )
     branches: list[list[tuple[str, float, float | None]]] = field(default_factory=list)  # `else`, absolute
     met: list[list[int]] = field(default_factory=list)  # per branch: the items already seen
     status: str = PENDING
@@ -123,7 +125,10 @@ class Tracked:
             depth=int(d.get("depth", 0)),
             instance=int(d.get("instance", d["decision"])),
             own_hi=None if own is None else float(own),
-            branches=[[(str(e), float(a), None if b is None else float(b)) for e, a, b in br] for br in d.get("branches", ())],
+            branches=[
+                [(str(e), float(a), None if b is None else float(b)) for e, a, b in br]
+                for br in d.get("branches", ())
+            ],
             met=[[int(i) for i in m] for m in d.get("met", ())],
             status=str(d["status"]),
             outcome_at=None if at is None else float(at),
@@ -220,7 +225,9 @@ class Tracker:
         )
         t.own_hi = t.hi
         if ob.alternatives and not ob.negated:
-            t.branches = [[(e, now + a, None if b is None else now + b) for e, a, b in br] for br in ob.alternatives]
+            t.branches = [
+                [(e, now + a, None if b is None else now + b) for e, a, b in br] for br in ob.alternatives
+            ]
             t.met = [[] for _ in t.branches]
             ends = [t.hi, *(b for br in t.branches for _, _, b in br)]
             t.hi = None if any(e is None for e in ends) else max(e for e in ends if e is not None)
@@ -253,7 +260,9 @@ class Tracker:
 
     def of_event(self, event: str) -> list[Tracked]:
         """The obligations and prohibitions in force that name ``event``, oldest first."""
-        return sorted((t for t in self._by_event.get(event, {}).values() if t.event == event), key=lambda t: t.id)
+        return sorted(
+            (t for t in self._by_event.get(event, {}).values() if t.event == event), key=lambda t: t.id
+        )
 
     def _index(self, t: Tracked) -> None:
         self._active[t.id] = t
@@ -340,7 +349,9 @@ class Tracker:
         out = Outcome()
         heap = self._heap
         first = self.next_deadline()
-        while heap and heap[0][0] < now and heap[0][0] == first and (limit is None or len(out.changed) < limit):
+        while (
+            heap and heap[0][0] < now and heap[0][0] == first and (limit is None or len(out.changed) < limit)
+        ):
             hi, tid = heapq.heappop(heap)
             t = self._active.get(tid)
             if t is None or t.hi != hi:

@@ -10,7 +10,7 @@ action until it is allowed (``request(E)`` and the dispatch never disagree).
 A priority ``H > L`` (declared in the rules' ``priority`` block, or given to the Manager;
 closed transitively) resolves clashes between the two rules' *instances* (one firing and
 its ``otherwise`` chain, active while anything of it is in force), as SLEEC-TK's
-``priority`` branch defines (``sleec-language.md`` §13):
+``priority`` branch defines (``docs/reference/sleec-language.md`` §13):
 
 - ``cancel``: whenever an instance of H and one of L are active together, the L instance
   is cancelled at once, whichever came first;
@@ -32,7 +32,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from cosleec.errors import show
-from cosleec.lang.priorities import closure, cycle, parse_priority
+from cosleec.lang import closure, cycle, parse_priority
 from cosleec.runtime.errors import ConfigurationError
 from cosleec.runtime.obligations import PENDING, Tracked, Tracker
 
@@ -128,7 +128,11 @@ def forced(tracker: Tracker, priorities: Priorities) -> tuple[float, Tracked, st
         if o.prohibition or d is None or o.branches or o.status != PENDING:
             continue
         for p in tracker.of_event(o.event):
-            if not p.prohibition or p.instance == o.instance or not (p.lo <= d and (p.hi is None or d <= p.hi)):
+            if (
+                not p.prohibition
+                or p.instance == o.instance
+                or not (p.lo <= d and (p.hi is None or d <= p.hi))
+            ):
                 continue
             higher = priorities.between(o.rule, p.rule)
             if higher is None:

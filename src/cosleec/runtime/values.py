@@ -46,7 +46,9 @@ class MeasureSpec:
             except OverflowError:
                 finite = False
             if not finite:
-                raise ContextError(f"{self.name} must be a finite number of at most 1.8e308; got {show(value)}")
+                raise ContextError(
+                    f"{self.name} must be a finite number of at most 1.8e308; got {show(value)}"
+                )
             return value
         if isinstance(value, str):
             try:

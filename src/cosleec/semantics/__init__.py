@@ -8,7 +8,23 @@ Small and slow on purpose: written from the language reference, sharing no code 
 from __future__ import annotations
 
 from cosleec.semantics.reference import CANCEL, CONFLICT_AWARE, Options, judge
-from cosleec.semantics.trace import Step, Value
+from cosleec.semantics.trace import Step, TraceError, Value, check_trace, read, read_audit, read_trace
 from cosleec.semantics.verdicts import Conflict, Firing, Judgement, Verdict
 
-__all__ = ["CANCEL", "CONFLICT_AWARE", "Conflict", "Firing", "Judgement", "Options", "Step", "Value", "Verdict", "judge"]
+__all__ = [
+    "CANCEL",
+    "CONFLICT_AWARE",
+    "Conflict",
+    "Firing",
+    "Judgement",
+    "Options",
+    "Step",
+    "TraceError",
+    "Value",
+    "Verdict",
+    "check_trace",
+    "judge",
+    "read",
+    "read_audit",
+    "read_trace",
+]

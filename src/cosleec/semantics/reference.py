@@ -1,6 +1,6 @@
 """The reference semantics: a rule set's verdicts on a finite timed trace.
 
-Written straight from the language reference (``sleec-language.md`` §6, §7, §10, §13),
+Written straight from the language reference (``docs/reference/sleec-language.md`` §6, §7, §10, §13),
 sharing no code with :mod:`cosleec.runtime`, and slow on purpose: every step scans every
 obligation. It is the oracle the runtime is tested against and what ``cosleec conforms``
 runs. The conventions, each a decision of the reference:
@@ -69,8 +69,10 @@ Priorities (§13; ``H > L``, closed transitively)
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterable, Mapping, Sequence
+import operator
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 from cosleec.lang import HedgeSemantics, Specification
 from cosleec.lang import ast as A
@@ -182,10 +184,10 @@ class _Eval:
             assert isinstance(t, A.ScaleType)
             return t.literals.index(e.name)
         if isinstance(e, A.Not | A.BinOp) and (not isinstance(e, A.BinOp) or e.op in ("and", "or")):
-            x = self.truth(e, values)
-            if x is None:
+            truth = self.truth(e, values)
+            if truth is None:
                 raise _Unknown("")
-            return x
+            return truth
         if isinstance(e, A.BinOp):
             a, b = self.value(e.left, values), self.value(e.right, values)
             assert isinstance(a, int | float) and isinstance(b, int | float)
@@ -193,15 +195,15 @@ class _Eval:
         if isinstance(e, A.Compare):
             s = self._scale(e.left) or self._scale(e.right)
             a, b = self.value(e.left, values, s), self.value(e.right, values, s)
-            ops = {
-                "<": lambda: a < b,  # type: ignore[operator]
-                "<=": lambda: a <= b,  # type: ignore[operator]
-                ">": lambda: a > b,  # type: ignore[operator]
-                ">=": lambda: a >= b,  # type: ignore[operator]
-                "=": lambda: a == b,
-                "<>": lambda: a != b,
-            }
-            return ops[e.op]()
+            compare: Callable[[Any, Any], bool] = {
+                "<": operator.lt,
+                "<=": operator.le,
+                ">": operator.gt,
+                ">=": operator.ge,
+                "=": operator.eq,
+                "<>": operator.ne,
+            }[e.op]
+            return compare(a, b)
         raise AssertionError(f"cannot evaluate {e!r}")
 
     def _scale(self, e: A.Expr) -> str | None:
@@ -410,7 +412,9 @@ class _Judge:
         fired = self.eval.truth(rule.trigger.condition, self.values)
         if fired is None:
             missing = self.eval.reads(rule.trigger.condition) - self.values.keys()
-            self.out.firings.append(Firing(step, now, rule.name, rule.trigger.event, None, None, None, _sorted(missing)))
+            self.out.firings.append(
+                Firing(step, now, rule.name, rule.trigger.event, None, None, None, _sorted(missing))
+            )
             return
         if not fired:
             self.out.firings.append(Firing(step, now, rule.name, rule.trigger.event, False, None, None))
@@ -419,7 +423,9 @@ class _Judge:
         k = choose([self.eval.truth(d.condition, self.values) for d in top.defeaters], self.options.semantics)
         if k is None:
             missing = set().union(*(self.eval.reads(d.condition) for d in top.defeaters)) - self.values.keys()
-            self.out.firings.append(Firing(step, now, rule.name, rule.trigger.event, True, None, None, _sorted(missing)))
+            self.out.firings.append(
+                Firing(step, now, rule.name, rule.trigger.event, True, None, None, _sorted(missing))
+            )
             return
         if k == 0:
             response: A.Response | None = A.Response(top.items, ())
@@ -464,13 +470,14 @@ class _Judge:
             key = self.keys[id(response)]
         if response.defeaters:
             vals = [self.eval.truth(d.condition, self.values) for d in response.defeaters]
-            k = choose(vals, self.options.semantics)
-            if k is None:
+            chosen = choose(vals, self.options.semantics)
+            if chosen is None:
                 raise _Undetermined(
-                    set().union(*(self.eval.reads(d.condition) for d in response.defeaters)) - self.values.keys()
+                    set().union(*(self.eval.reads(d.condition) for d in response.defeaters))
+                    - self.values.keys()
                 )
-            if k:
-                return self.plan(response.defeaters[k - 1].response, f"{key}~{k}", now)
+            if chosen:
+                return self.plan(response.defeaters[chosen - 1].response, f"{key}~{chosen}", now)
         out = []
         for n, it in enumerate(response.items):
             k = f"{key}:{n}"
@@ -490,10 +497,15 @@ class _Judge:
             out.append((k, _Item(verdict, 0, it.otherwise, branches, [set() for _ in branches])))
         return out
 
-    def branch(self, response: A.Response, key: str, now: float) -> list[tuple[str, float, float | None]] | None:
+    def branch(
+        self, response: A.Response, key: str, now: float
+    ) -> list[tuple[str, float, float | None]] | None:
         """An ``else`` alternative's windows (its clauses chosen now); None when it can never fulfil."""
         if response.defeaters:
-            k = choose([self.eval.truth(d.condition, self.values) for d in response.defeaters], self.options.semantics)
+            k = choose(
+                [self.eval.truth(d.condition, self.values) for d in response.defeaters],
+                self.options.semantics,
+            )
             if k is None:
                 return None  # unknown: it cannot be counted on (fail closed)
             if k:
@@ -529,7 +541,14 @@ class _Judge:
         return now, None if self.options.untimed is None else now + self.options.untimed
 
     def add(
-        self, planned: list[tuple[str, _Item]], now: float, seq: int, instance: int, rule: str, clause: int, depth: int
+        self,
+        planned: list[tuple[str, _Item]],
+        now: float,
+        seq: int,
+        instance: int,
+        rule: str,
+        clause: int,
+        depth: int,
     ) -> None:
         """Put a response's items in force, then apply priorities and conflicts."""
         fresh = []
@@ -589,14 +608,20 @@ class _Judge:
         if not (plo <= lo and (phi is None or (ohi is not None and ohi <= phi))):
             return  # some instant of the obligation's window is allowed: the robot can wait
         pair = (o.v.rule, p.v.rule)
-        if self.options.priority_semantics == CONFLICT_AWARE and (pair in self.above or pair[::-1] in self.above):
+        if self.options.priority_semantics == CONFLICT_AWARE and (
+            pair in self.above or pair[::-1] in self.above
+        ):
             winner = o.v.rule if pair in self.above else p.v.rule
             self.out.conflicts.append(
-                Conflict(now, o.v.event, o.v.id, p.v.id, pair, (o.v.clause, p.v.clause), CONFLICT_AWARE, winner)
+                Conflict(
+                    now, o.v.event, o.v.id, p.v.id, pair, (o.v.clause, p.v.clause), CONFLICT_AWARE, winner
+                )
             )
             return
         self.out.conflicts.append(
-            Conflict(now, o.v.event, o.v.id, p.v.id, pair, (o.v.clause, p.v.clause), "prohibition-wins", p.v.rule)
+            Conflict(
+                now, o.v.event, o.v.id, p.v.id, pair, (o.v.clause, p.v.clause), "prohibition-wins", p.v.rule
+            )
         )
         o.v.status, o.v.at, o.v.by = REFUSED, now, p.v.rule
         o.v.note = f"{p.v.rule} forbids {p.v.event} for the whole window"

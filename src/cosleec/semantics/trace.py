@@ -71,15 +71,14 @@ def read(path: str | Path) -> list[Step]:
     recognised by its first record, which has ``seq`` and ``kind``; anything else is read
     as a written trace, and its errors are a trace's errors.
     """
-    lines = _lines(path)
-    first = next((text for _, text in lines if text.strip()), "")
+    first = _first_line(path)
     try:
         record = json.loads(first)
     except (ValueError, RecursionError):  # a torn first (and only) record still starts like one
         is_audit = first.lstrip().startswith('{"seq":')
     else:
         is_audit = isinstance(record, dict) and "seq" in record and "kind" in record
-    return list(_audit_steps(path, lines) if is_audit else _trace_steps(path, lines))
+    return read_audit(path) if is_audit else read_trace(path)
 
 
 def read_trace(path: str | Path) -> list[Step]:
@@ -159,6 +158,19 @@ def _lines(path: str | Path) -> list[tuple[int, str]]:
     # JSON Lines separates records by "\n" only: str.splitlines would also split inside a line
     # at \x1c, \u2028 and friends, and the line numbers in messages would drift
     return [(n, raw.removesuffix("\r")) for n, raw in enumerate(text.split("\n"), 1)]
+
+
+def _first_line(path: str | Path) -> str:
+    """The first non-blank line, read alone ("" when there is none or the file cannot be
+    read: the reader then reports what is wrong, with its line)."""
+    try:
+        with Path(path).open("rb") as fh:
+            for raw in fh:
+                if raw.strip():
+                    return raw.decode("utf-8-sig", "replace")
+    except OSError:
+        pass
+    return ""
 
 
 def _parse(path: str | Path, n: int, text: str, hint: str, *, unique: bool = True) -> object:

@@ -119,12 +119,17 @@ def specifications(draw: st.DrawFn) -> A.Specification:
         A.Situation(f"p{i}", s.kind, s.trigger, s.responses)
         for i, s in enumerate(draw(st.lists(situation, max_size=2)))
     ]
+    # priorities among the drawn rules: repeats, self-pairs and cycles too (the checker's
+    # business, not the printer's or the parser's)
+    names = st.sampled_from([r.name for r in rules])
+    priorities = draw(st.lists(st.builds(A.Priority, names, names), max_size=4))
     return A.Specification(
         DEFINITIONS,
         tuple(rules),
         tuple(concerns),
         tuple(purposes),
         tuple(draw(st.lists(relation, max_size=3))),
+        tuple(priorities),
     )
 
 

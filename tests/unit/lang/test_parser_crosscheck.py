@@ -125,3 +125,27 @@ def test_printed_specifications(spec: A.Specification, seed: int) -> None:
         for _ in range(2):  # cheap next to drawing the specification
             crosscheck(SLEEC, mutate(rng, text))
             crosscheck(SLEEC, mutate_words(rng, text))
+
+
+PRIORITY_HEAD = "def_start event E def_end rule_start R1 when E then E R2 when E then E rule_end\n"
+
+
+@pytest.mark.parametrize(
+    "block",
+    [
+        "priority_start priority_end",
+        "priority_start R1 > R2 priority_end",
+        "priority_start\n  R1 > R2 > R1\n  R2 > R1 R1 > R2\npriority_end",
+        "priority_start ^when > witness until > R1 priority_end",  # escapes, relation words as names
+        "priority_start R1 > > R2 priority_end",
+        "priority_start > R1 priority_end",
+        "priority_start R1 priority_end",
+        "priority_start R1 < R2 priority_end",
+        "priority_start R1 > R2",
+        "priority_start R1 > R2 priority_end priority_start R2 > R1 priority_end",
+        "relation_start witness E E relation_end priority_start witness > R1 priority_end",
+    ],
+)
+def test_priority_blocks(block: str) -> None:
+    """cosleec's priority block (sleec-language.md §13.4), well-formed and not, read both ways."""
+    crosscheck(SLEEC, PRIORITY_HEAD + block)

@@ -44,7 +44,9 @@ seconds = st.integers(0, 6)
 deadlines = st.one_of(
     seconds.map(lambda x: f"within {x} seconds"),
     st.sampled_from(["within ({n} * 2) seconds", "within (3 - {n}) seconds"]),
-    st.tuples(st.integers(0, 3), st.integers(0, 3)).map(lambda p: f"within [{p[0]} seconds, {p[0] + p[1]} seconds]"),
+    st.tuples(st.integers(0, 3), st.integers(0, 3)).map(
+        lambda p: f"within [{p[0]} seconds, {p[0] + p[1]} seconds]"
+    ),
     st.just("within [1 seconds, ({n} * 1) seconds]"),
     st.just("eventually"),
     st.just(""),  # untimed
@@ -166,7 +168,8 @@ def reference(case: Case) -> dict[str, Any]:
     )
     return {
         "verdicts": [
-            (v.id, v.rule, v.key, v.start, v.window, v.status, v.at) for v in sorted(j.verdicts, key=lambda v: v.id)
+            (v.id, v.rule, v.key, v.start, v.window, v.status, v.at)
+            for v in sorted(j.verdicts, key=lambda v: v.id)
         ],
         "conflicts": [(c.time, c.obligation, c.prohibition, c.resolution) for c in j.conflicts],
         "choices": [(f.rule, f.clause) for f in j.firings if f.fired],
