@@ -39,6 +39,8 @@ def run(args: argparse.Namespace) -> int:
     """
     rules = RuleSet.from_file(args.rules, infer_defs=args.infer_defs)  # SleecError: the CLI shows it, exit 1
     m = Manager(rules, semantics=args.semantics, clock=VirtualClock(), dispatch=False)
+    conflicts: list[dict[str, object]] = []
+    m.subscribe(lambda ev: conflicts.append(ev.data) if ev.kind == "conflict" else None)
     values = {}
     for item in args.values:
         name, sep, text = item.partition("=")
@@ -82,6 +84,7 @@ def run(args: argparse.Namespace) -> int:
                 }
                 for d in decisions
             ],
+            "conflicts": conflicts,
         }
         print(json.dumps(doc, indent=2))
     else:
@@ -89,4 +92,6 @@ def run(args: argparse.Namespace) -> int:
             print(f"{args.event}: no rule applies")
         for d in decisions:
             print(d.explanation)
+        for c in conflicts:
+            print(f"conflict: {c['explanation']}")
     return 0

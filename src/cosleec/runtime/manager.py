@@ -69,7 +69,15 @@ from cosleec.runtime.journal import Change, Journal, JournalError, Saved
 from cosleec.runtime.layers import LayerManager, LayerSwitch, evaluate
 from cosleec.runtime.model import MAX_WINDOW_S, CompiledRule, ItemSpec, Obligation, ResponseSpec
 from cosleec.runtime.obligations import CANCELLED, PENDING, REFUSED, Outcome, Tracked, Tracker
-from cosleec.runtime.priorities import CANCEL, CONFLICT_AWARE, Priorities, covers, forced
+from cosleec.runtime.priorities import (
+    CANCEL,
+    CONFLICT_AWARE,
+    PossibleConflict,
+    Priorities,
+    covers,
+    forced,
+    possible_conflicts,
+)
 from cosleec.runtime.ruleset import RuleSet
 from cosleec.runtime.tasks import Task
 
@@ -262,6 +270,8 @@ class Manager:
             priority_lead,
         )
         self._held: dict[int, _Job] = {}  # decisions whose action is forbidden for now, by id
+        # item pairs that oblige and forbid one event with no priority between them (start() warns)
+        self.possible_conflicts: list[PossibleConflict] = []
         self.decisions: deque[Decision] = deque(maxlen=history)
         self.stats = {
             "updates": 0,
@@ -361,6 +371,9 @@ class Manager:
         """Check that every clause has an implementation; judge what happened while down; optionally
         run deadlines on a thread.
 
+        Logs a warning when the rules can conflict (an item obliges an event another forbids,
+        with no priority between their rules; :attr:`possible_conflicts` lists them).
+
         The check raises BindingError listing what is missing; it is skipped with
         ``check=False`` or when the Manager does not dispatch. With a journal, deadlines
         that passed while the Manager was down are judged now (their ``otherwise`` runs
@@ -368,6 +381,16 @@ class Manager:
         passes; without it, call :meth:`tick` yourself (as tests with a VirtualClock do).
         Returns ``self``.
         """
+        self.possible_conflicts = possible_conflicts(self.ruleset, self.priorities)
+        if self.possible_conflicts:
+            shown = "; ".join(c.describe() for c in self.possible_conflicts[:5])
+            more = len(self.possible_conflicts) - 5
+            log.warning(
+                "the rules can conflict (%s%s): the prohibition will win unless a priority is declared "
+                "(a priority_start block, or Manager(priorities=[...]))",
+                shown,
+                f"; and {more} more" if more > 0 else "",
+            )
         if check and self.dispatch_locally:
             self.implementations.check()
         if self.dispatch_locally:

@@ -35,6 +35,7 @@ from cosleec.errors import show
 from cosleec.lang import closure, cycle, parse_priority
 from cosleec.runtime.errors import ConfigurationError
 from cosleec.runtime.obligations import PENDING, Tracked, Tracker
+from cosleec.runtime.ruleset import RuleSet
 
 CANCEL = "cancel"
 CONFLICT_AWARE = "conflict-aware"
@@ -142,3 +143,38 @@ def forced(tracker: Tracker, priorities: Priorities) -> tuple[float, Tracked, st
             if best is None or (at, victim.id) < best[:2]:
                 best = (at, victim.id, victim, higher)
     return None if best is None else (best[0], best[2], best[3])
+
+
+@dataclass(frozen=True)
+class PossibleConflict:
+    """A response item of one rule that obliges ``event`` and one that forbids it: if both
+    are ever in force together the Manager must resolve a conflict (a quick pairwise check;
+    ``cosleec analyse`` decides whether it can really happen)."""
+
+    event: str
+    obliges: str  # the item's key, e.g. R1:0 or R2.1:0/o:0
+    forbids: str
+    rules: tuple[str, str]
+
+    def describe(self) -> str:
+        """``R1:0 obliges OpenCurtains, R2:0 forbids it``."""
+        return f"{self.obliges} obliges {self.event}, {self.forbids} forbids it"
+
+
+def possible_conflicts(ruleset: RuleSet, priorities: Priorities) -> list[PossibleConflict]:
+    """Every pair of response items that oblige and forbid the same event, across rules that
+    no declared priority orders (within one rule, across its clauses and fallbacks)."""
+    items: dict[str, list[tuple[str, str, bool]]] = {}
+    for rule in ruleset.rules:
+        for spec in rule.responses():
+            for it in spec.walk():
+                items.setdefault(it.event, []).append((rule.name, it.key, it.negated))
+    out = []
+    for event, found in items.items():
+        for r1, k1, neg1 in found:
+            if neg1:
+                continue
+            for r2, k2, neg2 in found:
+                if neg2 and priorities.between(r1, r2) is None:
+                    out.append(PossibleConflict(event, k1, k2, (r1, r2)))
+    return out

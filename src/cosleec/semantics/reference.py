@@ -515,7 +515,7 @@ class _Judge:
         for it in response.items:
             if it.occurrence.negated:
                 return None
-            lo, hi = self.window(it.occurrence, False, now)
+            lo, hi = self.window(it.occurrence, it.otherwise is not None, now)
             out.append((it.occurrence.event, lo, hi))
         return out or None
 

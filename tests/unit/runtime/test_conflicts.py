@@ -1,0 +1,182 @@
+"""Conflicts at runtime: E owed and forbidden at once. The Manager records the conflict,
+resolves it by priority or lets the prohibition win, and never dispatches what ``request``
+refuses."""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+import pytest
+
+from cosleec.runtime import Manager, VirtualClock
+
+CURTAINS = """def_start
+  event CurtainOpenRequest
+  event OpenCurtains
+  event ApologiseToUser
+  measure night: boolean
+def_end
+rule_start
+R1 when CurtainOpenRequest then OpenCurtains within 1 minutes otherwise ApologiseToUser
+R2 when CurtainOpenRequest and night then not OpenCurtains within {window}
+rule_end
+"""
+
+
+def build(window: str = "10 minutes", **options: Any) -> tuple[Manager, VirtualClock, list[Any], list[float]]:
+    """The curtain rules with a capability that opens the curtains (and reports it)."""
+    clock = VirtualClock(0.0)
+    m = Manager.from_text(CURTAINS.format(window=window), clock=clock, **options)
+    records: list[Any] = []
+    opened: list[float] = []
+    m.subscribe(records.append)
+
+    @m.capability("OpenCurtains")
+    def open_curtains(ob: Any, d: Any) -> None:
+        opened.append(clock.now())
+        m.event("OpenCurtains")
+
+    @m.capability("ApologiseToUser")
+    def apologise(ob: Any, d: Any) -> None:
+        m.event("ApologiseToUser")
+
+    m.start()
+    return m, clock, records, opened
+
+
+def kinds(records: list[Any], kind: str) -> list[dict[str, Any]]:
+    return [r.data for r in records if r.kind == kind]
+
+
+def final(records: list[Any]) -> dict[str, tuple[str, Any]]:
+    """Each obligation's last state, by its item key."""
+    out: dict[str, tuple[str, Any]] = {}
+    for d in kinds(records, "obligation"):
+        out[d["obligation"]["item"]] = (d["status"], d["at"])
+    return out
+
+
+def test_the_curtain_conflict_is_recorded_and_the_prohibition_wins() -> None:
+    m, _clock, records, opened = build()
+    m.update(night=True)
+    m.event("CurtainOpenRequest")
+    (c,) = kinds(records, "conflict")
+    assert c["between"] == ["R1", "R2"] and c["clauses"] == [0, 0] and c["event"] == "OpenCurtains"
+    assert c["resolution"] == "prohibition-wins" and c["winner"] == "R2"
+    assert "R2 forbids OpenCurtains" in c["explanation"]
+    assert opened == []  # the action is not dispatched ...
+    assert m.request("OpenCurtains") is False  # ... and request agrees
+    states = final(records)
+    assert states["R1:0"] == ("refused", 0.0)  # violated by conflict, at once
+    assert states["R1:0/o:0"] == ("fulfilled", 0.0)  # its otherwise ran: the robot apologised
+    assert m.stats["conflicts"] == 1
+    m.close()
+
+
+def test_by_day_there_is_no_conflict_and_the_curtains_open() -> None:
+    m, _clock, records, opened = build()
+    m.update(night=False)
+    m.event("CurtainOpenRequest")
+    assert kinds(records, "conflict") == [] and opened == [0.0]
+    assert final(records)["R1:0"] == ("fulfilled", 0.0)
+    m.close()
+
+
+def test_an_action_forbidden_for_part_of_its_window_waits_until_it_is_allowed() -> None:
+    m, clock, records, opened = build("30 seconds")
+    m.update(night=True)
+    m.event("CurtainOpenRequest")
+    assert kinds(records, "conflict") == [] and opened == []
+    assert kinds(records, "held")[0]["by"] == ["R2"]
+    clock.set(30.0)
+    m.tick()
+    assert opened == [] and m.request("OpenCurtains") is False  # [t, t+30] is closed at both ends
+    clock.set(30.5)
+    m.tick()
+    assert opened == [30.5]  # released as soon as the prohibition is over
+    assert kinds(records, "dispatch")[0]["decision"]["rule"] == "R1"
+    assert final(records)["R1:0"] == ("fulfilled", 30.5)
+    assert final(records)["R2:0"] == ("respected", 30.0)
+    m.close()
+
+
+def test_cancellation_based_priority_cancels_the_lower_rule_at_once() -> None:
+    m, _clock, records, opened = build(priorities=["R1 > R2"])
+    m.update(night=True)
+    m.event("CurtainOpenRequest")
+    assert opened == [0.0] and m.request("OpenCurtains") is True
+    (c,) = kinds(records, "cancelled")
+    assert c["rule"] == "R2" and c["by"] == "R1" and c["priority"] == "cancel"
+    assert final(records)["R2:0"] == ("cancelled", 0.0)
+    assert kinds(records, "conflict") == []
+    m.close()
+
+
+def test_conflict_aware_priority_keeps_the_lower_rule_until_the_higher_one_needs_the_action() -> None:
+    m, clock, records, opened = build(priorities=["R1 > R2"], priority_semantics="conflict-aware")
+    m.update(night=True)
+    m.event("CurtainOpenRequest")
+    (c,) = kinds(records, "conflict")
+    assert c["resolution"] == "conflict-aware" and c["winner"] == "R1"
+    assert opened == [] and m.request("OpenCurtains") is False
+    clock.set(59.0)
+    m.tick()
+    assert opened == []
+    clock.set(60.0)  # R1's deadline: R2 is cancelled, the curtains open, R1 is met in time
+    m.tick()
+    assert opened == [60.0]
+    assert final(records)["R2:0"] == ("cancelled", 60.0)
+    assert final(records)["R1:0"] == ("fulfilled", 60.0)
+    m.close()
+
+
+def test_a_lead_gives_the_robot_time_before_the_deadline() -> None:
+    m, clock, _records, opened = build(
+        priorities=["R1 > R2"], priority_semantics="conflict-aware", priority_lead=5.0
+    )
+    m.update(night=True)
+    m.event("CurtainOpenRequest")
+    clock.set(55.0)
+    m.tick()
+    assert opened == [55.0]
+    m.close()
+
+
+def test_the_higher_prohibition_cancels_the_lower_obligation() -> None:
+    m, clock, records, opened = build(priorities=["R2 > R1"])
+    m.update(night=True)
+    m.event("CurtainOpenRequest")
+    clock.set(120.0)
+    m.tick()
+    assert opened == [] and final(records)["R1:0"] == ("cancelled", 0.0)
+    assert m.stats["violations"] == 0  # a cancelled obligation is not violated, its otherwise never runs
+    m.close()
+
+
+def test_start_warns_about_rules_that_can_conflict_unless_a_priority_settles_them(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    with caplog.at_level(logging.WARNING, logger="cosleec.runtime"):
+        m, *_ = build()
+    assert "R1:0 obliges OpenCurtains, R2:0 forbids it" in caplog.text
+    assert [c.rules for c in m.possible_conflicts] == [("R1", "R2")]
+    m.close()
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="cosleec.runtime"):
+        m, *_ = build(priorities=["R2 > R1"])
+    assert "conflict" not in caplog.text and m.possible_conflicts == []
+    m.close()
+
+
+@pytest.mark.parametrize(
+    ("priorities", "message"),
+    [
+        (["R1 > R3"], "no rule 'R3'"),
+        (["R1 > R1"], "above itself"),
+        (["R1 > R2", "R2 > R1"], "cycle"),
+    ],
+)
+def test_bad_priorities_are_configuration_errors(priorities: list[str], message: str) -> None:
+    with pytest.raises(Exception, match=message):
+        build(priorities=priorities)
