@@ -1,0 +1,45 @@
+"""The README's `cosleec conforms` and `cosleec decide` sessions are real: each command is
+run and its output compared with what the README shows."""
+
+from __future__ import annotations
+
+import re
+import shlex
+from pathlib import Path
+
+import pytest
+
+from cosleec.cli.main import main
+
+ROOT = Path(__file__).resolve().parents[2]
+SESSION = re.compile(r"```console\n(.*?)```", re.S)
+
+
+def sessions() -> list[tuple[list[str], str]]:
+    """(arguments, expected output) of each README command whose output is shown in full."""
+    out = []
+    for block in SESSION.findall((ROOT / "README.md").read_text(encoding="utf-8")):
+        lines = block.splitlines()
+        for i, line in enumerate(lines):
+            if not line.startswith("$ cosleec conforms") or "&&" in line:
+                continue
+            shown = []
+            for later in lines[i + 1 :]:
+                if later.startswith("$ "):
+                    break
+                shown.append(later)
+            out.append((shlex.split(line[2:])[1:], "\n".join(shown)))
+    return out
+
+
+@pytest.mark.parametrize(("argv", "shown"), sessions(), ids=lambda x: " ".join(x) if isinstance(x, list) else "")
+def test_the_readme_shows_what_the_command_prints(
+    argv: list[str], shown: str, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(ROOT)
+    main(argv)
+    assert capsys.readouterr().out.strip() == shown.strip()
+
+
+def test_there_are_readme_sessions_to_check() -> None:
+    assert len(sessions()) >= 2
