@@ -32,8 +32,9 @@ BARRIERS = ("context", "layers")
 #: a violation anyway
 EMBEDDED_ONLY = ("task-done", "task-failed")
 #: fields of a record of another kind that are not compared: the Manager's numbering of
-#: its inputs (the order in which reports arrived) and the process it ran in
-VOLATILE = ("seq", "causal", "session")
+#: its inputs (the order in which reports arrived), the process it ran in, and the audit
+#: log's header (wall and monotonic time, run id, rule digest)
+VOLATILE = ("seq", "causal", "session", "wall", "mono", "run", "rules")
 
 
 @dataclass(frozen=True)

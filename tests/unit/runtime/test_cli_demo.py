@@ -65,6 +65,7 @@ def test_decide_json_shape(capsys: pytest.CaptureFixture[str]) -> None:
                 ],
             }
         ],
+        "conflicts": [],
     }
 
 

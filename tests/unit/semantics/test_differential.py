@@ -1,6 +1,6 @@
 """The runtime reaches exactly the reference verdicts (see differential.py).
 
-``COSLEEC_DIFF`` sets the number of cases (default 1500 in CI; 100000 for a long run).
+``COSLEEC_DIFF`` sets the number of cases (default 2000 in CI; 100000 for a long run).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from hypothesis import HealthCheck, given, settings
 
 from tests.unit.semantics.differential import Case, cases, reference, runtime
 
-CASES = int(os.environ.get("COSLEEC_DIFF", "1500"))
+CASES = int(os.environ.get("COSLEEC_DIFF", "2000"))
 
 
 @settings(max_examples=CASES, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=False)
