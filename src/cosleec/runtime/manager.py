@@ -948,6 +948,8 @@ class Manager:
             live = [t for t in items if t.status == PENDING]
             if items and not live:  # refused, cancelled, closed at once, or met while it waited
                 self._held.pop(job.decision.id, None)
+                if job.record is not None and not was_held:
+                    job.record["dispatch"] = "withheld"  # a Manager node does not hand it on either
                 self._emit(
                     step,
                     "withheld",

@@ -29,7 +29,9 @@ class Seen:
     """What both semantics agreed on: every item's verdict and every conflict."""
 
     items: list[Item]
-    conflicts: list[tuple[float, tuple[str, str], str]]  # (time, (obligation's rule, prohibition's rule), resolution)
+    conflicts: list[
+        tuple[float, tuple[str, str], str]
+    ]  # (time, (obligation's rule, prohibition's rule), resolution)
 
     def of(self, key: str) -> list[tuple[float, str, float | None]]:
         """(start, status, at) of every item with this key, in creation order."""
@@ -203,7 +205,9 @@ def test_a_prohibition_interval_refuses_requests_only_inside_it() -> None:
 
 
 @pytest.mark.parametrize("early", [1, 1.5, 1.99])
-def test_an_occurrence_before_a_prohibition_interval_opens_neither_violates_nor_respects(early: float) -> None:
+def test_an_occurrence_before_a_prohibition_interval_opens_neither_violates_nor_respects(
+    early: float,
+) -> None:
     """§6.4: `not E within [a, b]` forbids E in [t+a, t+b] only.
     Mutants: prohibition-ignores-start-occur, prohibition-violated-before-start."""
     seen = both(INTERVAL_NOT, [ev(0, "T0"), ev(early, "A"), tick(9)])
@@ -211,7 +215,9 @@ def test_an_occurrence_before_a_prohibition_interval_opens_neither_violates_nor_
 
 
 def test_an_occurrence_exactly_at_a_prohibition_interval_start_violates_it() -> None:
-    assert both(INTERVAL_NOT, [ev(0, "T0"), ev(1, "A"), ev(2, "A"), tick(9)]).of("R1:0") == [(0, "violated", 2)]
+    assert both(INTERVAL_NOT, [ev(0, "T0"), ev(1, "A"), ev(2, "A"), tick(9)]).of("R1:0") == [
+        (0, "violated", 2)
+    ]
     assert both(INTERVAL_NOT, [ev(0, "T0"), ev(5, "A")]).of("R1:0") == [(0, "violated", 5)]
 
 
@@ -325,7 +331,9 @@ def test_an_unknown_deadline_keeps_a_prohibition_in_force_and_makes_an_obligatio
 
 
 # ---------------------------------------------------------------- braced inner responses (§6.7)
-INNER = "R1 when T0 then A within 2 seconds otherwise {B within 3 seconds unless {b} then not B within 3 seconds}"
+INNER = (
+    "R1 when T0 then A within 2 seconds otherwise {B within 3 seconds unless {b} then not B within 3 seconds}"
+)
 
 
 def test_an_unless_inside_a_braced_otherwise_is_read_when_the_otherwise_starts() -> None:
@@ -370,7 +378,11 @@ def test_an_otherwise_started_at_a_deadline_is_in_force_before_a_later_deadline_
     Mutant: deadlines-judged-together."""
     rules = "R1 when T0 then A within 2 seconds otherwise not B within 5 seconds\nR2 when T0 then B within 4 seconds"
     seen = both(rules, [ev(0, "T0"), tick(5)])
-    assert seen.items == [("R1:0", 0, "violated", 2), ("R2:0", 0, "refused", 2), ("R1:0/o:0", 2, "pending", None)]
+    assert seen.items == [
+        ("R1:0", 0, "violated", 2),
+        ("R2:0", 0, "refused", 2),
+        ("R1:0/o:0", 2, "pending", None),
+    ]
     assert seen.conflicts == [(2, ("R2", "R1"), "prohibition-wins")]
 
 
@@ -440,7 +452,9 @@ def test_windows_that_coincide_exactly_conflict() -> None:
     rules = "R1 when T0 then A within 5 seconds\nR2 when T0 then not A within 5 seconds"
     seen = both(rules, [ev(0, "T0"), tick(9)])
     assert seen.items == [("R1:0", 0, "refused", 0), ("R2:0", 0, "respected", 5)]
-    rules = "R1 when T0 then A within [2 seconds, 5 seconds]\nR2 when T0 then not A within [2 seconds, 5 seconds]"
+    rules = (
+        "R1 when T0 then A within [2 seconds, 5 seconds]\nR2 when T0 then not A within [2 seconds, 5 seconds]"
+    )
     seen = both(rules, [ev(0, "T0"), tick(9)])
     assert seen.items == [("R1:0", 0, "refused", 0), ("R2:0", 0, "respected", 5)]
     rules = "R1 when T0 then A within 6 seconds\nR2 when T0 then not A within 5 seconds"
@@ -450,7 +464,9 @@ def test_windows_that_coincide_exactly_conflict() -> None:
 
 def test_an_obligation_with_an_else_is_never_refused() -> None:
     """Mutant: conflict-despite-else."""
-    rules = "R1 when T0 then A within 5 seconds else B within 5 seconds\nR2 when T0 then not A within 10 seconds"
+    rules = (
+        "R1 when T0 then A within 5 seconds else B within 5 seconds\nR2 when T0 then not A within 10 seconds"
+    )
     seen = both(rules, [ev(0, "T0"), ev(3, "B"), tick(20)])
     assert seen.items == [("R1:0", 0, "fulfilled", 3), ("R2:0", 0, "respected", 10)] and not seen.conflicts
 
@@ -459,7 +475,11 @@ def test_a_refused_obligation_starts_its_otherwise_at_the_conflict() -> None:
     """Mutant: refused-without-otherwise."""
     rules = "R1 when T0 then A within 5 seconds otherwise B within 2 seconds\nR2 when T1 then not A within 10 seconds"
     seen = both(rules, [ev(0, "T0"), ev(1, "T1"), ev(3, "B")])
-    assert seen.items == [("R1:0", 0, "refused", 1), ("R2:0", 1, "pending", None), ("R1:0/o:0", 1, "fulfilled", 3)]
+    assert seen.items == [
+        ("R1:0", 0, "refused", 1),
+        ("R2:0", 1, "pending", None),
+        ("R1:0/o:0", 1, "fulfilled", 3),
+    ]
 
 
 def test_a_held_action_is_dispatched_once_the_prohibition_ends() -> None:
@@ -539,20 +559,29 @@ def test_the_earliest_conflict_aware_cancellation_is_applied_first() -> None:
         "R2 when T0 then not A within 10 seconds and B within 5 seconds\n"
         "R3 when T0 then not B within 10 seconds"
     )
-    seen = both(rules, [ev(0, "T0"), tick(6)], priorities=[("R1", "R2"), ("R3", "R2")], priority_semantics="conflict-aware")
+    seen = both(
+        rules,
+        [ev(0, "T0"), tick(6)],
+        priorities=[("R1", "R2"), ("R3", "R2")],
+        priority_semantics="conflict-aware",
+    )
     assert seen.of("R2:0") == [(0, "cancelled", 3)] and seen.of("R2:1") == [(0, "cancelled", 3)]
     m, clock, records = manager(rules, priorities=["R1 > R2", "R3 > R2"], priority_semantics="conflict-aware")
     m.event("T0")
     clock.set(6)
     m.tick()
-    assert [(r.data["rule"], r.data["by"], r.data["at"]) for r in records if r.kind == "cancelled"] == [("R2", "R1", 3)]
+    assert [(r.data["rule"], r.data["by"], r.data["at"]) for r in records if r.kind == "cancelled"] == [
+        ("R2", "R1", 3)
+    ]
 
 
 def test_a_priority_lead_cancels_the_lower_rule_that_much_earlier() -> None:
     """Mutant: forced-ignores-lead."""
     seen = both(CA_RULES, [ev(0, "T0"), ev(4, "A")], lead=1.0, **CA)
     assert seen.items == [("R1:0", 0, "fulfilled", 4), ("R2:0", 0, "cancelled", 4)]
-    m, clock, _ = manager(CA_RULES, priorities=["R1 > R2"], priority_semantics="conflict-aware", priority_lead=1.0)
+    m, clock, _ = manager(
+        CA_RULES, priorities=["R1 > R2"], priority_semantics="conflict-aware", priority_lead=1.0
+    )
     m.event("T0")
     clock.set(3.5)
     assert m.request("A") is False
