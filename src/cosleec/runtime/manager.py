@@ -850,12 +850,14 @@ class Manager:
         for t in started:
             if t.status != PENDING:
                 continue
-            for other in self.tracker.of_event(t.event):
-                if other.prohibition == t.prohibition or other is t:
-                    continue
-                o, p = (other, t) if t.prohibition else (t, other)
-                if t.status == PENDING and o.status == PENDING:
-                    followups += self._clash(o, p, now, seq, step)
+            if t.prohibition:  # a new prohibition against the obligations in force, oldest first
+                for o in self.tracker.obliging(t.event):
+                    if t.status == PENDING and o.status == PENDING:
+                        followups += self._clash(o, t, now, seq, step)
+            else:  # a new obligation against the prohibitions in force
+                for p in self.tracker.banning(t.event):
+                    if t.status == PENDING and p.status == PENDING:
+                        followups += self._clash(t, p, now, seq, step)
         return followups
 
     def _prioritise(self, instance: int, rule: str, now: float, step: _Step) -> None:

@@ -162,6 +162,7 @@ class Tracker:
         self.tolerance = immediate_tolerance
         self._active: dict[int, Tracked] = {}
         self._by_event: dict[str, dict[int, Tracked]] = {}
+        self._bans: dict[str, dict[int, Tracked]] = {}  # the prohibitions in force, by the event they forbid
         self._heap: list[tuple[float, int]] = []
         self._missed: dict[str, deque[Tracked]] = {}  # per event: recent misses a late E may still report
         self.forgotten: list[int] = []  # misses dropped from _missed since the owner last looked
@@ -258,16 +259,26 @@ class Tracker:
         t.status, t.outcome_at, t.by = status, now, by
         self._close(t)
 
-    def of_event(self, event: str) -> list[Tracked]:
-        """The obligations and prohibitions in force that name ``event``, oldest first."""
-        return sorted(
-            (t for t in self._by_event.get(event, {}).values() if t.event == event), key=lambda t: t.id
-        )
+    def obliging(self, event: str) -> list[Tracked]:
+        """The obligations in force to produce ``event`` (not through an `else`), oldest first."""
+        found = self._by_event.get(event, {}).values()
+        return sorted((t for t in found if t.event == event and not t.prohibition), key=lambda t: t.id)
+
+    def banned(self) -> list[str]:
+        """The events some prohibition in force forbids (now or later)."""
+        return [e for e, bans in self._bans.items() if bans]
+
+    def banning(self, event: str) -> list[Tracked]:
+        """The prohibitions of ``event`` in force (whatever their windows), oldest first."""
+        bans = self._bans.get(event)
+        return sorted(bans.values(), key=lambda t: t.id) if bans else []
 
     def _index(self, t: Tracked) -> None:
         self._active[t.id] = t
         for ev in _events(t):
             self._by_event.setdefault(ev, {})[t.id] = t
+        if t.prohibition:
+            self._bans.setdefault(t.event, {})[t.id] = t
         if t.hi is not None:
             heapq.heappush(self._heap, (t.hi, t.id))
 
@@ -280,6 +291,10 @@ class Tracker:
             bucket = self._by_event.get(ev)
             if bucket is not None:
                 bucket.pop(t.id, None)
+        if t.prohibition:
+            bans = self._bans.get(t.event)
+            if bans is not None:
+                bans.pop(t.id, None)
         self.closed.append(t)
         if t.status == VIOLATED and not t.prohibition:
             self._miss(t)
@@ -371,11 +386,10 @@ class Tracker:
 
         Records nothing: the caller counts the refusal.
         """
-        return [
-            t
-            for t in self._by_event.get(event, {}).values()
-            if t.prohibition and t.event == event and t.lo <= now and (t.hi is None or now <= t.hi)
-        ]
+        bans = self._bans.get(event)
+        if not bans:
+            return []
+        return [t for t in bans.values() if t.lo <= now and (t.hi is None or now <= t.hi)]
 
     def instances(self) -> dict[int, str]:
         """The activations with something in force: instance -> rule."""

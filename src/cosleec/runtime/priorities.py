@@ -34,7 +34,7 @@ from dataclasses import dataclass
 from cosleec.errors import show
 from cosleec.lang import closure, cycle, parse_priority
 from cosleec.runtime.errors import ConfigurationError
-from cosleec.runtime.obligations import PENDING, Tracked, Tracker
+from cosleec.runtime.obligations import Tracked, Tracker
 from cosleec.runtime.ruleset import RuleSet
 
 CANCEL = "cancel"
@@ -124,24 +124,22 @@ def forced(tracker: Tracker, priorities: Priorities) -> tuple[float, Tracked, st
     if priorities.semantics != CONFLICT_AWARE or not priorities.above:
         return None
     best: tuple[float, int, Tracked, str] | None = None
-    for o in tracker.active:
-        d = o.own_hi
-        if o.prohibition or d is None or o.branches or o.status != PENDING:
-            continue
-        for p in tracker.of_event(o.event):
-            if (
-                not p.prohibition
-                or p.instance == o.instance
-                or not (p.lo <= d and (p.hi is None or d <= p.hi))
-            ):
+    for event in tracker.banned():  # only events some prohibition forbids can force anything
+        bans = tracker.banning(event)
+        for o in tracker.obliging(event):
+            d = o.own_hi
+            if d is None or o.branches:
                 continue
-            higher = priorities.between(o.rule, p.rule)
-            if higher is None:
-                continue
-            victim = p if higher == o.rule else o
-            at = max(d - priorities.lead, o.start)
-            if best is None or (at, victim.id) < best[:2]:
-                best = (at, victim.id, victim, higher)
+            for p in bans:
+                if p.instance == o.instance or not (p.lo <= d and (p.hi is None or d <= p.hi)):
+                    continue
+                higher = priorities.between(o.rule, p.rule)
+                if higher is None:
+                    continue
+                victim = p if higher == o.rule else o
+                at = max(d - priorities.lead, o.start)
+                if best is None or (at, victim.id) < best[:2]:
+                    best = (at, victim.id, victim, higher)
     return None if best is None else (best[0], best[2], best[3])
 
 
