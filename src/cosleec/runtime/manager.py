@@ -170,7 +170,7 @@ class _Scope:
             m._deliver()
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, slots=True)
 class _Job:
     """A decision to hand to its implementation once the step is over (or once allowed).
 
@@ -845,10 +845,10 @@ class Manager:
         for t in started:
             if t.status == PENDING and self.tracker.closed_at_start(t):
                 followups += self._settle(self.tracker.expire(t, now), now, seq, step)
-        if depth == 0 and self.priorities and self.priorities.semantics == CANCEL:
+        if depth == 0 and self.priorities.above and self.priorities.semantics == CANCEL:
             self._prioritise(instance, d.rule, now, step)
         for t in started:
-            if t.status != PENDING:
+            if t.status != PENDING or not self.tracker.bans:
                 continue
             if t.prohibition:  # a new prohibition against the obligations in force, oldest first
                 for o in self.tracker.obliging(t.event):
@@ -943,6 +943,9 @@ class Manager:
         once allowed it runs (a ``dispatch`` record). One whose obligations all ended while
         it waited never runs.
         """
+        if not self._held and not self.tracker.bans:  # nothing is forbidden: the common case
+            if all(t.status == PENDING for job in jobs for t in job.items):
+                return jobs
         out: list[_Job] = []
         for job in [*self._held.values(), *jobs]:
             was_held = job.decision.id in self._held

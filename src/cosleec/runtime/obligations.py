@@ -40,7 +40,7 @@ REFUSED, CANCELLED = "refused", "cancelled"
 MISSES_KEPT = 64  # per event: missed obligations a late occurrence is still reported for
 
 
-@dataclass(kw_only=True)
+@dataclass(kw_only=True, slots=True)
 class Tracked:
     """One obligation in force, with its absolute window and outcome."""
 
@@ -58,8 +58,8 @@ class Tracked:
     own_hi: float | None = (
         None  # the end of the event's own window (``hi`` is the last of all, `else` included)
     )
-    branches: list[list[tuple[str, float, float | None]]] = field(default_factory=list)  # `else`, absolute
-    met: list[list[int]] = field(default_factory=list)  # per branch: the items already seen
+    branches: tuple[tuple[tuple[str, float, float | None], ...], ...] = ()  # `else`, absolute windows
+    met: tuple[list[int], ...] = ()  # per branch: the items already seen
     status: str = PENDING
     outcome_at: float | None = None
     by: str | None = None  # the event that fulfilled (or violated) it
@@ -125,11 +125,11 @@ class Tracked:
             depth=int(d.get("depth", 0)),
             instance=int(d.get("instance", d["decision"])),
             own_hi=None if own is None else float(own),
-            branches=[
-                [(str(e), float(a), None if b is None else float(b)) for e, a, b in br]
+            branches=tuple(
+                tuple((str(e), float(a), None if b is None else float(b)) for e, a, b in br)
                 for br in d.get("branches", ())
-            ],
-            met=[[int(i) for i in m] for m in d.get("met", ())],
+            ),
+            met=tuple([int(i) for i in m] for m in d.get("met", ())),
             status=str(d["status"]),
             outcome_at=None if at is None else float(at),
             by=d.get("by"),
@@ -163,6 +163,7 @@ class Tracker:
         self._active: dict[int, Tracked] = {}
         self._by_event: dict[str, dict[int, Tracked]] = {}
         self._bans: dict[str, dict[int, Tracked]] = {}  # the prohibitions in force, by the event they forbid
+        self.bans = 0  # how many prohibitions are in force (0: nothing is forbidden, the fast path)
         self._heap: list[tuple[float, int]] = []
         self._missed: dict[str, deque[Tracked]] = {}  # per event: recent misses a late E may still report
         self.forgotten: list[int] = []  # misses dropped from _missed since the owner last looked
@@ -226,10 +227,10 @@ class Tracker:
         )
         t.own_hi = t.hi
         if ob.alternatives and not ob.negated:
-            t.branches = [
-                [(e, now + a, None if b is None else now + b) for e, a, b in br] for br in ob.alternatives
-            ]
-            t.met = [[] for _ in t.branches]
+            t.branches = tuple(
+                tuple((e, now + a, None if b is None else now + b) for e, a, b in br) for br in ob.alternatives
+            )
+            t.met = tuple([] for _ in t.branches)
             ends = [t.hi, *(b for br in t.branches for _, _, b in br)]
             t.hi = None if any(e is None for e in ends) else max(e for e in ends if e is not None)
         self._next += 1
@@ -279,6 +280,7 @@ class Tracker:
             self._by_event.setdefault(ev, {})[t.id] = t
         if t.prohibition:
             self._bans.setdefault(t.event, {})[t.id] = t
+            self.bans += 1
         if t.hi is not None:
             heapq.heappush(self._heap, (t.hi, t.id))
 
@@ -293,8 +295,8 @@ class Tracker:
                 bucket.pop(t.id, None)
         if t.prohibition:
             bans = self._bans.get(t.event)
-            if bans is not None:
-                bans.pop(t.id, None)
+            if bans is not None and bans.pop(t.id, None) is not None:
+                self.bans -= 1
         self.closed.append(t)
         if t.status == VIOLATED and not t.prohibition:
             self._miss(t)
@@ -418,6 +420,8 @@ class Tracker:
 
 def _events(t: Tracked) -> tuple[str, ...]:
     """The events an occurrence of which can settle ``t``: its own and its `else` branches'."""
+    if not t.branches:
+        return (t.obligation.event,)
     return (t.obligation.event, *(e for br in t.branches for e, _, _ in br))
 
 
