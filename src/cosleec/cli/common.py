@@ -19,7 +19,11 @@ def expand(paths: list[str]) -> list[Path]:
         if p.is_dir():
             found = sorted(p.rglob("*.sleec"))
             if not found:  # checking nothing must not look like a pass
-                raise UserError("no .sleec file in this directory", where=str(p), hint="give rule files or a directory of them")
+                raise UserError(
+                    "no .sleec file in this directory",
+                    where=str(p),
+                    hint="give rule files or a directory of them",
+                )
             out.extend(found)
         else:
             out.append(p)
@@ -47,4 +51,30 @@ def add_clause_options(
             choices=[str(u) for u in Unknowns],
             default=str(Unknowns.UNDETERMINED),
             help="how a clause condition over a measure with no value is read (default: undetermined, fail closed)",
+        )
+
+
+def add_priority_options(p: argparse.ArgumentParser, *, lead: bool = False) -> None:
+    """``--priority "H > L"`` (repeatable) and ``--priority-semantics``; with ``lead``, ``--priority-lead``."""
+    p.add_argument(
+        "--priority",
+        action="append",
+        default=[],
+        metavar='"H > L"',
+        help="rule H prevails over rule L when they conflict (repeatable; adds to the file's own priorities)",
+    )
+    p.add_argument(
+        "--priority-semantics",
+        choices=["cancel", "conflict-aware"],
+        default="cancel",
+        help="cancel: L is cancelled when H is triggered while L is active (default); "
+        "conflict-aware: L holds until H's deadline forces it",
+    )
+    if lead:
+        p.add_argument(
+            "--priority-lead",
+            type=float,
+            default=0.0,
+            metavar="SECONDS",
+            help="conflict-aware: cancel L this long before H's deadline, so the robot has time to act",
         )

@@ -18,12 +18,10 @@ from collections.abc import Sequence
 
 from rich.text import Text
 
-from cosleec.cli.common import add_clause_options, console
+from cosleec.cli.common import add_clause_options, add_priority_options, console
 from cosleec.errors import UserError, clip
 from cosleec.lang import HedgeSemantics, SleecError, Specification, cycle, load, pairs, parse_priority
 from cosleec.semantics import (
-    CANCEL,
-    CONFLICT_AWARE,
     Conflict,
     Judgement,
     Options,
@@ -53,20 +51,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         '{"t": 360}; or a Manager\'s audit log',
     )
     add_clause_options(p, unknown=False)
-    p.add_argument(
-        "--priority",
-        action="append",
-        default=[],
-        metavar='"H > L"',
-        help="rule H prevails over rule L when they conflict (repeatable; adds to the file's own priorities)",
-    )
-    p.add_argument(
-        "--priority-semantics",
-        choices=[CANCEL, CONFLICT_AWARE],
-        default=CANCEL,
-        help="cancel: L is cancelled when H is triggered while L is active (default); "
-        "conflict-aware: L holds until H's deadline forces it",
-    )
+    add_priority_options(p)
     p.add_argument(
         "--untimed",
         type=_seconds,

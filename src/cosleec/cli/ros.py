@@ -9,7 +9,7 @@ import sys
 from typing import Any
 
 from cosleec import ros
-from cosleec.cli.common import add_clause_options
+from cosleec.cli.common import add_clause_options, add_priority_options
 from cosleec.nodes import LayersNode, ListenerNode, ManagerNode, Mapping, TaskNode
 from cosleec.runtime import RuleSet, Unknowns
 
@@ -39,6 +39,7 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
         metavar="FILE",
         help="keep the Manager's state in this SQLite journal: a restarted Manager restores it",
     )
+    add_priority_options(m, lead=True)
     m.add_argument("--record", metavar="FILE.mcap", help="record the decision stream (Foxglove opens it)")
     m.add_argument(
         "--status-each", action="store_true", help="publish status after every message (harnesses)"
@@ -135,6 +136,9 @@ def run(args: argparse.Namespace) -> int:
                 status_each=args.status_each,
                 unknown=args.unknown,
                 journal=args.journal,
+                priorities=args.priority,
+                priority_semantics=args.priority_semantics,
+                priority_lead=args.priority_lead,
             )
         if node == "layers":
             assert rules is not None

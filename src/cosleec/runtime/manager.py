@@ -943,9 +943,9 @@ class Manager:
         once allowed it runs (a ``dispatch`` record). One whose obligations all ended while
         it waited never runs.
         """
-        if not self._held and not self.tracker.bans:  # nothing is forbidden: the common case
-            if all(t.status == PENDING for job in jobs for t in job.items):
-                return jobs
+        quiet = not self._held and not self.tracker.bans  # nothing is forbidden: the common case
+        if quiet and all(t.status == PENDING for job in jobs for t in job.items):
+            return jobs
         out: list[_Job] = []
         for job in [*self._held.values(), *jobs]:
             was_held = job.decision.id in self._held
