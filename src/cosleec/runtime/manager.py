@@ -845,7 +845,12 @@ class Manager:
         for t in started:
             if t.status == PENDING and self.tracker.closed_at_start(t):
                 followups += self._settle(self.tracker.expire(t, now), now, seq, step)
-        if depth == 0 and self.priorities.above and self.priorities.semantics == CANCEL:
+        if (
+            depth == 0
+            and d.clause is not None
+            and self.priorities.above
+            and self.priorities.semantics == CANCEL
+        ):
             self._prioritise(instance, d.rule, now, step)
         for t in started:
             if t.status != PENDING or not self.tracker.bans:
@@ -862,16 +867,34 @@ class Manager:
 
     def _prioritise(self, instance: int, rule: str, now: float, step: _Step) -> None:
         """Cancellation-based priority: a new instance against every active one."""
-        active = self.tracker.instances()
-        if instance not in active:
+        if not self.tracker.of_instance(instance):
             return  # it imposes nothing: it is not active
-        for other in sorted(active.keys() - {instance}):
-            higher = self.priorities.between(rule, active[other])
+        others = {i: r for r in self.priorities.related(rule) for i in self.tracker.instances_of(r)}
+        for other in sorted(others.keys() - {instance}):
+            higher = self.priorities.between(rule, others[other])
             if higher == rule:
+                self._settled(instance, other, now, rule, step)
                 self._cancel(other, now, rule, step, CANCEL)
             elif higher is not None:
+                self._settled(instance, other, now, higher, step)
                 self._cancel(instance, now, higher, step, CANCEL)
                 return
+
+    def _settled(self, a: int, b: int, now: float, winner: str, step: _Step) -> None:
+        """Record the conflicts a cancellation settles: each obligation of one activation whose
+        window a prohibition of the other forbids."""
+        both = sorted([*self.tracker.of_instance(a), *self.tracker.of_instance(b)], key=lambda t: t.id)
+        for o in both:
+            for p in both:
+                if (
+                    not o.prohibition
+                    and p.prohibition
+                    and o.event == p.event
+                    and o.instance != p.instance
+                    and covers(o, p, now)
+                ):
+                    how = f"{winner} has priority (cancel): the other is cancelled"
+                    self._conflict(o, p, now, CANCEL, winner, how, step)
 
     def _cancel(self, instance: int, at: float, by: str, step: _Step, how: str) -> None:
         """Cancel everything activation ``instance`` has in force: priority ``by`` outranks it."""
@@ -900,7 +923,32 @@ class Manager:
             return []
         higher = self.priorities.between(o.rule, p.rule)
         aware = higher is not None and self.priorities.semantics == CONFLICT_AWARE
+        if aware:
+            assert higher is not None
+            self._conflict(
+                o, p, now, CONFLICT_AWARE, higher,
+                f"{higher} has priority ({CONFLICT_AWARE}): the other is kept as long as possible", step,
+            )  # fmt: skip
+        else:
+            self._conflict(
+                o, p, now, "prohibition-wins", p.rule,
+                "the prohibition forbids the whole window and wins: the obligation is refused", step,
+            )  # fmt: skip
+        if aware:
+            return []
+        self.tracker.finish(o, REFUSED, now, p.rule)
+        self.stats["violations"] += 1
+        self._track(o, step)
+        if o.obligation.otherwise is None:
+            return []
+        return self._settle(Outcome(fallbacks=[(o, now)]), now, seq, step)
+
+    def _conflict(
+        self, o: Tracked, p: Tracked, now: float, resolution: str, winner: str, how: str, step: _Step
+    ) -> None:
+        """Record that obligation ``o`` and prohibition ``p`` conflict, and how it is resolved."""
         self.stats["conflicts"] += 1
+        until = "ever" if p.hi is None else _number(p.hi)
         self._emit(
             step,
             "conflict",
@@ -911,27 +959,12 @@ class Manager:
                 "prohibition": p.id,
                 "between": [o.rule, p.rule],  # the obligation's rule, the prohibition's
                 "clauses": [o.clause, p.clause],
-                "resolution": CONFLICT_AWARE if aware else "prohibition-wins",
-                "winner": higher if aware else p.rule,
-                "explanation": (
-                    f"{o.rule} requires {o.obligation.describe()} and {p.rule} forbids {o.event} "
-                    + (
-                        f"until {_number(p.hi) if p.hi is not None else 'ever'}: {higher} has priority"
-                        f" ({CONFLICT_AWARE}), the other is kept as long as possible"
-                        if aware
-                        else "for the whole window: the prohibition wins, the obligation is refused"
-                    )
-                ),
+                "resolution": resolution,
+                "winner": winner,
+                "explanation": f"{o.rule} requires {o.obligation.describe()} and {p.rule} forbids {o.event} "
+                f"until {until}: {how}",
             },
         )
-        if aware:
-            return []
-        self.tracker.finish(o, REFUSED, now, p.rule)
-        self.stats["violations"] += 1
-        self._track(o, step)
-        if o.obligation.otherwise is None:
-            return []
-        return self._settle(Outcome(fallbacks=[(o, now)]), now, seq, step)
 
     # ------------------------------------------------------------------ dispatch, held until allowed
     def _ready(self, jobs: list[_Job], now: float, step: _Step) -> list[_Job]:

@@ -164,6 +164,8 @@ class Tracker:
         self._by_event: dict[str, dict[int, Tracked]] = {}
         self._bans: dict[str, dict[int, Tracked]] = {}  # the prohibitions in force, by the event they forbid
         self.bans = 0  # how many prohibitions are in force (0: nothing is forbidden, the fast path)
+        self._instances: dict[int, dict[int, Tracked]] = {}  # activation -> what it has in force
+        self._rules: dict[str, dict[int, int]] = {}  # rule -> its decided activations in force (item counts)
         self._heap: list[tuple[float, int]] = []
         self._missed: dict[str, deque[Tracked]] = {}  # per event: recent misses a late E may still report
         self.forgotten: list[int] = []  # misses dropped from _missed since the owner last looked
@@ -228,7 +230,8 @@ class Tracker:
         t.own_hi = t.hi
         if ob.alternatives and not ob.negated:
             t.branches = tuple(
-                tuple((e, now + a, None if b is None else now + b) for e, a, b in br) for br in ob.alternatives
+                tuple((e, now + a, None if b is None else now + b) for e, a, b in br)
+                for br in ob.alternatives
             )
             t.met = tuple([] for _ in t.branches)
             ends = [t.hi, *(b for br in t.branches for _, _, b in br)]
@@ -281,6 +284,10 @@ class Tracker:
         if t.prohibition:
             self._bans.setdefault(t.event, {})[t.id] = t
             self.bans += 1
+        self._instances.setdefault(t.instance, {})[t.id] = t
+        if t.clause is not None:  # an undetermined decision is no activation a priority acts on
+            counts = self._rules.setdefault(t.rule, {})
+            counts[t.instance] = counts.get(t.instance, 0) + 1
         if t.hi is not None:
             heapq.heappush(self._heap, (t.hi, t.id))
 
@@ -297,6 +304,15 @@ class Tracker:
             bans = self._bans.get(t.event)
             if bans is not None and bans.pop(t.id, None) is not None:
                 self.bans -= 1
+        items = self._instances.get(t.instance)
+        if items is not None and items.pop(t.id, None) is not None:
+            if not items:
+                del self._instances[t.instance]
+            counts = self._rules.get(t.rule)
+            if t.clause is not None and counts is not None:
+                counts[t.instance] -= 1
+                if not counts[t.instance]:
+                    del counts[t.instance]
         self.closed.append(t)
         if t.status == VIOLATED and not t.prohibition:
             self._miss(t)
@@ -393,13 +409,13 @@ class Tracker:
             return []
         return [t for t in bans.values() if t.lo <= now and (t.hi is None or now <= t.hi)]
 
-    def instances(self) -> dict[int, str]:
-        """The activations with something in force: instance -> rule."""
-        return {t.instance: t.rule for t in self._active.values()}
+    def instances_of(self, rule: str) -> list[int]:
+        """The decided activations of ``rule`` with something in force."""
+        return list(self._rules.get(rule, ()))
 
     def of_instance(self, instance: int) -> list[Tracked]:
         """What activation ``instance`` has in force, oldest first."""
-        return sorted((t for t in self._active.values() if t.instance == instance), key=lambda t: t.id)
+        return sorted(self._instances.get(instance, {}).values(), key=lambda t: t.id)
 
     def backlog(self, now: float) -> int:
         """About how many windows are due at ``now`` (0 when none is); cheap, an upper bound."""

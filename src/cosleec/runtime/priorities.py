@@ -95,6 +95,10 @@ class Priorities:
     def __bool__(self) -> bool:
         return bool(self.above)
 
+    def related(self, rule: str) -> list[str]:
+        """The rules a priority orders ``rule`` against (above or below it), sorted."""
+        return sorted({b for a, b in self.above if a == rule} | {a for a, b in self.above if b == rule})
+
     def between(self, a: str, b: str) -> str | None:
         """The rule of the two that is higher, or None when neither is declared above the other."""
         if (a, b) in self.above:
@@ -130,14 +134,20 @@ def forced(tracker: Tracker, priorities: Priorities) -> tuple[float, Tracked, st
             d = o.own_hi
             if d is None or o.branches:
                 continue
+            if o.clause is None:
+                continue  # undetermined: no activation a priority acts on
             for p in bans:
-                if p.instance == o.instance or not (p.lo <= d and (p.hi is None or d <= p.hi)):
+                if (
+                    p.instance == o.instance
+                    or p.clause is None
+                    or not (p.lo <= d and (p.hi is None or d <= p.hi))
+                ):
                     continue
                 higher = priorities.between(o.rule, p.rule)
                 if higher is None:
                     continue
                 victim = p if higher == o.rule else o
-                at = max(d - priorities.lead, o.start)
+                at = max(d - priorities.lead, o.start, p.lo)
                 if best is None or (at, victim.id) < best[:2]:
                     best = (at, victim.id, victim, higher)
     return None if best is None else (best[0], best[2], best[3])

@@ -74,7 +74,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from cosleec.lang import HedgeSemantics, Specification
+from cosleec.lang import HedgeSemantics, Specification, closure, pairs
 from cosleec.lang import ast as A
 from cosleec.semantics.trace import Step, Value
 from cosleec.semantics.verdicts import (
@@ -91,6 +91,7 @@ from cosleec.semantics.verdicts import (
 )
 
 CANCEL = "cancel"
+MAX_SECONDS = 1e10  # a window longer than this (about 317 years) is out of range, read as unknown
 CONFLICT_AWARE = "conflict-aware"
 PRIORITY_SEMANTICS = (CANCEL, CONFLICT_AWARE)
 
@@ -215,7 +216,13 @@ class _Eval:
         """A duration in seconds (raises _Unknown)."""
         x = self.value(d.value, values)
         assert isinstance(x, int | float)
-        return float(x * A.TIME_UNITS[d.unit])
+        try:
+            seconds = float(x * A.TIME_UNITS[d.unit])
+        except OverflowError:
+            raise _Unknown("") from None
+        if not -MAX_SECONDS <= seconds <= MAX_SECONDS:  # too long to keep (also NaN): not a deadline
+            raise _Unknown("")
+        return seconds
 
     def reads(self, e: A.Expr | None) -> set[str]:
         """The measures ``e`` reads."""
@@ -280,7 +287,8 @@ class _Judge:
         self.options = options
         self.eval = _Eval(spec)
         self.rules = {r.name: r for r in spec.rules}
-        self.above = _closure(options.priorities)
+        self.above = closure([*options.priorities, *pairs(spec)])
+        self.live: list[_Item] = []  # the items that were pending when last looked at, and newer ones
         self.values: dict[str, Value] = {}
         self.items: list[_Item] = []
         self.seq = 0
@@ -309,7 +317,9 @@ class _Judge:
         return self.out
 
     def pending(self) -> list[_Item]:
-        return [i for i in self.items if i.v.status == PENDING]
+        """The items still in force, oldest first (the list of live items is pruned as it goes)."""
+        self.live = [i for i in self.live if i.v.status == PENDING]
+        return list(self.live)
 
     # -------------------------------------------------------------- time passing
     def advance(self, now: float) -> None:
@@ -362,7 +372,7 @@ class _Judge:
                 lo, hi = p.v.window
                 if not (lo <= d and (hi is None or d <= hi)):
                     continue
-                at = max(d - self.options.lead, o.v.start)
+                at = max(d - self.options.lead, o.v.start, lo)
                 if (o.v.rule, p.v.rule) in self.above:
                     out.append((at, p, o.v.rule))
                 elif (p.v.rule, o.v.rule) in self.above:
@@ -558,6 +568,7 @@ class _Judge:
             )  # fmt: skip
             item.created = seq
             self.items.append(item)
+            self.live.append(item)
             fresh.append(item)
         for item in fresh:  # a window that ends before it starts is already closed
             hi = item.deadline
@@ -583,10 +594,37 @@ class _Judge:
         for other in sorted(active - {instance}):
             orule = self.instance_rule[other]
             if (rule, orule) in self.above:
+                self.settled(instance, other, now, rule)
                 self.cancel(other, now, rule)
             elif (orule, rule) in self.above:
+                self.settled(instance, other, now, orule)
                 self.cancel(instance, now, orule)
                 return
+
+    def settled(self, a: int, b: int, now: float, winner: str) -> None:
+        """Record the conflicts a cancellation settles: the clashes between instances ``a`` and ``b``."""
+        both = [i for i in self.pending() if i.v.instance in (a, b)]
+        for o in both:
+            for p in both:
+                if (
+                    not o.v.negated
+                    and p.v.negated
+                    and o.v.event == p.v.event
+                    and o.v.instance != p.v.instance
+                    and _covers(o, p, now)
+                ):
+                    self.out.conflicts.append(
+                        Conflict(
+                            now,
+                            o.v.event,
+                            o.v.id,
+                            p.v.id,
+                            (o.v.rule, p.v.rule),
+                            (o.v.clause, p.v.clause),
+                            CANCEL,
+                            winner,
+                        )
+                    )
 
     def conflicts(self, item: _Item, now: float, seq: int) -> None:
         """A new item against those in force: an obligation whose whole window is forbidden."""
@@ -600,12 +638,7 @@ class _Judge:
                     self.clash(item, p, now, seq)
 
     def clash(self, o: _Item, p: _Item, now: float, seq: int) -> None:
-        if o.branches or o.v.status != PENDING:
-            return
-        olo, ohi = o.v.window
-        plo, phi = p.v.window
-        lo = max(olo, now)
-        if not (plo <= lo and (phi is None or (ohi is not None and ohi <= phi))):
+        if o.v.status != PENDING or not _covers(o, p, now):
             return  # some instant of the obligation's window is allowed: the robot can wait
         pair = (o.v.rule, p.v.rule)
         if self.options.priority_semantics == CONFLICT_AWARE and (
@@ -629,14 +662,13 @@ class _Judge:
             self.start(o.otherwise, now, seq, o.v.instance, o.v.rule, o.v.clause, o.v.depth + 1)
 
 
-def _closure(pairs: Iterable[tuple[str, str]]) -> frozenset[tuple[str, str]]:
-    """``H > L`` closed transitively."""
-    out = set(pairs)
-    while True:
-        more = {(a, d) for a, b in out for c, d in out if b == c} - out
-        if not more:
-            return frozenset(out)
-        out |= more
+def _covers(o: _Item, p: _Item, now: float) -> bool:
+    """Does prohibition ``p`` forbid every instant left of obligation ``o``'s window?"""
+    if o.branches:
+        return False  # an `else` alternative may still meet it
+    olo, ohi = o.v.window
+    plo, phi = p.v.window
+    return plo <= max(olo, now) and (phi is None or (ohi is not None and ohi <= phi))
 
 
 def _sorted(names: Iterable[str]) -> tuple[str, ...]:

@@ -109,7 +109,9 @@ def test_cancellation_based_priority_cancels_the_lower_rule_at_once() -> None:
     (c,) = kinds(records, "cancelled")
     assert c["rule"] == "R2" and c["by"] == "R1" and c["priority"] == "cancel"
     assert final(records)["R2:0"] == ("cancelled", 0.0)
-    assert kinds(records, "conflict") == []
+    (conflict,) = kinds(records, "conflict")  # the conflict the cancellation settled is recorded
+    assert conflict["resolution"] == "cancel" and conflict["winner"] == "R1"
+    assert conflict["between"] == ["R1", "R2"]
     m.close()
 
 
