@@ -31,6 +31,8 @@ BARRIERS = ("context", "layers")
 #: (task nodes count what they ran in their status); what a task failed to do shows up as
 #: a violation anyway
 EMBEDDED_ONLY = ("task-done", "task-failed")
+#: record kinds that describe the run rather than its outcomes (the options it ran with)
+SETTINGS = ("options",)
 #: fields of a record of another kind that are not compared: the Manager's numbering of
 #: its inputs (the order in which reports arrived), the process it ran in, and the audit
 #: log's header (wall and monotonic time, run id, rule digest)
@@ -105,7 +107,7 @@ def _opt_float(v: Any) -> float | None:
 
 
 def normalise(record: Mapping[str, Any]) -> Outcome | None:
-    """The :class:`Outcome` of one audit-form record; None for a kind in ``EMBEDDED_ONLY``.
+    """The :class:`Outcome` of one audit-form record; None for a kind in ``EMBEDDED_ONLY`` or ``SETTINGS``.
 
     A record of a kind not known here is compared whole, but for ``VOLATILE`` fields: a
     new kind of record is checked, not dropped. KeyError for a record that lacks a field
@@ -113,7 +115,7 @@ def normalise(record: Mapping[str, Any]) -> Outcome | None:
     """
     kind = str(record["kind"])
     t = float(record["time"])
-    if kind in EMBEDDED_ONLY:
+    if kind in EMBEDDED_ONLY or kind in SETTINGS:
         return None
     if kind == "decision":
         return Outcome(

@@ -238,7 +238,7 @@ class Manager:
         history: int = 10_000,
         max_depth: int = 16,
         dispatch: bool = True,
-        priorities: Iterable[str | tuple[str, str]] = (),
+        priorities: Iterable[str | tuple[str, str]] | None = (),
         priority_semantics: str = CANCEL,
         priority_lead: float = 0.0,
     ) -> None:
@@ -263,9 +263,16 @@ class Manager:
         if isinstance(max_depth, bool) or not isinstance(max_depth, int) or max_depth < 1:
             raise ConfigurationError(f"max_depth must be a whole number of at least 1, not {max_depth!r}")
         self.max_depth = max_depth
+        given = () if priorities is None else [priorities] if isinstance(priorities, str) else priorities
+        try:
+            given = list(given)
+        except TypeError:
+            raise ConfigurationError(
+                f"priorities must be a list of 'H > L' strings or (H, L) pairs, not {show(priorities)}"
+            ) from None
         self.priorities = Priorities.build(
             (r.name for r in rules.rules),
-            [*priority_pairs(rules.spec), *([priorities] if isinstance(priorities, str) else priorities)],
+            [*priority_pairs(rules.spec), *given],
             priority_semantics,
             priority_lead,
         )
@@ -393,6 +400,31 @@ class Manager:
             )
         if check and self.dispatch_locally:
             self.implementations.check()
+        if self._recording:  # what the run's verdicts depend on: `cosleec conforms` reads it back
+            with self._step() as step:
+                self._emit(
+                    step,
+                    "options",
+                    {
+                        "semantics": str(self.semantics),
+                        "unknown": str(self.layer_manager.unknowns),
+                        "untimed": self.tracker.untimed,
+                        "priorities": sorted([h, lo] for h, lo in self.priorities.declared),
+                        "priority_semantics": self.priorities.semantics,
+                        "priority_lead": self.priorities.lead,
+                    },
+                )
+        if (
+            self.priorities.semantics == CONFLICT_AWARE
+            and self.priorities.above
+            and not self.priorities.lead
+            and not isinstance(self.clock, VirtualClock)
+        ):
+            log.warning(
+                "conflict-aware priorities with priority_lead=0 on a real clock: the lower rule is cancelled "
+                "at the higher rule's deadline, too late for the robot to act in time; give priority_lead "
+                "(seconds the robot needs)"
+            )
         if self.dispatch_locally:
             self.implementations.prepare()  # start-up work, not the first trigger's latency
         self.tick()
@@ -457,6 +489,7 @@ class Manager:
                         step,
                         "context",
                         {"values": self.context.external(sorted(changed)), "version": self.context.version},
+                        now,
                     )
                 result = self._switched(switches, step)
                 followups = self._ready(followups, now, step)
@@ -521,7 +554,7 @@ class Manager:
             followups += self._advance(now, step)
             seq = self._count("seq")  # after what time's passing started: this occurrence counts for it
             if self._recording:
-                self._emit(step, "event", {"event": name, "causal": seq})
+                self._emit(step, "event", {"event": name, "causal": seq}, now)
             out = self.tracker.occur(name, now, seq)
             followups += self._settle(out, now, seq, step)
             jobs: list[_Job] = []
@@ -753,7 +786,9 @@ class Manager:
                 nd = self.tracker.next_deadline()
                 if nd is None or not nd < now or cut[0] <= nd:
                     at, victim, by = cut
-                    self._cancel(victim.instance, at, by, step, "conflict-aware")
+                    if not self._cancel(victim.instance, at, by, step, "conflict-aware"):
+                        log.error("conflict-aware cancellation of %s found nothing in force", victim.rule)
+                        break  # a bug must not hang the Manager: judge the rest at the next step
                     continue
             out = self.tracker.due(now, None if limit is None else limit - judged)
             if not out.changed:
@@ -896,8 +931,11 @@ class Manager:
                     how = f"{winner} has priority (cancel): the other is cancelled"
                     self._conflict(o, p, now, CANCEL, winner, how, step)
 
-    def _cancel(self, instance: int, at: float, by: str, step: _Step, how: str) -> None:
-        """Cancel everything activation ``instance`` has in force: priority ``by`` outranks it."""
+    def _cancel(self, instance: int, at: float, by: str, step: _Step, how: str) -> bool:
+        """Cancel everything activation ``instance`` has in force: priority ``by`` outranks it.
+
+        Returns whether there was anything to cancel.
+        """
         items = self.tracker.of_instance(instance)
         for t in items:
             self.tracker.finish(t, CANCELLED, at, by)
@@ -916,6 +954,7 @@ class Manager:
                     "obligations": [t.id for t in items],
                 },
             )
+        return bool(items)
 
     def _clash(self, o: Tracked, p: Tracked, now: float, seq: int, step: _Step) -> list[_Job]:
         """Obligation ``o`` meets prohibition ``p``: a conflict when ``p`` forbids all ``o`` has left."""
@@ -971,13 +1010,16 @@ class Manager:
         """Of ``jobs`` (and those held before), what may run now; the rest is held.
 
         A decision runs with the obligations still in force (refused and cancelled ones are
-        left out). While any of them names an event a prohibition forbids now, the whole
-        decision waits (a ``held`` record), so that nothing it does contradicts ``request``;
-        once allowed it runs (a ``dispatch`` record). One whose obligations all ended while
-        it waited never runs.
+        left out). While any of them names an event a prohibition forbids now, or one whose
+        interval has not opened (an earlier occurrence would not count), the whole decision
+        waits (a ``held`` record; kept in the journal), so that nothing it does contradicts
+        ``request``; once allowed it runs (a ``dispatch`` record). One whose obligations all
+        ended while it waited never runs.
         """
         quiet = not self._held and not self.tracker.bans  # nothing is forbidden: the common case
-        if quiet and all(t.status == PENDING for job in jobs for t in job.items):
+        if quiet and all(
+            t.status == PENDING and (t.prohibition or t.lo <= now) for job in jobs for t in job.items
+        ):
             return jobs
         out: list[_Job] = []
         for job in [*self._held.values(), *jobs]:
@@ -1000,12 +1042,13 @@ class Manager:
                 if self.journal is not None:
                     step.change.outbox[job.decision.id] = None
                 continue
-            blocked = [t for t in live if self.tracker.forbidding(t.event, now)]
+            blocked = [t for t in live if t.lo > now or self.tracker.forbidding(t.event, now)]
             if blocked:
                 if not was_held:
                     self._held[job.decision.id] = job
                     if job.record is not None:
                         job.record["dispatch"] = "held"
+                    opens = [t.lo for t in blocked if t.lo > now]
                     self._emit(
                         step,
                         "held",
@@ -1016,8 +1059,18 @@ class Manager:
                             "by": sorted(
                                 {p.rule for t in blocked for p in self.tracker.forbidding(t.event, now)}
                             ),
+                            "opens": max(opens) if opens else None,
                         },
                     )
+                    if self.journal is not None:  # a restart holds it again (and runs it once allowed)
+                        step.change.outbox[job.decision.id] = {
+                            "decision": job.decision.id,
+                            "rule": job.decision.rule,
+                            "event": job.decision.event,
+                            "held": True,
+                            "trigger": job.composition is not None,
+                            "record": job.decision.to_json(),
+                        }
                 continue
             self._held.pop(job.decision.id, None)
             kept = tuple(t.obligation for t in job.items if t.prohibition or t.status == PENDING)
@@ -1028,6 +1081,28 @@ class Manager:
                 self._emit(step, "dispatch", {"decision": job.decision.to_json()})
             out.append(job)
         return out
+
+    def _rehold(self, rec: dict[str, Any]) -> bool:
+        """Hold again a decision the journal kept as held; False when it cannot be (its rule is gone)."""
+        try:
+            rule = self.ruleset.rule(str(rec["rule"]))
+            d = Decision.from_json(rec["record"])
+        except (KeyError, TypeError, ValueError):
+            return False
+        composition = (
+            rule.compositions[d.clause]
+            if rec.get("trigger") and d.clause is not None and 0 <= d.clause < len(rule.compositions)
+            else None
+        )
+        items = [t for t in self.tracker.active if t.decision_id == d.id]
+        self._held[d.id] = _Job(rule, d, composition, items, None)
+        return True
+
+    def _next_opening(self) -> float | None:
+        """When the earliest held action's interval opens (the timer wakes then), or None."""
+        now = self.clock.now()
+        opens = [t.lo for job in self._held.values() for t in job.items if t.status == PENDING and t.lo > now]
+        return min(opens) if opens else None
 
     def _dispatch(self, jobs: list[_Job]) -> None:
         """Run each job's implementation (outside the lock), when this Manager dispatches."""
@@ -1199,9 +1274,14 @@ class Manager:
                 step.change.outbox[d.id] = entry
         return rec
 
-    def _emit(self, step: _Step, kind: str, data: dict[str, Any]) -> None:
-        """Add a record to the step; it is numbered now (every record of a step is committed)."""
-        step.events.append(RuntimeEvent(kind, self.clock.now(), data, self._count("record")))
+    def _emit(self, step: _Step, kind: str, data: dict[str, Any], at: float | None = None) -> None:
+        """Add a record to the step; it is numbered now (every record of a step is committed).
+
+        ``at`` is the time the step judged at, for the records a reader re-judges (occurrences,
+        values): the clock may have moved since the step read it.
+        """
+        t = self.clock.now() if at is None else at
+        step.events.append(RuntimeEvent(kind, t, data, self._count("record")))
 
     @property
     def _recording(self) -> bool:
@@ -1252,7 +1332,8 @@ class Manager:
                 nxt = self.tracker.next_deadline()
                 exp = self.context.next_expiry()
                 cut = forced(self.tracker, self.priorities)
-            times = [t for t in (nxt, exp, cut[0] if cut else None) if t is not None]
+                opening = self._next_opening()
+            times = [t for t in (nxt, exp, cut[0] if cut else None, opening) if t is not None]
             wait = None if not times else max(0.0, min(times) - self.clock.now() + 1e-3)
             with self._wake:
                 self._wake.wait(timeout=0.5 if wait is None else min(wait, 0.5))
@@ -1380,6 +1461,8 @@ class Manager:
             step.change.obligations[gone] = None
         self.tracker.forgotten.clear()
         for rec in saved.outbox:
+            if rec.get("held") and self._rehold(rec):
+                continue  # still waiting to be allowed: it runs (once) when it is
             if not self.dispatch_locally and isinstance(rec.get("record"), dict):
                 self.undelivered.append(rec["record"])  # the Manager node publishes it again
                 continue

@@ -46,9 +46,10 @@ SEMANTICS = (CANCEL, CONFLICT_AWARE)
 class Priorities:
     """The declared priorities, closed transitively, and how they resolve clashes."""
 
-    above: frozenset[tuple[str, str]] = frozenset()  # (higher, lower)
+    above: frozenset[tuple[str, str]] = frozenset()  # (higher, lower), closed transitively
     semantics: str = CANCEL
     lead: float = 0.0
+    declared: tuple[tuple[str, str], ...] = ()  # as given (the file's and the caller's)
 
     @classmethod
     def build(
@@ -73,7 +74,14 @@ class Priorities:
         known = set(names)
         pairs: list[tuple[str, str]] = []
         for p in declared:
-            got = parse_priority(p) if isinstance(p, str) else [p]
+            if isinstance(p, str):
+                got = parse_priority(p)
+            elif isinstance(p, tuple | list) and len(p) == 2 and all(isinstance(n, str) for n in p):
+                got = [(p[0], p[1])]
+            else:
+                raise ConfigurationError(
+                    f"a priority is a string like 'R1 > R2' or a pair of rule names, not {show(p)}"
+                )
             for h, lo in got:
                 for n in (h, lo):
                     if n not in known:
@@ -90,7 +98,7 @@ class Priorities:
             raise ConfigurationError(
                 f"the priorities form a cycle: {' > '.join(loop)}", hint="remove one of the pairs"
             )
-        return cls(closure(pairs), semantics, float(lead))
+        return cls(closure(pairs), semantics, float(lead), tuple(dict.fromkeys(pairs)))
 
     def __bool__(self) -> bool:
         return bool(self.above)
@@ -176,7 +184,8 @@ def possible_conflicts(ruleset: RuleSet, priorities: Priorities) -> list[Possibl
     for rule in ruleset.rules:
         for spec in rule.responses():
             for it in spec.walk():
-                items.setdefault(it.event, []).append((rule.name, it.key, it.negated))
+                if "/e" not in it.key:  # an `else` alternative is accepted, never enacted or enforced
+                    items.setdefault(it.event, []).append((rule.name, it.key, it.negated))
     out = []
     for event, found in items.items():
         for r1, k1, neg1 in found:

@@ -26,7 +26,7 @@ rule_end
 
 def build(window: str = "10 minutes", **options: Any) -> tuple[Manager, VirtualClock, list[Any], list[float]]:
     """The curtain rules with a capability that opens the curtains (and reports it)."""
-    clock = VirtualClock(0.0)
+    clock = options.pop("clock", None) or VirtualClock(0.0)
     m = Manager.from_text(CURTAINS.format(window=window), clock=clock, **options)
     records: list[Any] = []
     opened: list[float] = []
@@ -182,3 +182,105 @@ def test_start_warns_about_rules_that_can_conflict_unless_a_priority_settles_the
 def test_bad_priorities_are_configuration_errors(priorities: list[str], message: str) -> None:
     with pytest.raises(Exception, match=message):
         build(priorities=priorities)
+
+
+def test_an_interval_obligation_is_enacted_when_its_window_opens_not_before() -> None:
+    clock = VirtualClock(0.0)
+    m = Manager.from_text(
+        "def_start event T event E def_end rule_start R1 when T then E within [5 seconds, 10 seconds] rule_end",
+        clock=clock,
+    )
+    ran: list[float] = []
+
+    @m.capability("E")
+    def do(ob: Any, d: Any) -> None:
+        ran.append(clock.now())
+        m.event("E")
+
+    records: list[Any] = []
+    m.subscribe(records.append)
+    m.start()
+    m.event("T")
+    assert ran == [] and kinds(records, "held")[0]["opens"] == 5.0  # an E now would not count
+    clock.set(5.0)
+    m.tick()
+    assert ran == [5.0] and final(records)["R1:0"] == ("fulfilled", 5.0)
+    m.close()
+
+
+def test_a_held_action_survives_a_restart_and_runs_once_allowed(tmp_path: Any) -> None:
+    journal = tmp_path / "state.db"
+    clock = VirtualClock(0.0)
+    m, _, records, opened = build("30 seconds", journal=journal, clock=clock)
+    m.update(night=True)
+    m.event("CurtainOpenRequest")
+    assert opened == [] and kinds(records, "held")
+    m.close()  # the process ends while the action is held
+    clock2 = VirtualClock(5.0)
+    m2, _, records2, opened2 = build("30 seconds", journal=journal, clock=clock2)
+    assert kinds(records2, "task-interrupted") == []  # held, not lost: it waits again
+    assert m2.request("OpenCurtains") is False and opened2 == []
+    clock2.set(31.0)
+    m2.tick()
+    assert opened2 == [31.0] and m2.request("OpenCurtains") is True
+    assert final(records2)["R1:0"] == ("fulfilled", 31.0)
+    m2.close()
+
+
+def test_an_undetermined_higher_rule_cancels_nothing() -> None:
+    # R2 > R1, but R2's condition reads a measure with no value: its fail-closed prohibition
+    # holds (the prohibition wins), yet no activation of R2 exists to cancel R1 by priority
+    m, _clock, records, opened = build(priorities=["R2 > R1"])
+    m.event("CurtainOpenRequest")  # night unknown
+    assert kinds(records, "cancelled") == []
+    assert final(records)["R1:0"][0] == "refused" and opened == []
+    m.close()
+
+
+def test_start_records_the_options_the_run_judges_by(tmp_path: Any) -> None:
+    m, _clock, records, _ = build(priorities=["R1 > R2"], priority_semantics="conflict-aware", priority_lead=2.0)
+    (o,) = kinds(records, "options")
+    assert o == {
+        "semantics": "last-wins",
+        "unknown": "undetermined",
+        "untimed": "none",
+        "priorities": [["R1", "R2"]],
+        "priority_semantics": "conflict-aware",
+        "priority_lead": 2.0,
+    }
+    m.close()
+
+
+class Drifting(VirtualClock):
+    """A clock that moves a millisecond every time it is read (a busy real clock)."""
+
+    def now(self) -> float:
+        t = super().now()
+        self.set(t + 0.001)
+        return t
+
+
+def test_an_occurrence_is_recorded_at_the_time_it_was_judged_at() -> None:
+    clock = Drifting(0.0)
+    m = Manager.from_text(
+        "def_start event T event E def_end rule_start R1 when T then E within 1 seconds rule_end",
+        clock=clock,
+        dispatch=False,
+    )
+    records: list[Any] = []
+    m.subscribe(records.append)
+    m.start()
+    m.event("T")
+    m.event("E")
+    (ob,) = [d for d in kinds(records, "obligation") if d["status"] == "fulfilled"]
+    (e,) = [r for r in records if r.kind == "event" and r.data["event"] == "E"]
+    assert e.time == ob["at"]  # a reader re-judging the log sees the same instant
+    m.close()
+
+
+@pytest.mark.parametrize("bad", [[("R1",)], [42], 7, [("R1", 2)]])
+def test_malformed_priorities_are_configuration_errors(bad: Any) -> None:
+    from cosleec.runtime import ConfigurationError
+
+    with pytest.raises(ConfigurationError):
+        build(priorities=bad)

@@ -189,6 +189,23 @@ def test_a_prohibition_refuses_requests_up_to_its_deadline_included() -> None:
     assert answers == [False, False, False, False, True, True]
 
 
+def test_a_prohibition_that_has_ended_forbids_nothing_more() -> None:
+    """Violated once (its verdict is final) or cancelled by a priority, a prohibition no
+    longer refuses its event. Mutant: closed-prohibition-still-forbids."""
+    m, clock, _ = manager(NOT3)
+    m.event("T0")
+    clock.set(1)
+    m.event("A")  # happened anyway: violated
+    assert m.request("A") is True
+    rules = "R1 when T1 then B within 5 seconds\nR2 when T0 then not A within 10 seconds"
+    m, clock, _ = manager(rules, priorities=["R1 > R2"])
+    m.event("T0")
+    assert m.request("A") is False
+    clock.set(1)
+    m.event("T1")  # R2 is cancelled (cancellation-based priority)
+    assert m.request("A") is True
+
+
 INTERVAL_NOT = "R1 when T0 then not A within [2 seconds, 5 seconds]"
 
 
@@ -517,6 +534,24 @@ def test_a_cancelled_instance_imposes_nothing_and_an_empty_one_cancels_nothing()
     rules = "R1 when T0 then not A within (3 - {n}) seconds\nR2 when T1 then B within 5 seconds"
     seen = both(rules, [at(0, n=4), ev(0, "T1"), ev(1, "T0"), ev(2, "B")], priorities=[("R1", "R2")])
     assert seen.items == [("R2:0", 0, "fulfilled", 2), ("R1:0", 1, "respected", 1)]
+
+
+@pytest.mark.parametrize("semantics", ["cancel", "conflict-aware"])
+def test_an_undetermined_higher_decision_cancels_nothing(semantics: str) -> None:
+    """R1's trigger condition reads b, which has no value: the reference imposes nothing for
+    that firing; the runtime holds R1's prohibition fail-closed, but that policy must not
+    cancel R2 (R1 may well not apply): R2's obligation is violated at its deadline."""
+    rules = "R1 when T0 and {b} then not A within 5 seconds\nR2 when T1 then B within 5 seconds"
+    trace = [Step(0, values={"n": 1, "s": "low"}), ev(0, "T1"), ev(1, "T0"), tick(9)]
+    opts = {"priorities": [("R1", "R2")], "priority_semantics": semantics}
+    want = reference(rules, trace, opts)
+    assert [(key, status, at) for _, _, key, _, _, status, at in want["verdicts"]] == [
+        ("R2:0", "violated", 5)
+    ]
+    got = runtime(rules, trace, opts)
+    assert [(key, status, at) for _, rule, key, _, _, status, at in got["verdicts"] if rule == "R2"] == [
+        ("R2:0", "violated", 5)
+    ]
 
 
 CA_RULES = "R1 when T0 then A within 5 seconds\nR2 when T0 then not A within 10 seconds"

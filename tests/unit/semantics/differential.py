@@ -48,6 +48,7 @@ deadlines = st.one_of(
         lambda p: f"within [{p[0]} seconds, {p[0] + p[1]} seconds]"
     ),
     st.just("within [1 seconds, ({n} * 1) seconds]"),
+    st.just("within [({n} * 1) seconds, 6 seconds]"),
     st.just("eventually"),
     st.just(""),  # untimed
 )
@@ -83,6 +84,8 @@ def responses(draw: st.DrawFn, depth: int = 0, braced: bool = False) -> str:
 def inner(draw: st.DrawFn, depth: int) -> str:
     if draw(st.booleans()):
         return "{" + draw(responses(depth, braced=True)) + "}"
+    if draw(st.integers(0, 4)) == 0:  # two items: an `else` of this is met only by both
+        return "{" + draw(occurrences()) + " and " + draw(occurrences()) + "}"
     return draw(occurrences())
 
 
@@ -135,6 +138,7 @@ class Case:
     semantics: HedgeSemantics
     priorities: tuple[tuple[str, str], ...]
     priority_semantics: str
+    lead: float = 0.0
 
 
 @st.composite
@@ -151,6 +155,7 @@ def cases(draw: st.DrawFn) -> Case:
         draw(st.sampled_from(list(HedgeSemantics))),
         pri,
         draw(st.sampled_from(["cancel", "conflict-aware"])),
+        draw(st.sampled_from([0.0, 0.0, 1.0, 2.5])),
     )
 
 
@@ -164,6 +169,7 @@ def reference(case: Case) -> dict[str, Any]:
             semantics=case.semantics,
             priorities=frozenset(case.priorities),
             priority_semantics=case.priority_semantics,
+            lead=case.lead,
         ),
     )
     return {
@@ -186,6 +192,7 @@ def runtime(case: Case) -> dict[str, Any]:
         semantics=case.semantics,
         priorities=list(case.priorities),
         priority_semantics=case.priority_semantics,
+        priority_lead=case.lead,
     )
     final: dict[int, dict[str, Any]] = {}
     conflicts: list[tuple[Any, ...]] = []
