@@ -40,7 +40,9 @@ def run(args: argparse.Namespace) -> int:
     rules = RuleSet.from_file(args.rules, infer_defs=args.infer_defs)  # SleecError: the CLI shows it, exit 1
     m = Manager(rules, semantics=args.semantics, clock=VirtualClock(), dispatch=False)
     conflicts: list[dict[str, object]] = []
+    cancelled: list[dict[str, object]] = []
     m.subscribe(lambda ev: conflicts.append(ev.data) if ev.kind == "conflict" else None)
+    m.subscribe(lambda ev: cancelled.append(ev.data) if ev.kind == "cancelled" else None)
     values = {}
     for item in args.values:
         name, sep, text = item.partition("=")
@@ -85,6 +87,7 @@ def run(args: argparse.Namespace) -> int:
                 for d in decisions
             ],
             "conflicts": conflicts,
+            "cancelled": cancelled,
         }
         print(json.dumps(doc, indent=2))
     else:
@@ -94,4 +97,6 @@ def run(args: argparse.Namespace) -> int:
             print(d.explanation)
         for c in conflicts:
             print(f"conflict: {c['explanation']}")
+        for c in cancelled:
+            print(f"cancelled: {c['rule']}, by the priority of {c['by']} ({c['priority']})")
     return 0

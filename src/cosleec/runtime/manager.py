@@ -987,7 +987,7 @@ class Manager:
     ) -> None:
         """Record that obligation ``o`` and prohibition ``p`` conflict, and how it is resolved."""
         self.stats["conflicts"] += 1
-        until = "ever" if p.hi is None else _number(p.hi)
+        until = "ever" if p.hi is None else f"{p.hi:g} s"
         self._emit(
             step,
             "conflict",

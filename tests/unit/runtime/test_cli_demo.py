@@ -66,6 +66,7 @@ def test_decide_json_shape(capsys: pytest.CaptureFixture[str]) -> None:
             }
         ],
         "conflicts": [],
+        "cancelled": [],
     }
 
 
