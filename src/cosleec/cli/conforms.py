@@ -5,6 +5,14 @@ runtime, so a Manager's audit log can be checked against the rules it ran or aga
 version of them (issue 12). Exit codes: 0 the trace conforms up to its last time (what is
 still pending is printed), 1 something is violated or refused, 2 a usage or input error --
 a bad trace line, a rule file with errors, a name the rules do not know.
+
+The trace is read once, whole (a pipe -- ``/dev/stdin``, ``<(...)``, ``-`` -- is judged
+whole). When it is a Manager's audit log, every option not given on the command line is the
+one the run used (the log's last ``options`` record), and a line says which; names the
+rules do not declare (a newer version of them) are dropped from the log's steps, and said,
+where a written trace is held to the rules (exit 2). ``--json`` writes strict JSON: a number
+that is not finite (a window end past the largest time) is the string ``"inf"``, ``"-inf"``
+or ``"nan"``.
 """
 
 from __future__ import annotations
@@ -15,6 +23,8 @@ import json
 import math
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, TypeGuard
 
 from rich.text import Text
 
@@ -22,17 +32,28 @@ from cosleec.cli.common import add_clause_options, add_priority_options, console
 from cosleec.errors import UserError, clip
 from cosleec.lang import HedgeSemantics, SleecError, Specification, cycle, load, pairs, parse_priority
 from cosleec.semantics import (
+    CANCEL,
     Conflict,
     Judgement,
     Options,
+    Recording,
     Verdict,
     check_trace,
+    fit_trace,
     judge,
-    read,
+    read_recording,
 )
 
 USAGE_ERROR = 2
-STYLE = {"violated": "bold red", "refused": "bold red", "cancelled": "yellow", "conflict": "magenta"}
+STYLE = {
+    "violated": "bold red",
+    "refused": "bold red",
+    "cancelled": "yellow",
+    "conflict": "magenta",
+    "warning": "yellow",
+}
+IMMEDIATE_S = 1.0
+"""``untimed="immediate"``: the deadline the Manager gives an untimed response (its tolerance)."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -41,26 +62,49 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "conforms",
         help="check a recorded run (a JSON Lines trace or a Manager's audit log) against the rules",
         description="Judge a recorded run by the reference semantics. Exit 0: conforms up to the trace's "
-        "last time; 1: something is violated or refused; 2: a usage or input error.",
+        "last time; 1: something is violated or refused; 2: a usage or input error. When TRACE is a "
+        "Manager's audit log, an option not given here is the one the run used.",
     )
     p.add_argument("rules", metavar="RULES", help="the rule file")
     p.add_argument(
         "trace",
         metavar="TRACE",
         help='JSON Lines, one object a line: {"t": 0, "set": {"m": true}}, {"t": 0, "event": "E"}, '
-        '{"t": 360}; or a Manager\'s audit log',
+        '{"t": 360}; or a Manager\'s audit log; - reads standard input',
     )
-    add_clause_options(p, unknown=False)
-    add_priority_options(p)
+    add_clause_options(
+        p,
+        unknown=False,
+        semantics_help="how the unless clauses of a rule combine (default: the audit log's, else "
+        "last-wins, as SLEEC)",
+    )
+    add_priority_options(p, lead=True)
     p.add_argument(
         "--untimed",
-        type=_seconds,
+        type=_untimed,
         default=None,
-        metavar="SECONDS",
-        help="a deadline for responses written without `within` (default: none, they stay pending)",
+        metavar="none|immediate|SECONDS",
+        help="the deadline of a response written without `within`, as the Manager's option: none "
+        f"(they stay pending; the default), immediate ({IMMEDIATE_S:g} s) or seconds",
     )
     p.add_argument("--json", action="store_true", help="print one JSON document instead of text")
-    p.set_defaults(run=run)
+    # None is "not given": an audit log's options fill only what the command line leaves out
+    p.set_defaults(run=run, semantics=None, priority_semantics=None, priority_lead=None)
+
+
+OPTIONS = ("semantics", "priorities", "priority_semantics", "priority_lead", "untimed")
+"""The options a Manager's audit log records, by their JSON names, in the order they are shown."""
+
+
+@dataclass
+class _Chosen:
+    """The options a trace is judged with, and what the user is told about them."""
+
+    options: Options
+    from_audit: list[str] = field(default_factory=list)  # the options taken from the log (OPTIONS)
+    said: list[str] = field(default_factory=list)  # those options as the text line shows them
+    notes: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -71,46 +115,148 @@ def run(args: argparse.Namespace) -> int:
     same way.
     """
     try:
+        lead: float | None = args.priority_lead  # float(), as the Manager node's: check it here
+        if lead is not None and not (math.isfinite(lead) and lead >= 0):
+            raise UserError(
+                f"--priority-lead {lead}: not a finite number of seconds >= 0",
+                where="--priority-lead",
+                hint="give how long before the forcing deadline the lower rule is cancelled, e.g. 5",
+            )
         spec = load(args.rules)
-        steps = read(args.trace)
-        if not steps:  # checking nothing must not look like a pass
+        recording = read_recording(args.trace)  # once: a pipe cannot be read twice
+        if not recording.steps:  # checking nothing must not look like a pass
             raise UserError(
                 "the trace is empty",
-                where=str(args.trace),
+                where=recording.source,
                 hint='give one step a line, e.g. {"t": 0, "event": "E"}',
             )
-        check_trace(spec, steps, path=args.trace)
-        options = Options(
-            semantics=HedgeSemantics(args.semantics),
-            untimed=args.untimed,
-            priorities=frozenset(_priorities_of(spec, args.priority)),
-            priority_semantics=args.priority_semantics,
-        )
-        judgement = judge(spec, steps, options)
+        notes: list[str] = []
+        if recording.audit:  # checked against these rules, perhaps a newer version than it ran
+            steps, notes = fit_trace(spec, recording.steps)
+        else:
+            check_trace(spec, recording.steps, path=recording.source)
+            steps = recording.steps
+        chosen = _choose(args, spec, recording)
+        chosen.notes[:0] = notes
+        judgement = judge(spec, steps, chosen.options)
     except UserError as e:
         print(e.render() if isinstance(e, SleecError) else f"cosleec: {e.render()}", file=sys.stderr)
         return USAGE_ERROR
+    options = chosen.options
     if args.json:
         doc = {
             "rules": str(args.rules),
-            "trace": str(args.trace),
+            "trace": recording.source,
             "options": {
                 "semantics": str(options.semantics),
                 "untimed": options.untimed,
                 "priorities": [list(pair) for pair in sorted(options.priorities)],
                 "priority_semantics": options.priority_semantics,
+                "priority_lead": options.lead,
+                "from_audit": chosen.from_audit,
             },
+            "notes": chosen.notes,
+            "warnings": chosen.warnings,
             **judgement.to_json(),
         }
-        print(json.dumps(doc, indent=2))
+        print(json.dumps(json_safe(doc), indent=2, allow_nan=False))
     else:
-        _print(judgement)
+        _print(judgement, chosen, recording)
     return 0 if judgement.conforms else 1
 
 
-def _priorities_of(spec: Specification, given: Sequence[str]) -> list[tuple[str, str]]:
-    """The file's priorities and those given with ``--priority``; UserError for an unknown
-    rule name, a rule over itself, or a cycle (``A > B`` and ``B > A``)."""
+def json_safe(x: Any) -> Any:
+    """``x`` with every float that is not finite as the string ``"inf"``, ``"-inf"`` or ``"nan"``
+    (strict JSON has no such numbers; ``json.dumps(..., allow_nan=False)`` accepts the result)."""
+    if isinstance(x, float) and not math.isfinite(x):
+        return "nan" if math.isnan(x) else "inf" if x > 0 else "-inf"
+    if isinstance(x, dict):
+        return {k: json_safe(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [json_safe(v) for v in x]
+    return x
+
+
+def _choose(args: argparse.Namespace, spec: Specification, recording: Recording) -> _Chosen:
+    """The options: those given on the command line, else the audit log's, else the defaults."""
+    given: dict[str, Any] = {
+        "semantics": args.semantics,
+        "priority_semantics": args.priority_semantics,
+        "priority_lead": args.priority_lead,
+        "untimed": args.untimed,
+    }
+    log = recording.options
+    chosen = _Chosen(Options())
+    said: dict[str, str] = {}
+    if log is None:
+        priorities = _priorities_of(spec, args.priority)
+    else:
+        logged = {
+            "semantics": log.semantics,
+            "priority_semantics": log.priority_semantics,
+            "priority_lead": log.priority_lead,
+            "untimed": log.untimed,
+        }
+        for key, value in logged.items():
+            if given[key] is None:
+                given[key] = value
+                said[key] = f"{key.replace('_', '-')} {_said(value)}"
+        if args.priority:
+            priorities = _priorities_of(spec, args.priority)
+        else:
+            where = f"{recording.source}:{log.line}"
+            priorities = _priorities_of(spec, [], logged=log.priorities, where=where, notes=chosen.notes)
+            shown = [f"priority {h} > {lo}" for h, lo in log.priorities if (h, lo) in priorities]
+            said["priorities"] = ", ".join(shown) or "no priority"
+    chosen.from_audit = [key for key in OPTIONS if key in said]
+    chosen.said = [said[key] for key in chosen.from_audit]
+    chosen.options = Options(
+        semantics=HedgeSemantics(given["semantics"] or HedgeSemantics.LAST_WINS),
+        untimed=_untimed_seconds("none" if given["untimed"] is None else given["untimed"]),
+        priorities=frozenset(priorities),
+        priority_semantics=given["priority_semantics"] or CANCEL,
+        lead=0.0 if given["priority_lead"] is None else float(given["priority_lead"]),
+    )
+    if recording.audit and log is None:
+        chosen.notes.append(
+            "the audit log records no options (a Manager from before they were recorded): "
+            "options not given here are the defaults"
+        )
+    if log is not None and recording.options_differ and chosen.from_audit:
+        chosen.warnings.append(
+            f"the log has runs with different options: those of the last (line {log.line}) are used"
+        )
+    if log is not None and log.unknown not in (None, "undetermined"):
+        chosen.warnings.append(
+            f"the run read a condition over a measure with no value as {log.unknown} (unknown={log.unknown}); "
+            "the reference semantics leaves such a firing undetermined, so verdicts may differ"
+        )
+    other = {s: n for s, n in recording.decision_semantics.items() if s != str(chosen.options.semantics)}
+    if other:
+        made = ", ".join(f"{clip(s, 40)} ({_count(n, 'decision')})" for s, n in sorted(other.items()))
+        how = " (given on the command line)" if args.semantics is not None else ""
+        chosen.warnings.append(
+            f"the log's decisions were made with semantics {made}; "
+            f"judged with {chosen.options.semantics}{how}"
+        )
+    return chosen
+
+
+def _priorities_of(
+    spec: Specification,
+    given: Sequence[str],
+    *,
+    logged: Sequence[tuple[str, str]] = (),
+    where: str = "--priority",
+    notes: list[str] | None = None,
+) -> list[tuple[str, str]]:
+    """The file's priorities, those given with ``--priority`` and those an audit log's options
+    record (``logged``, found at ``where``); UserError for an unknown rule name on the command
+    line, a rule over itself, or a cycle (``A > B`` and ``B > A``).
+
+    A logged pair naming a rule these rules do not have (they are a newer version) is left
+    out, with a line in ``notes``.
+    """
     rules = [r.name for r in spec.rules]
     out = list(pairs(spec))
     for text in given:
@@ -131,18 +277,30 @@ def _priorities_of(spec: Specification, given: Sequence[str]) -> list[tuple[str,
                         else f"the rules are {clip(', '.join(rules), 200)}",
                     )
         out += given_pairs
+    known = [(h, lo) for h, lo in logged if h in rules and lo in rules]
+    gone = [f"{h} > {lo}" for h, lo in logged if (h, lo) not in known]
+    if gone and notes is not None:
+        notes.append(
+            f"priorities of the log over rules not in these rules, ignored: {clip(', '.join(gone), 300)}"
+        )
+    out += [pair for pair in known if pair not in out]
+    hint = (
+        "these are the audit log's priorities with the rule file's: choose others with --priority"
+        if logged
+        else ""
+    )
     circle = cycle(out)
     if circle and len(circle) == 2:
         raise UserError(
             f"rule {clip(circle[0], 80)!r} is declared above itself",
-            where="--priority",
-            hint="a priority orders two different rules",
+            where=where,
+            hint=hint or "a priority orders two different rules",
         )
     if circle:
         raise UserError(
             f"the priorities go round in a circle: {clip(' > '.join(circle), 200)}",
-            where="--priority",
-            hint="a rule cannot prevail over a rule that prevails over it; drop one of them",
+            where=where,
+            hint=hint or "a rule cannot prevail over a rule that prevails over it; drop one of them",
         )
     return out
 
@@ -150,8 +308,15 @@ def _priorities_of(spec: Specification, given: Sequence[str]) -> list[tuple[str,
 # ---------------------------------------------------------------------------- human output
 
 
-def _print(j: Judgement) -> None:
+def _print(j: Judgement, chosen: _Chosen, recording: Recording) -> None:
     out = console()
+    if chosen.said:
+        line = recording.options.line if recording.options is not None else 0
+        out.print(_line("options", f"from the audit log (line {line}): {', '.join(chosen.said)}"))
+    for text in chosen.warnings:
+        out.print(_line("warning", text))
+    for text in chosen.notes:
+        out.print(_line("note", text))
     cancelled = [v for v in j.verdicts if v.status == "cancelled"]
     for v in j.breaches:
         out.print(
@@ -198,10 +363,16 @@ def _who(v: Verdict) -> str:
 
 
 def _item(v: Verdict) -> str:
-    """``not CallSupport in [0, 600]``: the item with its absolute window."""
+    """``not CallSupport in [0, 600]``: the item with its absolute window (``[0, never]`` when its
+    end lies past the largest time)."""
     lo, hi = v.window
     window = f"[{_s(lo)}, {_s(hi)}]" if hi is not None else f"from {_s(lo)} s on"
     return f"{'not ' if v.negated else ''}{v.event} in {window}"
+
+
+def _ends(hi: float | None) -> TypeGuard[float]:
+    """Does a window with this end ever close?"""
+    return hi is not None and hi != math.inf
 
 
 def _why(v: Verdict) -> str:
@@ -217,15 +388,15 @@ def _why(v: Verdict) -> str:
     if v.negated:
         return f"{v.by or v.event} happened at {_s(v.at) if v.at is not None else '?'} s{note}"
     hi = v.window[1]
-    return f"no {v.event} by {_s(hi)} s{note}" if hi is not None else f"no {v.event}{note}"
+    return f"no {v.event} by {_s(hi)} s{note}" if _ends(hi) else f"no {v.event}{note}"
 
 
 def _open(v: Verdict) -> str:
     """What a pending verdict still allows after the trace ends."""
     hi = v.window[1]
     if v.negated:
-        return "respected so far" + (f"; forbidden until {_s(hi)} s" if hi is not None else "")
-    return "not yet" + (f"; due by {_s(hi)} s" if hi is not None else "; no deadline")
+        return "respected so far" + (f"; forbidden until {_s(hi)} s" if _ends(hi) else "")
+    return "not yet" + (f"; due by {_s(hi)} s" if _ends(hi) else "; no deadline")
 
 
 def _conflict(c: Conflict) -> str:
@@ -243,20 +414,46 @@ def _count(n: int, noun: str) -> str:
 
 
 def _s(x: float) -> str:
-    """Seconds as the user wrote them: ``360``, ``0.5``; ``17873.099`` for a monotonic clock's time."""
-    if not math.isfinite(x):
-        return str(x)
-    return str(int(x)) if x == int(x) and abs(x) < 1e15 else f"{x:.3f}".rstrip("0").rstrip(".")
+    """Seconds as the user wrote them: ``360``, ``0.5``; ``17873.099`` for a monotonic clock's time;
+    ``1e+308`` for a huge one; ``never`` for an infinite one (a window end past the largest time)."""
+    if math.isnan(x):
+        return "undefined"
+    if math.isinf(x):
+        return "never" if x > 0 else "-inf"
+    if abs(x) >= 1e15:
+        return f"{x:.6g}"
+    return str(int(x)) if x == int(x) else f"{x:.3f}".rstrip("0").rstrip(".")
 
 
-def _seconds(text: str) -> float:
-    """``--untimed``: a finite, non-negative number of seconds (argparse reports anything else, exit 2)."""
+def _said(value: object) -> str:
+    """An option's value on the options line: ``nested``, ``60``, ``immediate (1 s)``."""
+    if value == "immediate":
+        return f"immediate ({_s(IMMEDIATE_S)} s)"
+    return _s(value) if isinstance(value, float) else str(value)
+
+
+def _untimed(text: str) -> str | float:
+    """``--untimed``: ``none``, ``immediate`` or a finite, non-negative number of seconds (argparse
+    reports anything else, exit 2)."""
+    if text in ("none", "immediate"):
+        return text
     try:
         value = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{clip(text, 40)!r} is not a number of seconds") from None
+        raise argparse.ArgumentTypeError(
+            f"{clip(text, 40)!r} is not none, immediate or a number of seconds"
+        ) from None
     if not math.isfinite(value) or value < 0:
         raise argparse.ArgumentTypeError(
             f"{clip(text, 40)!r} is not a finite, non-negative number of seconds"
         )
     return value
+
+
+def _untimed_seconds(value: str | float) -> float | None:
+    """The reference's ``Options.untimed`` for the Manager's option: none -> None, immediate -> 1 s."""
+    if value == "none":
+        return None
+    if value == "immediate":
+        return IMMEDIATE_S
+    return float(value)

@@ -8,7 +8,19 @@ Small and slow on purpose: written from the language reference, sharing no code 
 from __future__ import annotations
 
 from cosleec.semantics.reference import CANCEL, CONFLICT_AWARE, Options, judge
-from cosleec.semantics.trace import Step, TraceError, Value, check_trace, read, read_audit, read_trace
+from cosleec.semantics.trace import (
+    Recording,
+    RunOptions,
+    Step,
+    TraceError,
+    Value,
+    check_trace,
+    fit_trace,
+    read,
+    read_audit,
+    read_recording,
+    read_trace,
+)
 from cosleec.semantics.verdicts import Conflict, Firing, Judgement, Verdict
 
 __all__ = [
@@ -18,13 +30,17 @@ __all__ = [
     "Firing",
     "Judgement",
     "Options",
+    "Recording",
+    "RunOptions",
     "Step",
     "TraceError",
     "Value",
     "Verdict",
     "check_trace",
+    "fit_trace",
     "judge",
     "read",
     "read_audit",
+    "read_recording",
     "read_trace",
 ]

@@ -11,26 +11,33 @@ Two files become traces (issue 12), both JSON Lines, one object a line:
   ``{"t": 0, "event": "UserFallen"}``, ``{"t": 360}``;
 - the Manager's own audit log (:func:`read_audit`), so a real run can be checked ex post.
 
-:func:`read` tells them apart, :func:`check_trace` holds a trace against the declarations of
-a specification. Every problem is a :class:`TraceError` naming ``file:line``. This module
+:func:`read_recording` reads a file of either kind -- once, so a pipe (``/dev/stdin``,
+``<(cat trace.jsonl)``) is read whole -- and tells them apart; for an audit log it also
+returns the options the run used (the Manager's ``options`` record) and the semantics its
+decisions were made with. :func:`read` is its steps alone. :func:`check_trace` holds a
+written trace against the declarations of a specification; :func:`fit_trace` fits an audit
+log to rules that may be a newer version than those it ran (what they do not declare is
+dropped, and said). Every problem is a :class:`TraceError` naming ``file:line``. This module
 reads the audit log's records itself: ``semantics`` sits beside ``runtime`` and imports only
 ``lang`` (and ``errors``), so the record layout is restated here, from what
 ``cosleec.runtime`` writes (``Manager._commit``: ``seq``, ``kind``, ``time``, then the
-record's data at the top level).
+record's data at the top level; ``Manager.start()``: an ``options`` record).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import json
 import math
+import sys
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeGuard
 
 from cosleec.errors import UserError, clip, show
-from cosleec.lang import Specification, ast
+from cosleec.lang import HedgeSemantics, Specification, Unknowns, ast
 
 Value = bool | int | float | str  # a scale measure's value is its literal's name
 
@@ -38,6 +45,12 @@ KEYS = ("t", "set", "event")
 """The keys of a trace line."""
 
 EXAMPLE = '{"t": 0, "set": {"assentToSupportCalls": false}} or {"t": 0, "event": "UserFallen"} or {"t": 360}'
+
+STDIN = "-"
+"""The name that reads the trace from standard input."""
+
+PRIORITY_SEMANTICS = ("cancel", "conflict-aware")  # restated from cosleec.semantics.reference
+UNTIMED_WORDS = ("none", "immediate")  # the Manager's untimed option, besides a number of seconds
 
 
 @dataclass(frozen=True, slots=True)
@@ -64,21 +77,89 @@ class TraceError(UserError):
     """
 
 
-def read(path: str | Path) -> list[Step]:
-    """The steps of a trace file or of a Manager's audit log, whichever ``path`` is.
+@dataclass(frozen=True, slots=True)
+class RunOptions:
+    """The options a Manager ran with, as its ``options`` audit record states them.
 
-    Use it when the user may give either (``cosleec conforms``). An audit log is
-    recognised by its first record, which has ``seq`` and ``kind``; anything else is read
-    as a written trace, and its errors are a trace's errors.
+    ``semantics``: ``last-wins`` or ``nested``; ``priorities``: every declared ``(higher,
+    lower)`` pair, the rule file's and the Manager's (sorted, each once);
+    ``priority_semantics``: ``cancel`` or ``conflict-aware``; ``priority_lead``: seconds;
+    ``untimed``: ``"none"``, ``"immediate"`` or seconds; ``unknown``: how the Manager read
+    a condition over a measure with no value (None: the record does not say). ``line`` and
+    ``run`` say which record (they take no part in comparisons: two runs with equal options
+    are equal).
     """
-    first = _first_line(path)
+
+    semantics: str
+    priorities: tuple[tuple[str, str], ...]
+    priority_semantics: str
+    priority_lead: float
+    untimed: str | float
+    unknown: str | None = None
+    line: int = field(default=0, compare=False)
+    run: str | None = field(default=None, compare=False)
+
+
+@dataclass(frozen=True, slots=True)
+class Recording:
+    """A trace file read once: its steps and, for a Manager's audit log, what the log says of the run.
+
+    ``source``: the file's name in messages (``<stdin>`` for ``-``); ``audit``: the file
+    is an audit log; ``options``: its last ``options`` record (None: a
+    written trace, or a log from before the Manager recorded its options);
+    ``options_differ``: the log holds options records that disagree (several runs, run
+    differently: ``options`` is the last); ``decision_semantics``: how many ``decision``
+    records were made with each clause semantics.
+    """
+
+    steps: list[Step]
+    source: str = ""
+    audit: bool = False
+    options: RunOptions | None = None
+    options_differ: bool = False
+    decision_semantics: Mapping[str, int] = field(default_factory=dict)
+
+
+def read_recording(path: str | Path) -> Recording:
+    """A trace file or a Manager's audit log, whichever ``path`` is, read once.
+
+    The file is read exactly once, whole, before anything is decided, so a pipe
+    (``/dev/stdin``, a shell's ``<(...)``) is judged whole; ``-`` reads standard input. An
+    audit log is recognised by its first record, which has ``seq`` and ``kind``; anything
+    else is read as a written trace, and its errors are a trace's errors.
+    """
+    data = _bytes(path)
+    path = _source(path)
+    lines, complete = _lines(path, data)
+    first = next((text for _, text in lines if text.strip()), "")
     try:
         record = json.loads(first)
     except (ValueError, RecursionError):  # a torn first (and only) record still starts like one
         is_audit = first.lstrip().startswith('{"seq":')
     else:
         is_audit = isinstance(record, dict) and "seq" in record and "kind" in record
-    return read_audit(path) if is_audit else read_trace(path)
+    if not is_audit:
+        return Recording(list(_trace_steps(path, lines)), path)
+    reader = _AuditReader(path)
+    steps = list(reader.steps(lines, complete))
+    distinct = set(reader.options)
+    return Recording(
+        steps,
+        path,
+        audit=True,
+        options=reader.options[-1] if reader.options else None,
+        options_differ=len(distinct) > 1,
+        decision_semantics=dict(reader.decision_semantics),
+    )
+
+
+def read(path: str | Path) -> list[Step]:
+    """The steps of a trace file or of a Manager's audit log, whichever ``path`` is.
+
+    Use it when the user may give either; :func:`read_recording` also returns what an
+    audit log says of its run.
+    """
+    return read_recording(path).steps
 
 
 def read_trace(path: str | Path) -> list[Step]:
@@ -90,7 +171,9 @@ def read_trace(path: str | Path) -> list[Step]:
     Raises :class:`TraceError` naming the line for anything else. Names are not checked
     against rules here: that is :func:`check_trace`.
     """
-    return list(_trace_steps(path, _lines(path)))
+    data = _bytes(path)
+    lines, _ = _lines(_source(path), data)
+    return list(_trace_steps(_source(path), lines))
 
 
 def read_audit(path: str | Path) -> list[Step]:
@@ -100,9 +183,12 @@ def read_audit(path: str | Path) -> list[Step]:
     went stale is ``None``: unknown); every other record (decisions, obligations, tasks,
     rejections...) only advances time, so the trace ends at the last record's time. A torn
     last line -- the process crashed while writing it -- is ignored; any other line that is
-    not an audit record raises :class:`TraceError`.
+    not an audit record raises :class:`TraceError`. An ``options`` record must be well
+    formed (:class:`RunOptions`).
     """
-    return list(_audit_steps(path, _lines(path)))
+    data = _bytes(path)
+    lines, complete = _lines(_source(path), data)
+    return list(_AuditReader(_source(path)).steps(lines, complete))
 
 
 def check_trace(spec: Specification, steps: Iterable[Step], *, path: str | Path = "") -> None:
@@ -139,15 +225,69 @@ def check_trace(spec: Specification, steps: Iterable[Step], *, path: str | Path 
                 )
 
 
+def fit_trace(spec: Specification, steps: Iterable[Step]) -> tuple[list[Step], list[str]]:
+    """``steps`` fitted to ``spec``, and one note per kind of change (none when nothing changed).
+
+    For an audit log checked against rules that may be a newer version than those it ran
+    (issue 12): an event or a measure ``spec`` does not declare is dropped from the steps
+    (a step left empty still marks the time), and a value of another type than ``spec``
+    declares becomes unknown (``None``) -- not dropped, which would let the measure's
+    earlier value stand past the moment it changed. A written trace is held to the rules
+    instead (:func:`check_trace`).
+    """
+    events = {d.name for d in spec.events}
+    measures = {d.name: d.type for d in spec.measures}
+    unknown: dict[str, str] = {}  # name -> what it is in spec, if anything
+    mistyped: dict[str, str] = {}  # measure -> its first value of the wrong type, and where
+    out: list[Step] = []
+    for step in steps:
+        event = step.event
+        if event is not None and event not in events:
+            unknown.setdefault(event, " (a measure here)" if event in measures else "")
+            event = None
+        values: dict[str, Value | None] = {}
+        for name, value in step.values.items():
+            kind = measures.get(name)
+            if kind is None:
+                unknown.setdefault(name, " (an event here)" if name in events else "")
+            elif _type_problem(kind, value):
+                mistyped.setdefault(name, f"{clip(name)} ({kind}): {show(value, 40)}" + _at(step.line))
+                values[name] = None
+            else:
+                values[name] = value
+        same = event == step.event and values == step.values
+        out.append(step if same else dataclasses.replace(step, event=event, values=values))
+    notes = []
+    if unknown:
+        names = ", ".join(clip(name, 80) + unknown[name] for name in sorted(unknown))
+        notes.append(f"not in these rules, ignored: {clip(names, 300)}")
+    if mistyped:
+        given = ", ".join(mistyped[name] for name in sorted(mistyped))
+        notes.append(f"not of the type these rules declare, read as unknown: {clip(given, 300)}")
+    return out, notes
+
+
 # ---------------------------------------------------------------------------- reading lines
 
 
-def _lines(path: str | Path) -> list[tuple[int, str]]:
-    """``(line number, text)`` for each line of the file (UTF-8, a BOM allowed); TraceError if unreadable."""
+def _bytes(path: str | Path) -> bytes:
+    """The whole file, read once (``-``: standard input); TraceError if it cannot be read."""
     try:
-        data = Path(path).read_bytes()
+        if str(path) == STDIN:
+            return sys.stdin.buffer.read()
+        return Path(path).read_bytes()
     except OSError as e:
         raise TraceError(f"cannot read the trace: {e.strerror or e}", where=str(path)) from None
+
+
+def _source(path: str | Path) -> str:
+    """The name of ``path`` in messages."""
+    return "<stdin>" if str(path) == STDIN else str(path)
+
+
+def _lines(path: str, data: bytes) -> tuple[list[tuple[int, str]], bool]:
+    """``(line number, text)`` for each line of ``data`` (UTF-8, a BOM allowed), and whether
+    the text ends with a newline (else its last line may be torn); TraceError if not UTF-8."""
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError as e:
@@ -157,20 +297,8 @@ def _lines(path: str | Path) -> list[tuple[int, str]]:
         ) from None
     # JSON Lines separates records by "\n" only: str.splitlines would also split inside a line
     # at \x1c, \u2028 and friends, and the line numbers in messages would drift
-    return [(n, raw.removesuffix("\r")) for n, raw in enumerate(text.split("\n"), 1)]
-
-
-def _first_line(path: str | Path) -> str:
-    """The first non-blank line, read alone ("" when there is none or the file cannot be
-    read: the reader then reports what is wrong, with its line)."""
-    try:
-        with Path(path).open("rb") as fh:
-            for raw in fh:
-                if raw.strip():
-                    return raw.decode("utf-8-sig", "replace")
-    except OSError:
-        pass
-    return ""
+    lines = [(n, raw.removesuffix("\r")) for n, raw in enumerate(text.split("\n"), 1)]
+    return lines, not data or data.endswith(b"\n")
 
 
 def _parse(path: str | Path, n: int, text: str, hint: str, *, unique: bool = True) -> object:
@@ -245,6 +373,12 @@ def _trace_steps(path: str | Path, lines: Sequence[tuple[int, str]]) -> Iterator
                     else 'a line has "t", and "set" and/or "event"',
                 )
         t = _time(obj.get("t"), "t" in obj, where)
+        if t < 0:
+            raise TraceError(
+                f"t is negative: {_s(t)}",
+                where=where,
+                hint="times are seconds from the start of the run, >= 0",
+            )
         if last is not None and t < last:
             raise TraceError(
                 f"time goes back: t is {_s(t)}, after {_s(last)} on an earlier line",
@@ -294,7 +428,7 @@ def _time(t: object, present: bool, where: str, key: str = "t") -> float:
             where=where,
             hint="give the time in seconds",
         )
-    return seconds
+    return seconds + 0.0  # -0.0 is 0
 
 
 def _values(given: Mapping[str, object], where: str) -> dict[str, Value | None]:
@@ -330,62 +464,119 @@ def _finite(x: int | float) -> bool:
 # ---------------------------------------------------------------------------- audit logs
 
 
-def _audit_steps(path: str | Path, lines: Sequence[tuple[int, str]]) -> Iterator[Step]:
-    lines = [(n, text) for n, text in lines if text.strip()]
-    last: float | None = None
-    run: object = None
-    for i, (n, text) in enumerate(lines):
-        where = f"{path}:{n}"
-        try:
-            rec = _parse(path, n, text, "an audit log line is one record the Manager wrote", unique=False)
-        except TraceError:
-            if i == len(lines) - 1 and _torn(path):
-                return  # the process died mid-write: the record never happened
-            raise
-        if not isinstance(rec, dict) or "seq" not in rec or not isinstance(rec.get("kind"), str):
-            raise TraceError(
-                "not an audit record (a JSON object with seq, kind and time)",
-                where=where,
-                hint="give either a Manager's audit log or a trace, not a mix of both",
-            )
-        kind: str = rec["kind"]
-        t = _time(rec.get("time"), "time" in rec, where, "time")
-        if kind in ("event", "context") and last is not None and t < last:
-            again = " (a new run starts here)" if rec.get("run") != run else ""
-            raise TraceError(
-                f"time goes back in the audit log: {_s(t)} after {_s(last)}{again}",
-                where=where,
-                hint="check each run of the log on its own: split it where the `run` field changes",
-            )
-        run = rec.get("run")
-        if kind == "event":
-            event = rec.get("event")
-            if not isinstance(event, str) or not event:
-                raise TraceError(f"an event record names no event: {show(event)}", where=where)
-            yield Step(t=t, event=event, line=n)
-        elif kind == "context":
-            values = rec.get("values")
-            if not isinstance(values, dict):
-                raise TraceError(f"a context record has no values: {show(values)}", where=where)
-            yield Step(t=t, values=_values(values, where), line=n)
-        elif last is None or t > last:
-            # a record at an earlier time (a fallback's decision carries its deadline) is no step back
-            yield Step(t=t, line=n)
-        else:
-            continue
-        last = t if last is None else max(last, t)
+class _AuditReader:
+    """Reads an audit log's records into steps, collecting its ``options`` records and the
+    clause semantics of its ``decision`` records on the way."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = path
+        self.options: list[RunOptions] = []
+        self.decision_semantics: dict[str, int] = {}
+
+    def steps(self, lines: Sequence[tuple[int, str]], complete: bool) -> Iterator[Step]:
+        """The steps of ``lines``; ``complete``: the text ends with a newline (else the last
+        line may be a write a crash cut short, and is ignored when it is not JSON)."""
+        path = self.path
+        lines = [(n, text) for n, text in lines if text.strip()]
+        last: float | None = None
+        run: object = None
+        for i, (n, text) in enumerate(lines):
+            where = f"{path}:{n}"
+            try:
+                rec = _parse(path, n, text, "an audit log line is one record the Manager wrote", unique=False)
+            except TraceError:
+                if i == len(lines) - 1 and not complete:
+                    return  # the process died mid-write: the record never happened
+                raise
+            if not isinstance(rec, dict) or "seq" not in rec or not isinstance(rec.get("kind"), str):
+                raise TraceError(
+                    "not an audit record (a JSON object with seq, kind and time)",
+                    where=where,
+                    hint="give either a Manager's audit log or a trace, not a mix of both",
+                )
+            kind: str = rec["kind"]
+            t = _time(rec.get("time"), "time" in rec, where, "time")
+            if kind in ("event", "context") and last is not None and t < last:
+                again = " (a new run starts here)" if rec.get("run") != run else ""
+                raise TraceError(
+                    f"time goes back in the audit log: {_s(t)} after {_s(last)}{again}",
+                    where=where,
+                    hint="check each run of the log on its own: split it where the `run` field changes",
+                )
+            run = rec.get("run")
+            if kind == "options":
+                self.options.append(_run_options(rec, where, n))
+            elif kind == "decision" and isinstance(rec.get("semantics"), str):
+                name = clip(rec["semantics"], 40)
+                self.decision_semantics[name] = self.decision_semantics.get(name, 0) + 1
+            if kind == "event":
+                event = rec.get("event")
+                if not isinstance(event, str) or not event:
+                    raise TraceError(f"an event record names no event: {show(event)}", where=where)
+                yield Step(t=t, event=event, line=n)
+            elif kind == "context":
+                values = rec.get("values")
+                if not isinstance(values, dict):
+                    raise TraceError(f"a context record has no values: {show(values)}", where=where)
+                yield Step(t=t, values=_values(values, where), line=n)
+            elif last is None or t > last:
+                # a record at an earlier time (a fallback's decision carries its deadline) is no step back
+                yield Step(t=t, line=n)
+            else:
+                continue
+            last = t if last is None else max(last, t)
 
 
-def _torn(path: str | Path) -> bool:
-    """Does the file end without a newline, as a write cut by a crash leaves it?"""
-    try:
-        with Path(path).open("rb") as fh:
-            if fh.seek(0, 2) == 0:
-                return False
-            fh.seek(-1, 2)
-            return fh.read(1) != b"\n"
-    except OSError:
-        return False
+def _run_options(rec: Mapping[str, Any], where: str, line: int) -> RunOptions:
+    """An ``options`` record's options; TraceError naming the field that is missing or wrong."""
+
+    def bad(key: str, want: str) -> TraceError:
+        got = f"not {show(rec[key], 60)}" if key in rec else "missing"
+        return TraceError(
+            f"the options record's {key!r} is {want}: {got}",
+            where=where,
+            hint="this is not a record a Manager writes; fix the line, or delete it and give the options "
+            "on the command line",
+        )
+
+    semantics = rec.get("semantics")
+    if semantics not in [str(s) for s in HedgeSemantics]:
+        raise bad("semantics", "last-wins or nested")
+    given = rec.get("priorities")
+    if not isinstance(given, list) or not all(
+        isinstance(p, list) and len(p) == 2 and all(isinstance(x, str) and x for x in p) for p in given
+    ):
+        raise bad("priorities", 'a list of ["higher", "lower"] rule name pairs')
+    priority_semantics = rec.get("priority_semantics")
+    if priority_semantics not in PRIORITY_SEMANTICS:
+        raise bad("priority_semantics", " or ".join(PRIORITY_SEMANTICS))
+    lead = rec.get("priority_lead")
+    if not _seconds(lead):
+        raise bad("priority_lead", "a number of seconds >= 0")
+    untimed = rec.get("untimed")
+    if untimed not in UNTIMED_WORDS and not _seconds(untimed):
+        raise bad("untimed", '"none", "immediate" or a number of seconds >= 0')
+    unknown = rec.get("unknown")
+    if "unknown" in rec and unknown not in [str(u) for u in Unknowns]:
+        raise bad("unknown", " or ".join(str(u) for u in Unknowns))
+    assert isinstance(semantics, str) and isinstance(priority_semantics, str)
+    assert isinstance(lead, int | float) and isinstance(untimed, str | int | float)
+    run = rec.get("run")
+    return RunOptions(
+        semantics=semantics,
+        priorities=tuple(sorted({(h, lo) for h, lo in given})),
+        priority_semantics=priority_semantics,
+        priority_lead=float(lead),
+        untimed=untimed if isinstance(untimed, str) else float(untimed),
+        unknown=unknown if isinstance(unknown, str) else None,
+        line=line,
+        run=run if isinstance(run, str) else None,
+    )
+
+
+def _seconds(x: object) -> bool:
+    """Is ``x`` a finite number of seconds >= 0 (not a boolean)?"""
+    return isinstance(x, int | float) and not isinstance(x, bool) and _finite(x) and x >= 0
 
 
 # ---------------------------------------------------------------------------- names and types
@@ -427,6 +618,10 @@ def _unknown_hint(name: str, pool: Iterable[str], other: Iterable[str], what: st
     return f"declare `{what} {clip(name)}` in the def block, or fix the name"
 
 
+def _at(line: int) -> str:
+    return f" (line {line})" if line else ""
+
+
 def _where(path: str | Path, line: int) -> str:
     if path and line:
         return f"{path}:{line}"
@@ -440,4 +635,6 @@ def _kind(obj: object) -> str:
 
 def _s(x: float) -> str:
     """Seconds for a message: ``360``, ``0.5``, ``17873.099``."""
-    return str(int(x)) if x == int(x) and abs(x) < 1e15 else f"{x:.3f}".rstrip("0").rstrip(".")
+    if abs(x) >= 1e15:
+        return f"{x:.6g}"
+    return str(int(x)) if x == int(x) else f"{x:.3f}".rstrip("0").rstrip(".")

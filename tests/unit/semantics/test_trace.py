@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import itertools
 import json
+import os
+import threading
 from pathlib import Path
 
 import pytest
@@ -12,7 +14,16 @@ import pytest
 from cosleec.lang import parse
 from cosleec.runtime import ContextError, Manager, VirtualClock
 from cosleec.semantics import Step
-from cosleec.semantics.trace import TraceError, check_trace, read, read_audit, read_trace
+from cosleec.semantics.trace import (
+    RunOptions,
+    TraceError,
+    check_trace,
+    fit_trace,
+    read,
+    read_audit,
+    read_recording,
+    read_trace,
+)
 
 RULES = """def_start
     event UserFallen
@@ -332,3 +343,274 @@ def test_audit_records_may_repeat_a_header_key(tmp_path: Path) -> None:
         '{"seq":2,"kind":"event","time":4,"rules":"e4e99dbb","event":"E"}\n'
     )
     assert steps_of(read_audit(log)) == [(3, None, {}), (4, "E", {})]
+
+
+# ---------------------------------------------------------------------------- read once (pipes)
+
+
+def piped(data: bytes) -> tuple[str, threading.Thread]:
+    """``/dev/fd/N`` of a pipe a thread fills with ``data`` (as ``<(cat trace)`` gives a path)."""
+    r, w = os.pipe()
+
+    def feed() -> None:
+        try:
+            with os.fdopen(w, "wb") as fh:
+                fh.write(data)
+        except BrokenPipeError:  # the reader stopped early: that is the bug a test shows
+            pass
+
+    thread = threading.Thread(target=feed, daemon=True)
+    thread.start()
+    return f"/dev/fd/{r}", thread
+
+
+@pytest.mark.skipif(not Path("/dev/fd").is_dir(), reason="needs /dev/fd")
+def test_a_pipe_is_read_once_whole(tmp_path: Path) -> None:
+    """A pipe can be read once: detecting the format must not consume what the parser reads."""
+    lines = [{"t": 0, "event": "UserFallen"}, *({"t": n} for n in range(1, 3000))]
+    data = "".join(json.dumps(x) + "\n" for x in lines).encode()
+    path, thread = piped(data)
+    try:
+        steps = read(path)
+    finally:
+        os.close(int(path.rsplit("/", 1)[1]))
+        thread.join(5)
+    assert len(steps) == len(lines) and steps[0].event == "UserFallen" and steps[-1].t == 2999
+
+
+@pytest.mark.skipif(not Path("/dev/fd").is_dir(), reason="needs /dev/fd")
+def test_a_piped_audit_log_keeps_its_records_and_drops_a_torn_tail(tmp_path: Path) -> None:
+    log = tmp_path / "audit.jsonl"
+    run_manager(log)
+    whole = read_audit(log)
+    path, thread = piped(log.read_bytes() + b'{"seq":999,"kind":"event","time":700.0,"ev')
+    try:
+        rec = read_recording(path)
+    finally:
+        os.close(int(path.rsplit("/", 1)[1]))
+        thread.join(5)
+    assert rec.audit and rec.steps == whole
+
+
+# ---------------------------------------------------------------------------- negative times
+
+
+@pytest.mark.parametrize("t", ["-5", "-0.001", "-1e300"])
+def test_a_negative_time_is_an_error(tmp_path: Path, t: str) -> None:
+    f = tmp_path / "trace.jsonl"
+    f.write_text(f'\n{{"t": {t}, "event": "UserFallen"}}\n{{"t": 1}}\n')
+    with pytest.raises(TraceError, match="negative") as e:
+        read_trace(f)
+    assert e.value.where == f"{f}:2"
+    assert "seconds from the start of the run" in e.value.hint and ">= 0" in e.value.hint
+
+
+def test_minus_zero_is_the_start(tmp_path: Path) -> None:
+    f = tmp_path / "trace.jsonl"
+    f.write_text('{"t": -0.0}\n{"t": 0}\n')
+    assert [s.t for s in read_trace(f)] == [0, 0]
+
+
+# ---------------------------------------------------------------------------- options records
+
+
+def options_record(seq: int, time: float, run: str = "r1", **over: object) -> str:
+    """An ``options`` audit record as the Manager writes it at start()."""
+    rec: dict[str, object] = {
+        "seq": seq,
+        "kind": "options",
+        "time": time,
+        "wall": "2026-01-01T00:00:00.000000+00:00",
+        "mono": 1.5,
+        "run": run,
+        "rules": "06700cf8c39a7f6f",
+        "semantics": "nested",
+        "priorities": [["Rule21", "Rule3"]],
+        "priority_semantics": "conflict-aware",
+        "priority_lead": 2.5,
+        "untimed": "immediate",
+    }
+    rec.update(over)
+    return json.dumps(rec, separators=(",", ":")) + "\n"
+
+
+def decision_record(seq: int, time: float, semantics: str, run: str = "r1") -> str:
+    return (
+        json.dumps(
+            {
+                "seq": seq,
+                "kind": "decision",
+                "time": time,
+                "run": run,
+                "rules": "x",
+                "type": "decision",
+                "id": seq,
+                "event": "UserFallen",
+                "rule": "Rule3",
+                "clause": 0,
+                "semantics": semantics,
+            },
+            separators=(",", ":"),
+        )
+        + "\n"
+    )
+
+
+def test_the_options_of_an_audit_log_are_read_with_its_steps(tmp_path: Path) -> None:
+    log = tmp_path / "audit.jsonl"
+    log.write_text(
+        options_record(1, 0)
+        + '{"seq":2,"kind":"event","time":0,"run":"r1","rules":"x","event":"UserFallen"}\n'
+        + decision_record(3, 0, "nested")
+        + decision_record(4, 0, "nested")
+    )
+    rec = read_recording(log)
+    assert rec.audit and steps_of(rec.steps) == [(0, None, {}), (0, "UserFallen", {})]
+    assert rec.options == RunOptions(
+        semantics="nested",
+        priorities=(("Rule21", "Rule3"),),
+        priority_semantics="conflict-aware",
+        priority_lead=2.5,
+        untimed="immediate",
+    )
+    assert rec.options is not None and rec.options.line == 1 and rec.options.run == "r1"
+    assert rec.options.unknown is None  # not in this record
+    assert not rec.options_differ
+    assert rec.decision_semantics == {"nested": 2}
+    assert read(log) == rec.steps  # the options record is no step of its own beyond time
+
+
+def test_a_log_without_options_and_a_written_trace_have_none(tmp_path: Path) -> None:
+    log = tmp_path / "audit.jsonl"
+    run_manager(log)
+    rec = read_recording(log)
+    if rec.options is not None:  # the Manager writes them since issue 12
+        assert rec.options.semantics == "last-wins"
+    assert rec.audit and rec.decision_semantics == {"last-wins": 2}
+    f = tmp_path / "trace.jsonl"
+    f.write_text('{"t": 0, "event": "UserFallen"}\n')
+    rec = read_recording(f)
+    assert not rec.audit and rec.options is None and rec.decision_semantics == {}
+
+
+def test_several_runs_the_last_options_count(tmp_path: Path) -> None:
+    log = tmp_path / "audit.jsonl"
+    same = options_record(1, 0, "r1") + options_record(2, 5, "r2")
+    log.write_text(same)
+    assert not read_recording(log).options_differ
+    log.write_text(same + options_record(3, 9, "r3", semantics="last-wins", untimed=30))
+    rec = read_recording(log)
+    assert rec.options_differ
+    assert rec.options is not None and rec.options.line == 3 and rec.options.run == "r3"
+    assert rec.options.semantics == "last-wins" and rec.options.untimed == 30.0
+    # the order of the priority pairs is no difference
+    log.write_text(
+        options_record(1, 0, "r1", priorities=[["A", "B"], ["C", "D"]])
+        + options_record(2, 5, "r2", priorities=[["C", "D"], ["A", "B"], ["A", "B"]])
+    )
+    assert not read_recording(log).options_differ
+
+
+@pytest.mark.parametrize(
+    ("over", "message"),
+    [
+        ({"semantics": "nestd"}, "semantics"),
+        ({"semantics": None}, "semantics"),
+        ({"priorities": "R1 > R2"}, "priorities"),
+        ({"priorities": [["R1"]]}, "priorities"),
+        ({"priorities": [["R1", 2]]}, "priorities"),
+        ({"priority_semantics": "first"}, "priority_semantics"),
+        ({"priority_lead": -1}, "priority_lead"),
+        ({"priority_lead": "1"}, "priority_lead"),
+        ({"priority_lead": True}, "priority_lead"),
+        ({"untimed": "later"}, "untimed"),
+        ({"untimed": -3}, "untimed"),
+        ({"untimed": None}, "untimed"),
+        ({"unknown": "maybe"}, "unknown"),
+    ],
+)
+def test_a_bad_options_record_is_an_error(tmp_path: Path, over: dict[str, object], message: str) -> None:
+    log = tmp_path / "audit.jsonl"
+    log.write_text('{"seq":1,"kind":"event","time":0,"event":"UserFallen"}\n' + options_record(2, 0, **over))
+    with pytest.raises(TraceError, match=message) as e:
+        read_recording(log)
+    assert e.value.where == f"{log}:2"
+
+
+def test_an_options_record_missing_a_field_is_an_error(tmp_path: Path) -> None:
+    log = tmp_path / "audit.jsonl"
+    rec = json.loads(options_record(1, 0))
+    del rec["untimed"]
+    log.write_text(json.dumps(rec) + "\n")
+    with pytest.raises(TraceError, match="untimed") as e:
+        read_recording(log)
+    assert e.value.where == f"{log}:1"
+
+
+def test_a_real_manager_records_its_options(tmp_path: Path) -> None:
+    """Manager.start() writes an ``options`` record (issue 12); skipped until the runtime does."""
+    log = tmp_path / "audit.jsonl"
+    rules = (
+        "def_start event T event A def_end\n"
+        "rule_start\n R1 when T then A within 5 seconds\n R2 when T then not A within 9 seconds\nrule_end\n"
+    )
+    m = Manager.from_text(
+        rules, clock=VirtualClock(), audit=log, semantics="nested", priorities=["R1 > R2"], dispatch=False
+    )
+    m.start()
+    m.event("T")
+    m.close()
+    rec = read_recording(log)
+    if rec.options is None:
+        pytest.skip("this Manager writes no options record yet")
+    assert rec.options.semantics == "nested"
+    assert rec.options.priorities == (("R1", "R2"),)
+    assert rec.options.priority_semantics == "cancel"
+    assert rec.options.priority_lead == 0
+    assert rec.options.untimed == "none"
+    assert rec.options.unknown in (None, "undetermined")
+    assert rec.decision_semantics == {"nested": 2}  # R1 and R2
+
+
+# ---------------------------------------------------------------------------- other rules
+
+
+NEW_RULES = """def_start
+    event UserFallen
+    event SmokeDetected
+    event CallSupport
+    measure assentToSupportCalls : boolean
+    measure alarmOn : boolean
+    measure level : numeric
+def_end
+rule_start
+    Rule3 when UserFallen and not assentToSupportCalls then not CallSupport within 10 minutes
+rule_end
+"""
+
+
+def test_fit_trace_drops_what_other_rules_do_not_declare(tmp_path: Path) -> None:
+    """An audit log checked against a new version of the rules: unknown names are dropped,
+    values of a changed type become unknown, and each is said once."""
+    steps = [
+        Step(0, values={"assentToSupportCalls": False, "temperature": 21.5, "level": "medium"}, line=1),
+        Step(0, event="UserFallen", line=2),
+        Step(1, event="Dance", values={"heartRate": 80}, line=3),
+        Step(2, values={"temperature": 20, "level": 3}, line=4),
+    ]
+    fitted, notes = fit_trace(parse(NEW_RULES), steps)
+    assert steps_of(fitted) == [
+        (0, None, {"assentToSupportCalls": False, "level": None}),
+        (0, "UserFallen", {}),
+        (1, None, {}),
+        (2, None, {"level": 3}),
+    ]
+    assert [s.line for s in fitted] == [1, 2, 3, 4]
+    assert notes == [
+        "not in these rules, ignored: Dance, heartRate, temperature",
+        "not of the type these rules declare, read as unknown: level (numeric): 'medium' (line 1)",
+    ]
+    assert fit_trace(parse(RULES), steps[:2]) == (steps[:2], [])
+    # a name declared as the other kind is said so
+    _, notes = fit_trace(parse(NEW_RULES), [Step(0, event="alarmOn", values={"CallSupport": 1})])
+    assert notes == ["not in these rules, ignored: CallSupport (an event here), alarmOn (a measure here)"]
