@@ -14,10 +14,10 @@ from typing import Any
 
 import pytest
 
-from cosleec.lang import HedgeSemantics, parse
+from cosleec.lang import HedgeSemantics
 from cosleec.runtime import Manager, VirtualClock
-from cosleec.semantics import Options, Step, judge
-from tests.unit.semantics.differential import HEADER
+from cosleec.semantics import Step
+from tests.unit.semantics.differential import HEADER, Case, reference, runtime
 
 V0: dict[str, Any] = {"b": False, "n": 2, "s": "low"}  # every measure known from 0
 
@@ -42,96 +42,19 @@ def spec_text(rules: str) -> str:
     return HEADER + "rule_start\n" + rules + "\nrule_end\n"
 
 
-def reference(rules: str, trace: list[Step], opts: dict[str, Any]) -> dict[str, list[Any]]:
-    j = judge(
-        parse(spec_text(rules)),
-        trace,
-        Options(
-            semantics=opts.get("semantics", HedgeSemantics.LAST_WINS),
-            priorities=frozenset(opts.get("priorities", ())),
-            priority_semantics=opts.get("priority_semantics", "cancel"),
-            lead=opts.get("lead", 0.0),
-        ),
-    )
-    return {
-        "verdicts": [
-            (v.id, v.rule, v.key, float(v.start), _window(v.window), v.status, _at(v.at))
-            for v in sorted(j.verdicts, key=lambda v: v.id)
-        ],
-        "conflicts": [(float(c.time), c.obligation, c.prohibition, c.resolution) for c in j.conflicts],
-        "choices": [(f.rule, f.clause) for f in j.firings if f.fired],
-    }
-
-
-def runtime(rules: str, trace: list[Step], opts: dict[str, Any]) -> dict[str, list[Any]]:
-    clock = VirtualClock(0.0)
-    m = Manager.from_text(
-        spec_text(rules),
-        clock=clock,
-        dispatch=False,
-        semantics=opts.get("semantics", HedgeSemantics.LAST_WINS),
-        priorities=[f"{h} > {lo}" for h, lo in opts.get("priorities", ())],
-        priority_semantics=opts.get("priority_semantics", "cancel"),
-        priority_lead=opts.get("lead", 0.0),
-    )
-    final: dict[int, dict[str, Any]] = {}
-    conflicts: list[tuple[Any, ...]] = []
-    choices: list[tuple[str, int | None]] = []
-
-    def seen(ev: Any) -> None:
-        d = ev.data
-        if ev.kind == "obligation":
-            final[d["id"]] = d
-        elif ev.kind == "conflict":
-            conflicts.append((float(d["at"]), d["obligation"], d["prohibition"], d["resolution"]))
-        elif ev.kind == "decision" and d["event"] != "otherwise":
-            choices.append((d["rule"], d["clause"]))
-
-    m.subscribe(seen)
-    m.start(check=False)
-    try:
-        for step in trace:
-            clock.set(float(step.t))
-            if step.values:
-                m.update(dict(step.values))
-            if step.event is not None:
-                m.event(step.event)
-            if not step.values and step.event is None:
-                m.tick()
-        m.tick()
-    finally:
-        m.close()
-    return {
-        "verdicts": [
-            (
-                d["id"],
-                d["rule"],
-                d["obligation"]["item"],
-                float(d["start"]),
-                _window(tuple(d["window"])),
-                d["status"],
-                _at(d["at"]),
-            )
-            for _, d in sorted(final.items())
-        ],
-        "conflicts": conflicts,
-        "choices": choices,
-    }
-
-
-def _window(w: tuple[Any, ...]) -> tuple[float, float | None]:
-    return float(w[0]), None if w[1] is None else float(w[1])
-
-
-def _at(x: float | None) -> float | None:
-    return None if x is None else float(x)
-
-
 def both(rules: str, trace: list[Step], **opts: Any) -> Seen:
     """Run ``trace`` through the reference and the runtime; they must agree on everything."""
-    trace = [Step(0, values=V0), *trace]
-    want = reference(rules, trace, opts)
-    got = runtime(rules, trace, opts)
+    case = Case(
+        spec_text(rules),
+        [Step(0, values=V0), *trace],
+        opts.get("semantics", HedgeSemantics.LAST_WINS),
+        tuple(opts.get("priorities", ())),
+        opts.get("priority_semantics", "cancel"),
+        opts.get("lead", 0.0),
+    )
+    trace = case.trace
+    want = reference(case)
+    got = runtime(case)
     assert got == want, f"runtime and reference disagree on\n{rules}\n{trace}"
     rule = {id_: rule for id_, rule, *_ in want["verdicts"]}
     return Seen(
@@ -543,12 +466,12 @@ def test_an_undetermined_higher_decision_cancels_nothing(semantics: str) -> None
     cancel R2 (R1 may well not apply): R2's obligation is violated at its deadline."""
     rules = "R1 when T0 and {b} then not A within 5 seconds\nR2 when T1 then B within 5 seconds"
     trace = [Step(0, values={"n": 1, "s": "low"}), ev(0, "T1"), ev(1, "T0"), tick(9)]
-    opts = {"priorities": [("R1", "R2")], "priority_semantics": semantics}
-    want = reference(rules, trace, opts)
+    case = Case(spec_text(rules), trace, HedgeSemantics.LAST_WINS, (("R1", "R2"),), semantics)
+    want = reference(case)
     assert [(key, status, at) for _, _, key, _, _, status, at in want["verdicts"]] == [
         ("R2:0", "violated", 5)
     ]
-    got = runtime(rules, trace, opts)
+    got = runtime(case)
     assert [(key, status, at) for _, rule, key, _, _, status, at in got["verdicts"] if rule == "R2"] == [
         ("R2:0", "violated", 5)
     ]
