@@ -77,6 +77,8 @@ _.measure_invariant  #
 _.event_measure_relation  #
 _.until_relation  #
 _.for_relation  #
+_.priority_block  #
+_.chain_first  #
 measure_rel  #
 event_measure_rel  #
 REFUSE  # UnknownEvents.REFUSE: chosen by value (unknown_events="refuse")

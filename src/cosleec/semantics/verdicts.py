@@ -24,7 +24,6 @@ VIOLATED = "violated"
 REFUSED = "refused"
 CANCELLED = "cancelled"
 
-FINAL = frozenset({FULFILLED, RESPECTED, VIOLATED, REFUSED, CANCELLED})
 BREACHES = frozenset({VIOLATED, REFUSED})  # the outcomes that make a trace not conform
 
 
