@@ -276,6 +276,7 @@ class Manager:
             priority_semantics,
             priority_lead,
         )
+        self.tracker.by_instance = bool(self.priorities.above)  # priorities act on activations
         self._held: dict[int, _Job] = {}  # decisions whose action is forbidden for now, by id
         # item pairs that oblige and forbid one event with no priority between them (start() warns)
         self.possible_conflicts: list[PossibleConflict] = []
@@ -780,8 +781,9 @@ class Manager:
             self._switched(switches, step)
         followups: list[_Job] = []
         judged = 0
+        aware = self.priorities.semantics == CONFLICT_AWARE and bool(self.priorities.above)
         while True:
-            cut = forced(self.tracker, self.priorities)
+            cut = forced(self.tracker, self.priorities) if aware else None
             if cut is not None and cut[0] <= now:
                 nd = self.tracker.next_deadline()
                 if nd is None or not nd < now or cut[0] <= nd:

@@ -164,6 +164,8 @@ class Tracker:
         self._by_event: dict[str, dict[int, Tracked]] = {}
         self._bans: dict[str, dict[int, Tracked]] = {}  # the prohibitions in force, by the event they forbid
         self.bans = 0  # how many prohibitions are in force (0: nothing is forbidden, the fast path)
+        # activation -> what it has in force, rule -> its activations: kept only for priorities
+        self.by_instance = False
         self._instances: dict[int, dict[int, Tracked]] = {}  # activation -> what it has in force
         self._rules: dict[str, dict[int, int]] = {}  # rule -> its decided activations in force (item counts)
         self._heap: list[tuple[float, int]] = []
@@ -284,12 +286,13 @@ class Tracker:
         if t.prohibition:
             self._bans.setdefault(t.event, {})[t.id] = t
             self.bans += 1
-        self._instances.setdefault(t.instance, {})[t.id] = t
-        if t.clause is not None:  # an undetermined decision is no activation a priority acts on
-            counts = self._rules.setdefault(t.rule, {})
-            counts[t.instance] = counts.get(t.instance, 0) + 1
         if t.hi is not None:
             heapq.heappush(self._heap, (t.hi, t.id))
+        if self.by_instance:
+            self._instances.setdefault(t.instance, {})[t.id] = t
+            if t.clause is not None:  # an undetermined decision is no activation a priority acts on
+                counts = self._rules.setdefault(t.rule, {})
+                counts[t.instance] = counts.get(t.instance, 0) + 1
 
     def _close(self, t: Tracked) -> None:
         del self._active[t.id]
@@ -304,7 +307,7 @@ class Tracker:
             bans = self._bans.get(t.event)
             if bans is not None and bans.pop(t.id, None) is not None:
                 self.bans -= 1
-        items = self._instances.get(t.instance)
+        items = self._instances.get(t.instance) if self.by_instance else None
         if items is not None and items.pop(t.id, None) is not None:
             if not items:
                 del self._instances[t.instance]
@@ -381,6 +384,8 @@ class Tracker:
         """
         out = Outcome()
         heap = self._heap
+        if not heap or heap[0][0] >= now:
+            return out  # nothing is due: the common case
         first = self.next_deadline()
         while (
             heap and heap[0][0] < now and heap[0][0] == first and (limit is None or len(out.changed) < limit)
