@@ -277,7 +277,11 @@ class Manager:
             priority_lead,
         )
         self.tracker.by_instance = bool(self.priorities.above)  # priorities act on activations
+        self.tracker.keep_started = self.priorities.semantics == CONFLICT_AWARE and bool(self.priorities.above)
         self._held: dict[int, _Job] = {}  # decisions whose action is forbidden for now, by id
+        self._cut: tuple[int, tuple[float, Tracked, str] | None] | None = None  # (tracker version, forced())
+        # held decisions as last examined: (tracker version, when the next interval opens)
+        self._held_seen: tuple[int, float] = (-1, 0.0)
         # item pairs that oblige and forbid one event with no priority between them (start() warns)
         self.possible_conflicts: list[PossibleConflict] = []
         self.decisions: deque[Decision] = deque(maxlen=history)
@@ -783,7 +787,7 @@ class Manager:
         judged = 0
         aware = self.priorities.semantics == CONFLICT_AWARE and bool(self.priorities.above)
         while True:
-            cut = forced(self.tracker, self.priorities) if aware else None
+            cut = self._forced() if aware else None
             if cut is not None and cut[0] <= now:
                 nd = self.tracker.next_deadline()
                 if nd is None or not nd < now or cut[0] <= nd:
@@ -1024,7 +1028,10 @@ class Manager:
         ):
             return jobs
         out: list[_Job] = []
-        for job in [*self._held.values(), *jobs]:
+        # a held decision can only become ready when something in force ends or an interval opens
+        recheck = self.tracker.ended != self._held_seen[0] or now >= self._held_seen[1]
+        opening = math.inf if recheck else self._held_seen[1]
+        for job in [*(self._held.values() if recheck else ()), *jobs]:
             was_held = job.decision.id in self._held
             items = [t for t in job.items if not t.prohibition]
             live = [t for t in items if t.status == PENDING]
@@ -1046,6 +1053,7 @@ class Manager:
                 continue
             blocked = [t for t in live if t.lo > now or self.tracker.forbidding(t.event, now)]
             if blocked:
+                opening = min([opening, *(t.lo for t in blocked if t.lo > now)])
                 if not was_held:
                     self._held[job.decision.id] = job
                     if job.record is not None:
@@ -1082,7 +1090,25 @@ class Manager:
                     job.record["dispatch"] = "changed"
                 self._emit(step, "dispatch", {"decision": job.decision.to_json()})
             out.append(job)
+        self._held_seen = (self.tracker.ended, opening)
         return out
+
+    def _forced(self) -> tuple[float, Tracked, str] | None:
+        """The next conflict-aware cancellation (:func:`forced`), kept while nothing in force ends
+        (what starts meanwhile is weighed against the kept answer, not everything again)."""
+        tr = self.tracker
+        if self._cut is not None and self._cut[0] == tr.ended:
+            if not tr.started:
+                return self._cut[1]
+            found = forced(tr, self.priorities, tr.started)
+            kept = self._cut[1]
+            if kept is None or (found is not None and (found[0], found[1].id) < (kept[0], kept[1].id)):
+                kept = found
+        else:
+            kept = forced(tr, self.priorities)
+        tr.started.clear()
+        self._cut = (tr.ended, kept)
+        return kept
 
     def _rehold(self, rec: dict[str, Any]) -> bool:
         """Hold again a decision the journal kept as held; False when it cannot be (its rule is gone)."""
@@ -1333,7 +1359,7 @@ class Manager:
             with self._lock:
                 nxt = self.tracker.next_deadline()
                 exp = self.context.next_expiry()
-                cut = forced(self.tracker, self.priorities)
+                cut = self._forced()
                 opening = self._next_opening()
             times = [t for t in (nxt, exp, cut[0] if cut else None, opening) if t is not None]
             wait = None if not times else max(0.0, min(times) - self.clock.now() + 1e-3)
@@ -1509,6 +1535,12 @@ class Manager:
             for rec in saved.obligations:
                 if int(rec["id"]) not in kept_ids:
                     step.change.obligations[int(rec["id"])] = None
+        if self.priorities.above and self.priorities.semantics == CANCEL:
+            # priorities declared since (or changed): activations restored together meet now
+            now = self.clock.now()
+            for t in sorted(restored, key=lambda t: t.instance):
+                if t.status == PENDING and t.clause is not None and self.tracker.of_instance(t.instance):
+                    self._prioritise(t.instance, t.rule, now, step)
 
 
 @functools.cache

@@ -28,13 +28,13 @@ from __future__ import annotations
 
 import difflib
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
 from cosleec.errors import show
 from cosleec.lang import closure, cycle, parse_priority
 from cosleec.runtime.errors import ConfigurationError
-from cosleec.runtime.obligations import Tracked, Tracker
+from cosleec.runtime.obligations import PENDING, Tracked, Tracker
 from cosleec.runtime.ruleset import RuleSet
 
 CANCEL = "cancel"
@@ -125,40 +125,57 @@ def covers(obligation: Tracked, prohibition: Tracked, now: float) -> bool:
     return prohibition.lo <= lo and (prohibition.hi is None or (hi is not None and hi <= prohibition.hi))
 
 
-def forced(tracker: Tracker, priorities: Priorities) -> tuple[float, Tracked, str] | None:
+def forced(
+    tracker: Tracker, priorities: Priorities, fresh: Iterable[Tracked] | None = None
+) -> tuple[float, Tracked, str] | None:
     """Conflict-aware: the earliest cancellation due -- (time, an item of the instance to
     cancel, the higher rule) -- or None.
 
     An obligation of one rule whose deadline finds a prohibition of the same event by a
     rule it is prioritised against forces the lower of the two out at that deadline
-    (minus ``lead``).
+    (minus ``lead``). The answer depends only on what is in force, not on the time; with
+    ``fresh``, only the pairs that involve those items are looked at (the caller keeps the
+    answer for the rest, while nothing ends).
     """
     if priorities.semantics != CONFLICT_AWARE or not priorities.above:
         return None
     best: tuple[float, int, Tracked, str] | None = None
-    for event in tracker.banned():  # only events some prohibition forbids can force anything
+    for o, p in _pairs(tracker) if fresh is None else _pairs_with(tracker, fresh):
+        d = o.own_hi
+        if d is None or o.branches or o.clause is None:
+            continue  # no deadline to force; an `else` may meet it; undetermined: no activation
+        if p.instance == o.instance or p.clause is None or not (p.lo <= d and (p.hi is None or d <= p.hi)):
+            continue
+        higher = priorities.between(o.rule, p.rule)
+        if higher is None:
+            continue
+        victim = p if higher == o.rule else o
+        at = max(d - priorities.lead, o.start, p.lo)
+        if best is None or (at, victim.id) < best[:2]:
+            best = (at, victim.id, victim, higher)
+    return None if best is None else (best[0], best[2], best[3])
+
+
+def _pairs(tracker: Tracker) -> Iterator[tuple[Tracked, Tracked]]:
+    """Every (obligation, prohibition) of one event in force; only banned events can force."""
+    for event in tracker.banned():
         bans = tracker.banning(event)
         for o in tracker.obliging(event):
-            d = o.own_hi
-            if d is None or o.branches:
-                continue
-            if o.clause is None:
-                continue  # undetermined: no activation a priority acts on
             for p in bans:
-                if (
-                    p.instance == o.instance
-                    or p.clause is None
-                    or not (p.lo <= d and (p.hi is None or d <= p.hi))
-                ):
-                    continue
-                higher = priorities.between(o.rule, p.rule)
-                if higher is None:
-                    continue
-                victim = p if higher == o.rule else o
-                at = max(d - priorities.lead, o.start, p.lo)
-                if best is None or (at, victim.id) < best[:2]:
-                    best = (at, victim.id, victim, higher)
-    return None if best is None else (best[0], best[2], best[3])
+                yield o, p
+
+
+def _pairs_with(tracker: Tracker, fresh: Iterable[Tracked]) -> Iterator[tuple[Tracked, Tracked]]:
+    """The (obligation, prohibition) pairs in force that involve one of ``fresh``."""
+    for t in fresh:
+        if t.status != PENDING:
+            continue
+        if t.prohibition:
+            for o in tracker.obliging(t.event):
+                yield o, t
+        else:
+            for p in tracker.banning(t.event):
+                yield t, p
 
 
 @dataclass(frozen=True)

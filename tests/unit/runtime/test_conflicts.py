@@ -284,3 +284,51 @@ def test_malformed_priorities_are_configuration_errors(bad: Any) -> None:
 
     with pytest.raises(ConfigurationError):
         build(priorities=bad)
+
+
+def test_a_priority_declared_before_a_restart_acts_on_what_the_journal_restores(tmp_path: Any) -> None:
+    rules = (
+        "def_start event T0 event T1 event A event B def_end rule_start "
+        "R1 when T0 then A within 50 seconds R2 when T1 then B within 50 seconds rule_end"
+    )
+    journal = tmp_path / "state.db"
+    clock = VirtualClock(0.0)
+    m = Manager.from_text(rules, clock=clock, dispatch=False, journal=journal)
+    m.start()
+    m.event("T0")
+    clock.set(1.0)
+    m.event("T1")
+    m.close()  # both activations in force; R1 > R2 is declared for the next run
+    m2 = Manager.from_text(
+        rules, clock=VirtualClock(3.0), dispatch=False, journal=journal, priorities=["R1 > R2"]
+    )
+    m2.start()
+    assert m2.stats["cancelled"] == 1  # R2's activation, cancelled as the journal was restored
+    assert [t.rule for t in m2.outstanding()] == ["R1"]
+    m2.close()
+
+
+def test_conflict_aware_cuts_are_not_recomputed_while_nothing_in_force_changes(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import cosleec.runtime.manager as manager_module
+
+    rules = (
+        "def_start event T event G event E event Q def_end rule_start "
+        "R1 when T then E within 1000 seconds R2 when G then not E within 2000 seconds rule_end"
+    )
+    m = Manager.from_text(
+        rules, clock=VirtualClock(0.0), dispatch=False, priorities=["R1 > R2"], priority_semantics="conflict-aware"
+    )
+    m.start()
+    m.event("G")
+    for _ in range(50):
+        m.event("T")
+    calls = []
+    real = manager_module.forced
+    monkeypatch.setattr(manager_module, "forced", lambda *a: calls.append(1) or real(*a))
+    for _ in range(20):
+        assert m.request("Q") is True  # a step that changes nothing in force
+    assert len(calls) <= 1  # not a scan of everything in force per step
+    assert m.request("E") is False and len(m._held) == 50  # still held, and still right
+    m.close()
