@@ -9,7 +9,7 @@ from pathlib import Path
 from rich.console import Console
 
 from cosleec.errors import UserError
-from cosleec.lang import HedgeSemantics, Unknowns
+from cosleec.lang import CANCEL, PRIORITY_SEMANTICS, HedgeSemantics, Unknowns
 
 
 def expand(paths: list[str]) -> list[Path]:
@@ -65,8 +65,8 @@ def add_priority_options(p: argparse.ArgumentParser, *, lead: bool = False) -> N
     )
     p.add_argument(
         "--priority-semantics",
-        choices=["cancel", "conflict-aware"],
-        default="cancel",
+        choices=list(PRIORITY_SEMANTICS),
+        default=CANCEL,
         help="cancel: L is cancelled when H is triggered while L is active (default); "
         "conflict-aware: L holds until H's deadline forces it",
     )

@@ -25,10 +25,21 @@ from cosleec.lang.frontend import DIALECTS, CheckResult, analyse, analyse_file, 
 from cosleec.lang.hedges import HedgeSemantics, Unknowns, candidates, choose, decisive
 from cosleec.lang.infer import infer_definitions
 from cosleec.lang.printer import Printer, format_spec
-from cosleec.lang.priorities import closure, cycle, pairs, parse_priority
+from cosleec.lang.priorities import (
+    CANCEL,
+    CONFLICT_AWARE,
+    PRIORITY_SEMANTICS,
+    closure,
+    cycle,
+    pairs,
+    parse_priority,
+)
 
 __all__ = [
+    "CANCEL",
+    "CONFLICT_AWARE",
     "DIALECTS",
+    "PRIORITY_SEMANTICS",
     "CheckResult",
     "Diagnostic",
     "DiagnosticSink",

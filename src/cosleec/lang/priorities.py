@@ -28,9 +28,21 @@ from cosleec.errors import ConfigurationError
 from cosleec.lang import ast as A
 from cosleec.lang.diagnostics import QUOTE_LIMIT, DiagnosticSink, clip
 
-__all__ = ["check_priorities", "closure", "cycle", "pairs", "parse_priority"]
+__all__ = [
+    "CANCEL",
+    "CONFLICT_AWARE",
+    "PRIORITY_SEMANTICS",
+    "check_priorities",
+    "closure",
+    "cycle",
+    "pairs",
+    "parse_priority",
+]
 
 Pair = tuple[str, str]
+CANCEL = "cancel"  # SLEEC-TK's cancellation-based priority (§13.2)
+CONFLICT_AWARE = "conflict-aware"  # SLEEC-TK's conflict-aware priority (§13.3)
+PRIORITY_SEMANTICS = (CANCEL, CONFLICT_AWARE)
 """``(higher, lower)``: rule ``higher`` takes precedence over rule ``lower``."""
 
 _NAME = re.compile(r"\^?([A-Za-z_][A-Za-z0-9_]*)")  # a SLEEC name; SLEEC-TK's `^` escape dropped

@@ -57,7 +57,7 @@ from typing import Any, TypeVar
 
 from cosleec.cop import Snapshot
 from cosleec.errors import CosleecError, clip, show
-from cosleec.lang import HedgeSemantics, Specification, Unknowns, candidates, choose
+from cosleec.lang import CANCEL, CONFLICT_AWARE, HedgeSemantics, Specification, Unknowns, candidates, choose
 from cosleec.lang import pairs as priority_pairs
 from cosleec.runtime.audit import AuditLog
 from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
@@ -70,8 +70,6 @@ from cosleec.runtime.layers import LayerManager, LayerSwitch, evaluate
 from cosleec.runtime.model import MAX_WINDOW_S, CompiledRule, ItemSpec, Obligation, ResponseSpec
 from cosleec.runtime.obligations import CANCELLED, PENDING, REFUSED, Outcome, Tracked, Tracker
 from cosleec.runtime.priorities import (
-    CANCEL,
-    CONFLICT_AWARE,
     PossibleConflict,
     Priorities,
     covers,
@@ -967,20 +965,12 @@ class Manager:
         if not covers(o, p, now):
             return []
         higher = self.priorities.between(o.rule, p.rule)
-        aware = higher is not None and self.priorities.semantics == CONFLICT_AWARE
-        if aware:
-            assert higher is not None
-            self._conflict(
-                o, p, now, CONFLICT_AWARE, higher,
-                f"{higher} has priority ({CONFLICT_AWARE}): the other is kept as long as possible", step,
-            )  # fmt: skip
-        else:
-            self._conflict(
-                o, p, now, "prohibition-wins", p.rule,
-                "the prohibition forbids the whole window and wins: the obligation is refused", step,
-            )  # fmt: skip
-        if aware:
-            return []
+        if higher is not None and self.priorities.semantics == CONFLICT_AWARE:
+            how = f"{higher} has priority ({CONFLICT_AWARE}): the other is kept as long as possible"
+            self._conflict(o, p, now, CONFLICT_AWARE, higher, how, step)
+            return []  # settled later, at the deadline that forces it (forced())
+        how = "the prohibition forbids the whole window and wins: the obligation is refused"
+        self._conflict(o, p, now, "prohibition-wins", p.rule, how, step)
         self.tracker.finish(o, REFUSED, now, p.rule)
         self.stats["violations"] += 1
         self._track(o, step)
@@ -1125,12 +1115,6 @@ class Manager:
         items = [t for t in self.tracker.active if t.decision_id == d.id]
         self._held[d.id] = _Job(rule, d, composition, items, None)
         return True
-
-    def _next_opening(self) -> float | None:
-        """When the earliest held action's interval opens (the timer wakes then), or None."""
-        now = self.clock.now()
-        opens = [t.lo for job in self._held.values() for t in job.items if t.status == PENDING and t.lo > now]
-        return min(opens) if opens else None
 
     def _dispatch(self, jobs: list[_Job]) -> None:
         """Run each job's implementation (outside the lock), when this Manager dispatches."""
@@ -1360,7 +1344,7 @@ class Manager:
                 nxt = self.tracker.next_deadline()
                 exp = self.context.next_expiry()
                 cut = self._forced()
-                opening = self._next_opening()
+                opening = self._held_seen[1] if self._held and self._held_seen[1] < math.inf else None
             times = [t for t in (nxt, exp, cut[0] if cut else None, opening) if t is not None]
             wait = None if not times else max(0.0, min(times) - self.clock.now() + 1e-3)
             with self._wake:

@@ -173,7 +173,6 @@ class Tracker:
         self.forgotten: list[int] = []  # misses dropped from _missed since the owner last looked
         self.closed: deque[Tracked] = deque(maxlen=1000)  # the most recent outcomes, for inspection
         self._next = 1  # the next obligation id
-        self.version = 0  # changes whenever an obligation starts or ends: what is in force changed
         self.ended = 0  # changes whenever one ends (what can release an action held back)
         self.keep_started = False  # keep `started` (conflict-aware priorities read what is new)
         self.started: list[Tracked] = []  # what started since the owner last cleared it
@@ -284,7 +283,6 @@ class Tracker:
         return sorted(bans.values(), key=lambda t: t.id) if bans else []
 
     def _index(self, t: Tracked) -> None:
-        self.version += 1
         if self.keep_started:
             self.started.append(t)
         self._active[t.id] = t
@@ -302,7 +300,6 @@ class Tracker:
                 counts[t.instance] = counts.get(t.instance, 0) + 1
 
     def _close(self, t: Tracked) -> None:
-        self.version += 1
         self.ended += 1
         del self._active[t.id]
         if len(self._heap) > 2 * len(self._active) + 1024:  # closed early: drop their deadlines

@@ -32,14 +32,10 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
 from cosleec.errors import show
-from cosleec.lang import closure, cycle, parse_priority
+from cosleec.lang import CANCEL, CONFLICT_AWARE, PRIORITY_SEMANTICS, closure, cycle, parse_priority
 from cosleec.runtime.errors import ConfigurationError
 from cosleec.runtime.obligations import PENDING, Tracked, Tracker
 from cosleec.runtime.ruleset import RuleSet
-
-CANCEL = "cancel"
-CONFLICT_AWARE = "conflict-aware"
-SEMANTICS = (CANCEL, CONFLICT_AWARE)
 
 
 @dataclass(frozen=True)
@@ -64,9 +60,9 @@ class Priorities:
         ConfigurationError, naming the fix, for an unknown rule (with the closest names),
         a rule above itself, a cycle, an unknown ``semantics`` or a bad ``lead``.
         """
-        if semantics not in SEMANTICS:
+        if semantics not in PRIORITY_SEMANTICS:
             raise ConfigurationError(
-                f"priority_semantics must be one of {', '.join(SEMANTICS)}, not {show(semantics)}"
+                f"priority_semantics must be one of {', '.join(PRIORITY_SEMANTICS)}, not {show(semantics)}"
             )
         if isinstance(lead, bool) or not isinstance(lead, int | float) or not (0 <= lead < math.inf):
             raise ConfigurationError(f"priority_lead must be a number of seconds >= 0, not {show(lead)}")
@@ -99,9 +95,6 @@ class Priorities:
                 f"the priorities form a cycle: {' > '.join(loop)}", hint="remove one of the pairs"
             )
         return cls(closure(pairs), semantics, float(lead), tuple(dict.fromkeys(pairs)))
-
-    def __bool__(self) -> bool:
-        return bool(self.above)
 
     def related(self, rule: str) -> list[str]:
         """The rules a priority orders ``rule`` against (above or below it), sorted."""

@@ -7,7 +7,8 @@ Small and slow on purpose: written from the language reference, sharing no code 
 
 from __future__ import annotations
 
-from cosleec.semantics.reference import CANCEL, CONFLICT_AWARE, Options, judge
+from cosleec.lang import CANCEL, CONFLICT_AWARE
+from cosleec.semantics.reference import Options, judge
 from cosleec.semantics.trace import (
     Recording,
     RunOptions,

@@ -74,7 +74,15 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from cosleec.lang import HedgeSemantics, Specification, closure, pairs
+from cosleec.lang import (
+    CANCEL,
+    CONFLICT_AWARE,
+    PRIORITY_SEMANTICS,
+    HedgeSemantics,
+    Specification,
+    closure,
+    pairs,
+)
 from cosleec.lang import ast as A
 from cosleec.semantics.trace import Step, Value
 from cosleec.semantics.verdicts import (
@@ -90,10 +98,7 @@ from cosleec.semantics.verdicts import (
     Verdict,
 )
 
-CANCEL = "cancel"
 MAX_SECONDS = 1e10  # a window longer than this (about 317 years) is out of range, read as unknown
-CONFLICT_AWARE = "conflict-aware"
-PRIORITY_SEMANTICS = (CANCEL, CONFLICT_AWARE)
 
 
 @dataclass(frozen=True)

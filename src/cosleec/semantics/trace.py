@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Any, TypeGuard
 
 from cosleec.errors import UserError, clip, show
-from cosleec.lang import HedgeSemantics, Specification, Unknowns, ast
+from cosleec.lang import PRIORITY_SEMANTICS, HedgeSemantics, Specification, Unknowns, ast
 
 Value = bool | int | float | str  # a scale measure's value is its literal's name
 
@@ -49,7 +49,6 @@ EXAMPLE = '{"t": 0, "set": {"assentToSupportCalls": false}} or {"t": 0, "event":
 STDIN = "-"
 """The name that reads the trace from standard input."""
 
-PRIORITY_SEMANTICS = ("cancel", "conflict-aware")  # restated from cosleec.semantics.reference
 UNTIMED_WORDS = ("none", "immediate")  # the Manager's untimed option, besides a number of seconds
 
 

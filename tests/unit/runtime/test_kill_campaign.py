@@ -55,6 +55,7 @@ from tests.kill_campaign import (
     ward_day,
 )
 from tests.kill_campaign import calls_made as made
+from tests.unit.runtime.test_journal import RULES  # the journal tests' rules: the findings replay them
 
 KILLS = int(os.environ.get("COSLEEC_KILLS", "5"))
 _seed = os.environ.get("COSLEEC_KILL_SEED", "20250611")
@@ -161,15 +162,6 @@ def test_a_day_killed_at_random_points_ends_as_if_uninterrupted(
 
 # ---------------------------------------------------------------------- what the campaign found, one by one
 
-RULES = """def_start
- event Trigger event Act event Help event Rec event Watch
- measure consent : boolean
-def_end
-rule_start
- R1 when Trigger then Act within 5 seconds otherwise Help
- R2 when Watch then not Rec within 10 minutes unless consent
-rule_end
-"""
 
 
 def manager(tmp_path: Path, t: float) -> Manager:
