@@ -22,14 +22,15 @@ ALLOWED: dict[str, set[str]] = {
     "lang": {"errors"},
     "cop": set(),
     "semantics": {"errors", "lang"},
+    "analysis": {"errors", "lang", "semantics"},
     "runtime": {"errors", "lang", "cop"},
     "nodes": {"errors", "lang", "runtime"},
     "testing": {"errors", "lang", "cop", "runtime", "nodes"},
     "demo": {"errors", "lang", "runtime", "nodes", "testing"},
     "ros": {"errors", "lang", "runtime", "nodes", "testing", "demo"},
-    "cli": {"errors", "lang", "cop", "semantics", "runtime", "nodes", "testing", "demo", "ros"},
+    "cli": {"errors", "lang", "cop", "semantics", "analysis", "runtime", "nodes", "testing", "demo", "ros"},
 }
-NO_FUNCTION_IMPORTS = {"errors", "lang", "cop", "semantics", "runtime"}
+NO_FUNCTION_IMPORTS = {"errors", "lang", "cop", "semantics", "analysis", "runtime"}
 
 
 def modules() -> Iterator[tuple[str, Path]]:

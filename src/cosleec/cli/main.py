@@ -12,7 +12,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from cosleec.cli import check, conforms, decide, demo, fmt, ros
+from cosleec.cli import analyse, check, conforms, decide, demo, fmt, ros
 from cosleec.errors import UserError
 from cosleec.lang import SleecError
 
@@ -36,6 +36,7 @@ def build_parser() -> argparse.ArgumentParser:
     fmt.add_parser(sub)
     decide.add_parser(sub)
     conforms.add_parser(sub)
+    analyse.add_parser(sub)
     demo.add_parser(sub)
     ros.add_parser(sub, "ros2")
     ros.add_parser(sub, "ros1")

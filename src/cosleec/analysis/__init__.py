@@ -1,0 +1,38 @@
+"""Rule-set analysis: conflicting, redundant and dead rules, found before the robot runs them.
+
+``cosleec analyse`` is built here, on z3 and on the reference semantics
+(:mod:`cosleec.semantics`): every question is a satisfiability question over the finite
+timed traces of the rules (:mod:`~cosleec.analysis.encoding`), every unsat core is
+minimised the same way every run (:mod:`~cosleec.analysis.cores`), and every witness trace
+is judged by the reference semantics before it is shown (:mod:`~cosleec.analysis.witness`).
+Depends on :mod:`cosleec.lang` and :mod:`cosleec.semantics` only.
+
+Typical use::
+
+    from cosleec.analysis import Settings, analyse_file
+    report = analyse_file("rules.sleec", Settings())
+    for f in report.findings:
+        print(f.diagnostic().render(report.source))
+"""
+
+from __future__ import annotations
+
+from cosleec.analysis.checks import DEFAULT_BOUND, Settings
+from cosleec.analysis.findings import BOUNDED, CHECKS, PROVED, FileReport, Finding, Witness
+from cosleec.analysis.run import Coverage, analyse_file, analyse_spec
+from cosleec.analysis.sarif import sarif
+
+__all__ = [
+    "BOUNDED",
+    "CHECKS",
+    "DEFAULT_BOUND",
+    "PROVED",
+    "Coverage",
+    "FileReport",
+    "Finding",
+    "Settings",
+    "Witness",
+    "analyse_file",
+    "analyse_spec",
+    "sarif",
+]

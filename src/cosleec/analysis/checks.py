@@ -1,0 +1,554 @@
+"""The checks over whole traces: conflicts, redundancy, concerns, purposes, runtime conflicts.
+
+Each is one satisfiability question per rule (or concern, purpose, pair of clauses) over
+the traces of :mod:`cosleec.analysis.encoding`, with N-Check's meanings
+(``docs/reference/sleec-language.md`` §9 and the README's "Analysing rules"):
+
+vacuous conflict
+    rule R's trigger (with its condition) can never occur in a trace that meets every rule.
+situational conflict
+    there is a situation -- an earlier occurrence that fires a rule, and the values R's
+    trigger then reads -- in which R's trigger cannot occur without a rule being broken,
+    although R is not vacuously conflicting. Candidates are the clauses whose obligation a
+    prohibition of the same event can cover whole (the runtime conflicts); each candidate
+    situation is fixed and then checked against every rule.
+redundancy
+    the other rules imply R: no trace meets them all and breaks R.
+concern raised
+    some trace meets every rule and shows the concern (the rules are too weak).
+purpose blocked
+    no trace that meets every rule shows the purpose (the rules are too strict); the
+    minimal set of rules that blocks it is named.
+runtime conflict
+    two clauses (of one rule or two) can owe an event and forbid it in overlapping windows,
+    and no declared priority orders their rules: the runtime will have to refuse one.
+
+Relations (the LEGOS ``relation`` block) are assumptions about the world and hold in every
+question; cores may name them.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from typing import Any
+
+import z3
+
+from cosleec.analysis.cores import Undecided, minimal_core
+from cosleec.analysis.encoding import Encoding, Reading, Slot
+from cosleec.analysis.findings import BOUNDED, PROVED, Finding
+from cosleec.analysis.witness import witness
+from cosleec.lang import HedgeSemantics, Severity, Specification, closure, pairs
+from cosleec.lang import ast as A
+from cosleec.semantics import Options
+
+DEFAULT_BOUND = 6
+"""Slots per event the unfolding may create before it stops (``--bound``)."""
+
+
+@dataclass(frozen=True)
+class Settings:
+    """How to analyse: the reading of the rules, the bound, the time each question may take."""
+
+    semantics: HedgeSemantics = HedgeSemantics.LAST_WINS
+    untimed: float | None = None
+    bound: int = DEFAULT_BOUND
+    timeout: float = 20.0
+    priorities: frozenset[tuple[str, str]] = frozenset()
+
+    @property
+    def reading(self) -> Reading:
+        """The encoding's view of these settings."""
+        return Reading(self.semantics, self.untimed)
+
+    @property
+    def options(self) -> Options:
+        """The reference semantics' view (for judging witnesses)."""
+        return Options(semantics=self.semantics, untimed=self.untimed)
+
+
+@dataclass
+class Analysis:
+    """The questions about one checked specification; findings accumulate in ``findings``."""
+
+    spec: Specification
+    constants: dict[str, int]
+    settings: Settings
+    findings: list[Finding] = field(default_factory=list)
+    unknown: list[str] = field(default_factory=list)
+    _by_event: dict[tuple[str, int], Encoding] = field(default_factory=dict)
+
+    # ------------------------------------------------------------------ helpers
+    def encoding(self, event: str, bound: int) -> tuple[Encoding, Slot]:
+        """The shared encoding whose probe is an occurrence of ``event`` (built once per bound)."""
+        enc = self._by_event.get((event, bound))
+        if enc is None:
+            enc = self._new(bound)
+            enc.probe(event)
+            for s in (*self.spec.concerns, *self.spec.purposes):
+                if s.trigger.event == event and s.meanwhile is None:
+                    for wanted in s.responses:
+                        enc.demand(enc.slots[0], wanted)
+            for rule in self.spec.rules:
+                if rule.trigger.event == event:
+                    enc.demand(enc.slots[0], rule.response)
+            enc.unfold()
+            self._by_event[(event, bound)] = enc
+        return enc, enc.slots[0]
+
+    def _new(self, bound: int | None = None) -> Encoding:
+        return Encoding(
+            self.spec,
+            self.constants,
+            self.settings.reading,
+            self.settings.bound if bound is None else bound,
+            timeout_ms=int(self.settings.timeout * 1000),
+        )
+
+    def deepen(
+        self, make: Callable[[int], tuple[Encoding, Any]], without: str | None, what: str
+    ) -> tuple[Any, Encoding, Any, list[tuple[str, Any]]] | None:
+        """Ask ``make(bound)``'s goal with every rule (but ``without``) at a small bound first:
+        a trace found there is a proof at any bound, and so is "none" when the unfolding
+        completed; only an inconclusive "none" is asked again at the full bound."""
+        full = self.settings.bound
+        for bound in sorted({min(2, full), full}):
+            enc, goal = make(bound)
+            cands = self.candidates(enc, without)
+            answer = self.solve(enc, [goal, *(lit for _, lit in cands)], what)
+            if answer is None:
+                return None
+            if answer == z3.sat or enc.complete or bound == full:
+                return answer, enc, goal, cands
+        return None  # pragma: no cover - the loop always returns at the full bound
+
+    def candidates(self, enc: Encoding, without: str | None = None) -> list[tuple[str, Any]]:
+        """Rules (that some slot can trigger) and relations, as (name, literal), in file order."""
+        out = [
+            (r.name, enc.rule_lit[r.name])
+            for r in self.spec.rules
+            if r.name != without and r.trigger.event in enc.by_event
+        ]
+        out += [(f"relation {i + 1}", lit) for i, lit in enumerate(enc.relation_lit)]
+        return out
+
+    def status(self, enc: Encoding) -> tuple[str, int | None]:
+        """Whether an unsat answer of ``enc`` is a proof, or holds up to the bound."""
+        return (PROVED, None) if enc.complete else (BOUNDED, self.settings.bound)
+
+    def span_of(self, name: str) -> A.Span:
+        """Where a rule or relation is (relations are ``relation N``)."""
+        if name.startswith("relation "):
+            return self.spec.relations[int(name.split()[1]) - 1].span
+        for r in self.spec.rules:
+            if r.name == name:
+                return r.span
+        return A.NO_SPAN
+
+    def related(self, names: tuple[str, ...], skip: str = "") -> tuple[tuple[str, A.Span], ...]:
+        """Notes pointing at each named rule or relation."""
+        return tuple((f"{n} is part of the cause", self.span_of(n)) for n in names if n != skip)
+
+    def solve(self, enc: Encoding, assumptions: list[Any], what: str) -> Any:
+        """Check; an ``unknown`` answer is recorded and returned as None."""
+        answer = enc.check(assumptions)
+        if answer == z3.unknown:
+            self.unknown.append(f"{what}: the solver gave up ({enc.solver.reason_unknown()})")
+            return None
+        return answer
+
+    # ------------------------------------------------------------------ N-Check's checks
+    def vacuous_conflicts(self) -> None:
+        """Rules whose trigger can never occur while every rule holds."""
+        for rule in self.spec.rules:
+
+            def make(bound: int, rule: A.Rule = rule) -> tuple[Encoding, Any]:
+                enc, x = self.encoding(rule.trigger.event, bound)
+                goal = enc.fresh("goal")
+                enc.solver.add(z3.Implies(goal, enc.fires(rule, x)))
+                return enc, goal
+
+            asked = self.deepen(make, None, f"vacuous conflict of {rule.name}")
+            if asked is None or asked[0] != z3.unsat:
+                continue
+            _, enc, goal, cands = asked
+            try:
+                core = minimal_core(enc, [goal], cands)
+            except Undecided as u:
+                self.unknown.append(f"vacuous conflict of {rule.name}: core not minimised ({u})")
+                continue
+            status, bound = self.status(enc)
+            others = [n for n in core if n != rule.name]
+            cause = f"because of {', '.join(others)}" if others else "because of its own response"
+            self.findings.append(
+                Finding(
+                    code="vacuous-conflict",
+                    subject=rule.name,
+                    message=f"rule {rule.name} conflicts whenever it is triggered: `{rule.trigger.event}` "
+                    f"can never occur{' with its condition' if rule.trigger.condition else ''} without "
+                    f"breaking a rule, {cause}",
+                    path=self.spec.path,
+                    span=rule.span,
+                    rules=core,
+                    related=self.related(core, rule.name),
+                    hint="weaken one of these rules (a deadline, an unless clause) or declare which prevails "
+                    "in a priority block",
+                    status=status,
+                    bound=bound,
+                    severity=Severity.ERROR,
+                )
+            )
+
+    def redundancies(self) -> None:
+        """Rules the other rules already imply."""
+        for rule in self.spec.rules:
+
+            def make(bound: int, rule: A.Rule = rule) -> tuple[Encoding, Any]:
+                enc, x = self.encoding(rule.trigger.event, bound)
+                goal = enc.fresh("broken")
+                enc.solver.add(
+                    z3.Implies(goal, z3.And(enc.fires(rule, x), z3.Not(enc.holds(rule.response, x))))
+                )
+                return enc, goal
+
+            asked = self.deepen(make, rule.name, f"redundancy of {rule.name}")
+            if asked is None or asked[0] != z3.unsat:
+                continue
+            _, enc, goal, cands = asked
+            try:
+                core = minimal_core(enc, [goal], cands)
+            except Undecided as u:
+                self.unknown.append(f"redundancy of {rule.name}: core not minimised ({u})")
+                continue
+            status, bound = self.status(enc)
+            why = (
+                f"the other rules already imply it: {', '.join(core)}"
+                if core
+                else "it can never be broken (its trigger cannot occur with its condition, or its response "
+                "always holds)"
+            )
+            self.findings.append(
+                Finding(
+                    code="redundant",
+                    subject=rule.name,
+                    message=f"rule {rule.name} is redundant: {why}",
+                    path=self.spec.path,
+                    span=rule.span,
+                    rules=core,
+                    related=self.related(core),
+                    hint="remove the rule, or check that the rules it names say what was meant",
+                    status=status,
+                    bound=bound,
+                )
+            )
+
+    def situations(self, kind: str) -> None:
+        """Concerns the rules allow (``concern``) and purposes they block (``purpose``)."""
+        items = self.spec.concerns if kind == "concern" else self.spec.purposes
+        for s in items:
+            asked = self.deepen(functools.partial(self._situation, s), None, f"{kind} {s.name}")
+            if asked is None:
+                continue
+            answer, enc, goal, cands = asked
+            status, bound = self.status(enc)
+            if kind == "concern" and answer == z3.sat:
+                w = witness(enc, enc.solver.model(), self.settings.options, shows=[_as_rule(s)])
+                self.findings.append(
+                    Finding(
+                        code="concern-raised",
+                        subject=s.name,
+                        message=f"concern {s.name} is raised: the rules allow this undesirable situation",
+                        path=self.spec.path,
+                        span=s.span,
+                        hint="strengthen the rules so that the situation cannot happen (the witness shows how "
+                        "it can)",
+                        status=PROVED,
+                        witness=w,
+                    )
+                )
+            elif kind == "purpose" and answer == z3.unsat:
+                try:
+                    core = minimal_core(enc, [goal], cands)
+                except Undecided as u:
+                    self.unknown.append(f"purpose {s.name}: core not minimised ({u})")
+                    continue
+                self.findings.append(
+                    Finding(
+                        code="purpose-blocked",
+                        subject=s.name,
+                        message=f"purpose {s.name} is blocked by {', '.join(core) or 'the relations'}: no trace "
+                        "that meets the rules achieves it",
+                        path=self.spec.path,
+                        span=s.span,
+                        rules=core,
+                        related=self.related(core),
+                        hint="relax one of these rules (an unless clause for this situation) so the purpose "
+                        "stays possible",
+                        status=status,
+                        bound=bound,
+                        severity=Severity.ERROR,
+                    )
+                )
+
+    def _situation(self, s: A.Situation, bound: int) -> tuple[Encoding, Any]:
+        """An encoding and goal literal for ``s`` (the situation occurs)."""
+        if s.meanwhile is None:
+            enc, x = self.encoding(s.trigger.event, bound)
+        else:
+            enc = self._new(bound)
+            chain: list[tuple[A.Situation, Slot]] = []
+            cur: A.Situation | None = s
+            while cur is not None:
+                slot = enc.probe(cur.trigger.event)
+                for r in cur.responses:
+                    enc.demand(slot, r)
+                chain.append((cur, slot))
+                cur = cur.meanwhile
+            enc.unfold()
+            x = chain[0][1]
+        goal = enc.fresh("situation")
+        parts = []
+        cur = s
+        slots = [x] if s.meanwhile is None else [slot for _, slot in chain]
+        for slot in slots:
+            assert cur is not None
+            parts.append(enc.truth(cur.trigger.condition, slot.snap))
+            parts += [enc.holds(r, slot, untimed=0.0) for r in cur.responses]
+            cur = cur.meanwhile
+        enc.solver.add(z3.Implies(goal, z3.And(*parts)))
+        return enc, goal
+
+    # ------------------------------------------------------------------ runtime conflicts
+    def clashes(self) -> Iterator[tuple[A.Rule, int, A.ResponseItem, A.Rule, int, A.ResponseItem]]:
+        """Every (rule, clause, obligation) and (rule, clause, prohibition) of the same event."""
+        owes: dict[str, list[tuple[A.Rule, int, A.ResponseItem]]] = {}
+        bans: dict[str, list[tuple[A.Rule, int, A.ResponseItem]]] = {}
+        for r in self.spec.rules:
+            for k, it in _clause_items(r.response):
+                (bans if it.occurrence.negated else owes).setdefault(it.occurrence.event, []).append(
+                    (r, k, it)
+                )
+        for event in sorted(owes.keys() & bans.keys()):
+            for ro, ko, io in owes[event]:
+                for rp, kp, ip in bans[event]:
+                    yield ro, ko, io, rp, kp, ip
+
+    def runtime_conflicts(self, situational: bool) -> None:
+        """Clauses that can owe and forbid an event in overlapping windows (and, with
+        ``situational``, the situations where that leaves a trigger unanswerable)."""
+        above = closure([*self.settings.priorities, *pairs(self.spec)])
+        settled_note = []
+        for ro, ko, io, rp, kp, ip in self.clashes():
+            found = self._clash(ro, ko, io, rp, kp, ip)
+            if found is None:
+                continue
+            enc, xo, xp, base, (lo, hi, plo, phi) = found
+            what = f"{_clause(ro.name, ko)} and {_clause(rp.name, kp)} on {io.occurrence.event}"
+            if (ro.name, rp.name) in above or (rp.name, ro.name) in above:
+                settled_note.append(what)
+                continue
+            event = io.occurrence.event
+            w = witness(
+                enc,
+                enc.solver.model(),
+                self.settings.options,
+                confirm=functools.partial(_overlap, event=event, owing=ro.name, banning=rp.name),
+            )
+            same = ro.name == rp.name
+            self.findings.append(
+                Finding(
+                    code="runtime-conflict",
+                    subject=f"{ro.name}/{rp.name}",
+                    message=f"{_clause(ro.name, ko)} can owe `{event}` while {_clause(rp.name, kp)} forbids it, "
+                    "in overlapping windows"
+                    + (" (two activations of the rule)" if same and xo is not xp else ""),
+                    path=self.spec.path,
+                    span=io.occurrence.span or ro.span,
+                    rules=tuple(dict.fromkeys((ro.name, rp.name))),
+                    related=((f"{_clause(rp.name, kp)} forbids `{event}` here", ip.occurrence.span),),
+                    hint=f"declare which prevails (priority_start {ro.name} > {rp.name} priority_end), or "
+                    "separate the clauses' conditions",
+                    status=PROVED,
+                    witness=w,
+                )
+            )
+            if situational:
+                self._situational(enc, ro, ko, io, xo, rp, kp, ip, xp, base, lo, hi, plo, phi)
+        del settled_note
+
+    def _clash(
+        self, ro: A.Rule, ko: int, io: A.ResponseItem, rp: A.Rule, kp: int, ip: A.ResponseItem
+    ) -> tuple[Encoding, Slot, Slot, list[Any], tuple[Any, Any, Any, Any]] | None:
+        """A situation where the obligation and the prohibition overlap: one occurrence
+        triggering both when it can, else two; no other occurrence (the smallest witness)."""
+        shared = ro.trigger.event == rp.trigger.event
+        for one in [True, False] if shared else [False]:
+            if one and ro is rp and ko != kp:
+                continue  # two clauses of one rule never apply to one occurrence
+            enc = self._new()
+            xo = enc.probe(ro.trigger.event, "obligation")
+            xp = xo if one else enc.probe(rp.trigger.event, "prohibition")
+            enc.unfold()
+            lo, hi = self._item_window(enc, ro, ko, io, xo)
+            plo, phi = self._item_window(enc, rp, kp, ip, xp)
+            probes = {xo.id, xp.id}
+            base = [
+                enc.fires(ro, xo),
+                enc.chosen_at(ro.response, ko, xo.snap),
+                enc.fires(rp, xp),
+                enc.chosen_at(rp.response, kp, xp.snap),
+                *[
+                    z3.Implies(lit, enc._relation(rel))
+                    for lit, rel in zip(enc.relation_lit, self.spec.relations)
+                ],
+                *enc.relation_lit,
+            ]
+            overlap = z3.And(
+                *([lo <= phi] if phi is not None else []), *([plo <= hi] if hi is not None else [])
+            )
+            alone = z3.And(*(z3.Not(s.present) for s in enc.slots if s.id not in probes))
+            what = f"runtime conflict {_clause(ro.name, ko)} / {_clause(rp.name, kp)}"
+            if (
+                self.solve(enc, [*base, overlap, alone], what) == z3.sat
+                or self.solve(enc, [*base, overlap], what) == z3.sat
+            ):
+                return enc, xo, xp, base, (lo, hi, plo, phi)
+        return None
+
+    def _item_window(
+        self, enc: Encoding, rule: A.Rule, clause: int, it: A.ResponseItem, x: Slot
+    ) -> tuple[Any, Any]:
+        return enc.window(it.occurrence, it.otherwise is not None, x.t, x.snap, self.settings.untimed)
+
+    def _situational(
+        self,
+        enc: Encoding,
+        ro: A.Rule,
+        ko: int,
+        io: A.ResponseItem,
+        xo: Slot,
+        rp: A.Rule,
+        kp: int,
+        ip: A.ResponseItem,
+        xp: Slot,
+        base: list[Any],
+        lo: Any,
+        hi: Any,
+        plo: Any,
+        phi: Any,
+    ) -> None:
+        """The obligation's whole window forbidden: fix that situation, check it against every rule."""
+        if hi is None:
+            return  # an obligation without deadline can always wait
+        covered = z3.And(plo <= lo, *([hi <= phi] if phi is not None else []))
+        if self.solve(enc, [*base, covered], "situation") != z3.sat:
+            return
+        model = enc.solver.model()
+        fixed = Encoding(
+            self.spec, self.constants, self.settings.reading, self.settings.bound,
+            timeout_ms=int(self.settings.timeout * 1000),
+        )  # fmt: skip
+        slots = []
+        for x in dict.fromkeys([xo, xp]):
+            s = fixed.probe(x.event)
+            slots.append((x, s))
+        fixed.unfold()
+        pins = []
+        for x, s in slots:
+            pins.append(s.t == model.eval(x.t, model_completion=True))
+            pins += [s.snap[m] == model.eval(v, model_completion=True) for m, v in x.snap.items()]
+        order = []
+        if len(slots) == 2:
+            (a, sa), (b, sb) = slots
+            first = z3.is_true(
+                model.eval(z3.Or(a.t < b.t, z3.And(a.t == b.t, a.pos < b.pos)), model_completion=True)
+            )
+            order.append(sa.pos < sb.pos if first else sb.pos < sa.pos)
+        goal = fixed.fresh("situation")
+        fixed.solver.add(z3.Implies(goal, z3.And(*pins, *order)))
+        cands = self.candidates(fixed)
+        answer = self.solve(fixed, [goal, *(lit for _, lit in cands)], "situational conflict")
+        if answer != z3.unsat:
+            return
+        try:
+            core = minimal_core(fixed, [goal], cands)
+        except Undecided as u:
+            self.unknown.append(f"situational conflict of {ro.name}: core not minimised ({u})")
+            return
+        if any(f.code == "vacuous-conflict" and f.subject in core for f in self.findings):
+            return
+        if any(f.code == "situational-conflict" and f.rules == core for f in self.findings):
+            return
+        status, bound = self.status(fixed)
+        situation = "; ".join(
+            f"{x.event} at t={_num(model.eval(x.t, model_completion=True))}"
+            + (
+                " with "
+                + ", ".join(f"{m}={model.eval(v, model_completion=True)}" for m, v in sorted(x.snap.items()))
+                if x.snap
+                else ""
+            )
+            for x in dict.fromkeys([xp, xo])
+        )
+        self.findings.append(
+            Finding(
+                code="situational-conflict",
+                subject=ro.name,
+                message=f"rules {', '.join(core)} conflict in a situation: {_clause(rp.name, kp)} forbids "
+                f"`{io.occurrence.event}` for the whole window in which {_clause(ro.name, ko)} owes it",
+                path=self.spec.path,
+                span=ro.span,
+                rules=core,
+                related=self.related(core, ro.name),
+                hint="add an unless clause for this situation to one of the rules, or declare which prevails "
+                "in a priority block",
+                status=status,
+                bound=bound,
+                situation=situation,
+            )
+        )
+
+
+def _overlap(j: Any, event: str, owing: str, banning: str) -> bool:
+    """The judgement has an obligation of ``owing`` and a prohibition of ``banning`` on
+    ``event`` whose windows overlap."""
+    inf = float("inf")
+    for o in j.verdicts:
+        if o.rule != owing or o.negated or o.event != event:
+            continue
+        for p in j.verdicts:
+            if p.rule == banning and p.negated and p.event == event and p is not o:
+                olo, ohi = o.window
+                plo, phi = p.window
+                if olo <= (inf if phi is None else phi) and plo <= (inf if ohi is None else ohi):
+                    return True
+    return False
+
+
+def _num(v: Any) -> str:
+    s = str(v)
+    return s[:-1] if s.endswith("?") else s
+
+
+def _clause(rule: str, k: int) -> str:
+    return rule if k == 0 else f"{rule}.{k}"
+
+
+def _clause_items(resp: A.Response) -> Iterator[tuple[int, A.ResponseItem]]:
+    """The top-level items of each clause of a rule's response: (clause, item)."""
+    for it in resp.items:
+        yield 0, it
+    for k, d in enumerate(resp.defeaters, 1):
+        if d.response is not None and not d.response.defeaters:
+            for it in d.response.items:
+                yield k, it
+
+
+def _as_rule(s: A.Situation) -> A.Rule:
+    """A concern or purpose read as a rule (to judge a witness by the reference semantics)."""
+    items: list[A.ResponseItem] = []
+    for r in s.responses:
+        items.extend(r.items)
+    return A.Rule(s.name, s.trigger, A.Response(tuple(items)) if items else A.Response(()))

@@ -1,0 +1,171 @@
+"""The checks over one snapshot: clauses never selected, semantics that disagree, negative deadlines.
+
+These read only the values a trigger finds (measure domains: booleans, reals, scale
+positions; and the measure relations), so each answer is a proof -- no bound is involved.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Iterator
+from typing import Any
+
+import z3
+
+from cosleec.analysis.checks import Analysis
+from cosleec.analysis.encoding import Encoding, Slot
+from cosleec.analysis.findings import PROVED, Finding
+from cosleec.analysis.witness import witness
+from cosleec.lang import HedgeSemantics, Severity
+from cosleec.lang import ast as A
+from cosleec.semantics import Judgement
+
+
+def _probe(a: Analysis, rule: A.Rule) -> tuple[Encoding, Slot, list[Any]]:
+    """A one-occurrence encoding of ``rule``'s trigger, and what always holds of it."""
+    enc = Encoding(a.spec, a.constants, a.settings.reading, 1, timeout_ms=int(a.settings.timeout * 1000))
+    x = enc.probe(rule.trigger.event)
+    enc.unfold(children=False)
+    return enc, x, [enc.fires(rule, x), enc.assumptions(x.snap), *enc.relation_lit]
+
+
+def _values(model: Any, x: Slot) -> str:
+    return ", ".join(f"{m}={model.eval(v, model_completion=True)}" for m, v in sorted(x.snap.items()))
+
+
+def unselectable(a: Analysis) -> None:
+    """Clauses (the default response included) that no values let apply."""
+    sem = a.settings.semantics
+    for rule in a.spec.rules:
+        ds = rule.response.defeaters
+        if not ds:
+            continue
+        enc, x, base = _probe(a, rule)
+        if a.solve(enc, base, f"clauses of {rule.name}") != z3.sat:
+            continue  # the trigger condition itself never holds: every clause would be reported
+        for k, cond in enumerate(enc.chosen(ds, x.snap)):
+            if a.solve(enc, [*base, cond], f"clause {k} of {rule.name}") != z3.unsat:
+                continue
+            span = rule.response.span if k == 0 else ds[k - 1].span
+            what = "the default response" if k == 0 else f"clause {rule.name}.{k} (unless #{k})"
+            a.findings.append(
+                Finding(
+                    code="unselectable-clause",
+                    subject=f"{rule.name}.{k}",
+                    message=f"{what} is never selected under {sem} semantics, whatever the measures' values",
+                    path=a.spec.path,
+                    span=span,
+                    rules=(rule.name,),
+                    hint="reorder the unless clauses (the last that holds wins)"
+                    if sem == HedgeSemantics.LAST_WINS
+                    else "reorder the unless clauses (each needs the ones before it)",
+                    status=PROVED,
+                )
+            )
+
+
+def semantics_differ(a: Analysis) -> None:
+    """Rules where last-wins and nested choose different clauses, with such a situation."""
+    for rule in a.spec.rules:
+        ds = rule.response.defeaters
+        if len(ds) < 2:
+            continue
+        enc, x, base = _probe(a, rule)
+        lw = enc.chosen(ds, x.snap, HedgeSemantics.LAST_WINS)
+        ne = enc.chosen(ds, x.snap, HedgeSemantics.NESTED)
+        differ = z3.Or(*(z3.And(lw[i], z3.Not(ne[i])) for i in range(len(lw))))
+        if a.solve(enc, [*base, differ], f"semantics of {rule.name}") != z3.sat:
+            continue
+        model = enc.solver.model()
+        pick_lw = next(i for i, c in enumerate(lw) if z3.is_true(model.eval(c, model_completion=True)))
+        pick_ne = next(i for i, c in enumerate(ne) if z3.is_true(model.eval(c, model_completion=True)))
+        situation = _values(model, x)
+        a.findings.append(
+            Finding(
+                code="semantics-differ",
+                subject=rule.name,
+                message=f"rule {rule.name} means different things under last-wins and nested: with "
+                f"{situation or 'these values'}, last-wins selects {_name(rule.name, pick_lw)} and nested "
+                f"selects {_name(rule.name, pick_ne)}",
+                path=a.spec.path,
+                span=rule.span,
+                rules=(rule.name,),
+                hint="make the unless conditions exclusive (or nested by construction), or state which "
+                "semantics the rules are written for",
+                status=PROVED,
+                situation=situation,
+                witness=witness(
+                    enc, model, a.settings.options, confirm=functools.partial(_picked, clause=pick_lw)
+                ),
+                severity=Severity.NOTE,
+            )
+        )
+
+
+def _picked(j: Judgement, clause: int) -> bool:
+    return any(f.fired and f.clause == clause for f in j.firings)
+
+
+def _name(rule: str, k: int) -> str:
+    return f"the default response of {rule}" if k == 0 else f"{rule}.{k}"
+
+
+def negative_deadlines(a: Analysis) -> None:
+    """Deadlines computed from measures that some values make negative (or end before they start)."""
+    for rule in a.spec.rules:
+        for clause, depth, it in _items(rule.response, 0, 0):
+            lim = it.occurrence.limit
+            measures = {m.name for m in a.spec.measures}
+            if lim is None or not (
+                _reads(lim.hi.value, measures) or (lim.lo is not None and _reads(lim.lo.value, measures))
+            ):
+                continue
+            enc, x, base = _probe(a, rule)
+            if depth == 0:
+                base.append(enc.chosen_at(rule.response, clause, x.snap))
+            else:  # an otherwise reads the values at its own start: any values
+                base = [enc.assumptions(x.snap), *enc.relation_lit]
+            hi = enc.seconds(lim.hi, x.snap)
+            bad = hi < 0
+            if lim.lo is not None:
+                bad = z3.Or(bad, enc.seconds(lim.lo, x.snap) < 0, hi < enc.seconds(lim.lo, x.snap))
+            if a.solve(enc, [*base, bad], f"deadline in {rule.name}") != z3.sat:
+                continue
+            model = enc.solver.model()
+            situation = _values(model, x)
+            a.findings.append(
+                Finding(
+                    code="negative-deadline",
+                    subject=rule.name,
+                    message=f"the deadline of `{it.occurrence.event}` in {rule.name} can be negative: with "
+                    f"{situation}, it is {model.eval(hi, model_completion=True)} seconds (the obligation is then "
+                    "violated at once)",
+                    path=a.spec.path,
+                    span=lim.span or it.occurrence.span,
+                    rules=(rule.name,),
+                    hint="bound the measure with an unless clause or a relation (measure invariant), or use a "
+                    "constant deadline",
+                    status=PROVED,
+                    situation=situation,
+                    severity=Severity.WARNING,
+                )
+            )
+
+
+def _reads(e: A.Expr, measures: set[str]) -> bool:
+    """``e`` reads a measure."""
+    if isinstance(e, A.Name):
+        return e.name in measures
+    if isinstance(e, A.BinOp):
+        return _reads(e.left, measures) or _reads(e.right, measures)
+    return False
+
+
+def _items(resp: A.Response | None, clause: int, depth: int) -> Iterator[tuple[int, int, A.ResponseItem]]:
+    if resp is None:
+        return
+    for it in resp.items:
+        yield clause, depth, it
+        yield from _items(it.otherwise, clause, depth + 1)
+    for k, d in enumerate(resp.defeaters, 1):
+        yield from _items(d.response, k if depth == 0 and clause == 0 else clause, depth)

@@ -1,0 +1,573 @@
+"""Rule sets as satisfiability problems: the finite timed traces a rule set allows, in z3.
+
+A trace is a finite set of *occurrences* (an event at a time, in a causal order) and, for
+each, the *snapshot* of measure values it reads. :class:`Encoding` unfolds the occurrences
+a question can need into *slots*: the probe (an occurrence the question is about) and, for
+every obligation any slot's rules can raise, one fresh slot that may fulfil it -- and so on
+down the chain of obligations, breadth first, at most ``bound`` slots per event. A slot may
+or may not be part of the trace (``present``); its time, causal position and snapshot are
+free. Every rule then constrains every slot, guarded by one assumption literal per rule (and
+per relation), so one solver answers questions about any subset of the rules and unsat
+cores name rules.
+
+Why the answers can be *proved*: the constraints a rule puts on a trace are of two kinds --
+"some occurrence of E in this window" (an obligation: a demand) and "no occurrence of E in
+this window" (a prohibition) -- and removing occurrences never breaks a prohibition. So if
+any trace satisfies a question, so does the sub-trace made of the probe and, for every
+obligation that trace meets, one occurrence that meets it, recursively: a tree of demands,
+which is exactly what the unfolding builds. When the unfolding finishes within ``bound``
+(:attr:`Encoding.complete`), "unsatisfiable" is a proof about *all* traces; when it stops
+at the bound (a chain of obligations that feeds itself), "unsatisfiable" holds up to that
+bound only. "Satisfiable" is always a proof: the model is a trace, and
+:mod:`cosleec.analysis.witness` checks it against the reference semantics. The argument
+fails for ``until`` relations (removing the event that ends one extends it), so a question
+that involves one is never called complete.
+
+The meaning is the reference semantics' (:mod:`cosleec.semantics.reference`), with one
+reading of its own: a trace is *complete* -- time goes on past every deadline -- so an
+untimed obligation (no deadline at run time) must still happen at some time, and ``not E
+eventually`` forbids E for ever. Windows are closed, an occurrence counts for an obligation
+only if it comes after the step that raised it (the trigger never fulfils its own
+response), an ``otherwise`` starts at the deadline it follows (after every occurrence at
+that instant) or at the first occurrence that breaks its prohibition, and reads the values
+of that moment. Numeric measures are reals, as at run time; scale measures are their
+literal's position. A measure always has a value (the runtime's policy for unknown values is
+not part of the rules' meaning).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import z3
+
+from cosleec.lang import HedgeSemantics, Specification
+from cosleec.lang import ast as A
+
+Z3 = Any  # z3's Python API is untyped
+
+
+@dataclass(frozen=True)
+class Reading:
+    """How rules are read: clause semantics and the deadline of an untimed obligation.
+
+    ``untimed`` None: an untimed obligation must happen at some time after its trigger
+    (the runtime's "no deadline"); a number: within that many seconds (LEGOS reads ``0``).
+    """
+
+    semantics: HedgeSemantics = HedgeSemantics.LAST_WINS
+    untimed: float | None = None
+
+
+@dataclass(eq=False)
+class Slot:
+    """One possible occurrence of ``event``: present or not, with its time and snapshot."""
+
+    id: int
+    event: str
+    depth: int
+    t: Z3
+    pos: Z3
+    present: Z3
+    snap: dict[str, Z3]
+    why: str = ""  # what it may fulfil, for a witness's timeline
+
+
+@dataclass(eq=False)
+class Fallback:
+    """The snapshot an ``otherwise`` that starts at a deadline reads, and when it starts."""
+
+    at: Z3
+    started: Z3
+    snap: dict[str, Z3]
+
+
+@dataclass(frozen=True)
+class _After:
+    """Which occurrences come after the step that raised an obligation: after slot ``slot``
+    in causal order, or strictly after time ``at`` (an ``otherwise`` started by a deadline)."""
+
+    slot: Slot | None = None
+    at: Z3 = None
+
+    def __call__(self, y: Slot) -> Z3:
+        if self.slot is not None:
+            x = self.slot
+            if y is x:
+                return z3.BoolVal(False)
+            return z3.Or(y.t > x.t, z3.And(y.t == x.t, y.pos > x.pos))
+        return y.t > self.at
+
+
+class Encoding:
+    """The traces of ``spec`` around some probe occurrences, as z3 constraints.
+
+    Use: create probes with :meth:`probe`, declare what a question's own formula will need
+    with :meth:`demand`, then :meth:`unfold`; after that, :meth:`holds` and :meth:`rule_holds`
+    build formulas over the slots, and :meth:`check` solves under assumption literals.
+    """
+
+    def __init__(
+        self,
+        spec: Specification,
+        constants: dict[str, int],
+        reading: Reading,
+        bound: int,
+        *,
+        timeout_ms: int = 0,
+    ) -> None:
+        self.spec = spec
+        self.constants = constants
+        self.reading = reading
+        self.bound = max(1, bound)
+        self.measures = {m.name: m.type for m in spec.measures}
+        self.solver = z3.Solver()
+        self.solver.set("random_seed", 0)
+        if timeout_ms:
+            self.solver.set("timeout", timeout_ms)
+        self.slots: list[Slot] = []
+        self.by_event: dict[str, list[Slot]] = {}
+        self.fallbacks: list[Fallback] = []
+        self.rules_by_event: dict[str, list[A.Rule]] = {}
+        for r in spec.rules:
+            self.rules_by_event.setdefault(r.trigger.event, []).append(r)
+        self.rule_lit = {r.name: z3.Bool(f"rule!{i}") for i, r in enumerate(spec.rules)}
+        self.relation_lit = [z3.Bool(f"relation!{i}") for i in range(len(spec.relations))]
+        self.complete = not any(isinstance(r, A.UntilRelation) for r in spec.relations)
+        self._extra: list[tuple[Slot, list[tuple[str, str]]]] = []
+        self._ids = itertools.count()
+        self._fresh = itertools.count()
+        self._unfolded = False
+
+    # ------------------------------------------------------------------ slots
+    def _slot(self, event: str, depth: int, why: str) -> Slot:
+        n = next(self._ids)
+        snap = {m: self._var(m, f"s{n}") for m in self.measures}
+        s = Slot(n, event, depth, z3.Real(f"t{n}"), z3.Int(f"p{n}"), z3.Bool(f"in{n}"), snap, why)
+        self.slots.append(s)
+        self.by_event.setdefault(event, []).append(s)
+        self.solver.add(s.t >= 0)
+        self._domain(snap)
+        return s
+
+    def _var(self, measure: str, prefix: str) -> Z3:
+        t = self.measures[measure]
+        name = f"{prefix}!{measure}"
+        if isinstance(t, A.BooleanType):
+            return z3.Bool(name)
+        if isinstance(t, A.ScaleType):
+            return z3.Int(name)
+        return z3.Real(name)
+
+    def _domain(self, snap: dict[str, Z3]) -> None:
+        for m, v in snap.items():
+            t = self.measures[m]
+            if isinstance(t, A.ScaleType):
+                self.solver.add(v >= 0, v < len(t.literals))
+
+    def probe(self, event: str, why: str = "probe") -> Slot:
+        """An occurrence of ``event`` that is part of the trace (the question is about it)."""
+        s = self._slot(event, 0, why)
+        self.solver.add(s.present)
+        return s
+
+    def demand(self, slot: Slot, response: A.Response | None) -> None:
+        """A question's formula will ask ``response`` of ``slot``: unfold a slot for every
+        occurrence it names (negated ones too: denying a prohibition needs an occurrence)."""
+        if response is not None:
+            self._extra.append((slot, [(e, f"{why}") for e, why in _occurrences(response, everything=True)]))
+
+    def unfold(self, *, children: bool = True) -> None:
+        """Create the demanded slots, breadth first, at most ``bound`` per event, and add
+        the constraints that hold of every trace (order, rules, relations). Without
+        ``children``, only the probes: a question about the values one trigger reads."""
+        if not children:
+            self._unfolded = True
+            return
+        queue: deque[tuple[Slot, str, str]] = deque()
+        for s in list(self.slots):
+            queue.extend((s, e, why) for e, why in self._demands(s))
+        for s, extra in self._extra:
+            queue.extend((s, e, why) for e, why in extra)
+        while queue:
+            parent, event, why = queue.popleft()
+            if len(self.by_event.get(event, ())) >= self.bound:
+                self.complete = False
+                continue
+            child = self._slot(event, parent.depth + 1, why)
+            queue.extend((child, e, w) for e, w in self._demands(child))
+        if len(self.slots) > 1:
+            self.solver.add(z3.Distinct(*(s.pos for s in self.slots)))
+        self._unfolded = True
+        for s in self.slots:
+            for r in self.rules_by_event.get(s.event, ()):
+                self.solver.add(z3.Implies(self.rule_lit[r.name], self.rule_holds(r, s)))
+        for lit, rel in zip(self.relation_lit, self.spec.relations):
+            self.solver.add(z3.Implies(lit, self._relation(rel)))
+
+    def _demands(self, s: Slot) -> Iterator[tuple[str, str]]:
+        for r in self.rules_by_event.get(s.event, ()):
+            for e, why in _occurrences(r.response, everything=False):
+                yield e, f"{r.name}: {why}"
+        for rel in self.spec.relations:
+            if isinstance(rel, A.EventRelation):
+                if rel.kind == "witness" and s.event == rel.first:
+                    yield rel.second, f"witness {rel.first} {rel.second}"
+                elif rel.kind == "equal" and s.event in (rel.first, rel.second):
+                    other = rel.second if s.event == rel.first else rel.first
+                    yield other, f"equal {rel.first} {rel.second}"
+                elif rel.kind == "happenBefore" and s.event == rel.second:
+                    yield rel.first, f"happenBefore {rel.first} {rel.second}"
+            elif isinstance(rel, A.EventMeasureRelation) and rel.kind == "causation" and s.event != rel.event:
+                yield rel.event, f"causation {rel.event}"
+
+    # ------------------------------------------------------------------ expressions
+    def truth(self, e: A.Expr | None, snap: dict[str, Z3]) -> Z3:
+        """The condition ``e`` on a snapshot (None: true)."""
+        if e is None:
+            return z3.BoolVal(True)
+        if isinstance(e, A.BoolLit):
+            return z3.BoolVal(e.value)
+        if isinstance(e, A.Name):
+            return snap[e.name]
+        if isinstance(e, A.Not):
+            return z3.Not(self.truth(e.operand, snap))
+        if isinstance(e, A.BinOp) and e.op in ("and", "or"):
+            a, b = self.truth(e.left, snap), self.truth(e.right, snap)
+            return z3.And(a, b) if e.op == "and" else z3.Or(a, b)
+        if isinstance(e, A.Compare):
+            if self._boolean(e.left) or self._boolean(e.right):
+                a, b = self.truth(e.left, snap), self.truth(e.right, snap)
+            else:
+                scale = self._scale(e.left) or self._scale(e.right)
+                a, b = self.value(e.left, snap, scale), self.value(e.right, snap, scale)
+            return {
+                "<": lambda: a < b,
+                "<=": lambda: a <= b,
+                ">": lambda: a > b,
+                ">=": lambda: a >= b,
+                "=": lambda: a == b,
+                "<>": lambda: a != b,
+            }[e.op]()
+        raise AssertionError(f"not a condition: {e!r}")
+
+    def value(self, e: A.Expr, snap: dict[str, Z3], scale: A.ScaleType | None = None) -> Z3:
+        """A numeric (or scale position) expression on a snapshot."""
+        if isinstance(e, A.IntLit):
+            return z3.IntVal(e.value) if scale is not None else z3.RealVal(e.value)
+        if isinstance(e, A.Name):
+            if e.name in self.measures:
+                return snap[e.name]
+            if e.name in self.constants:
+                v = self.constants[e.name]
+                return z3.IntVal(v) if scale is not None else z3.RealVal(v)
+            if scale is not None and e.name in scale.literals:
+                return z3.IntVal(scale.literals.index(e.name))
+            raise AssertionError(f"unresolved name {e.name!r}")
+        if isinstance(e, A.BinOp) and e.op in ("+", "-", "*"):
+            a, b = self.value(e.left, snap, scale), self.value(e.right, snap, scale)
+            return a + b if e.op == "+" else a - b if e.op == "-" else a * b
+        raise AssertionError(f"not a number: {e!r}")
+
+    def _boolean(self, e: A.Expr) -> bool:
+        if isinstance(e, A.BoolLit | A.Not | A.Compare):
+            return True
+        if isinstance(e, A.BinOp):
+            return e.op in ("and", "or")
+        return isinstance(e, A.Name) and isinstance(self.measures.get(e.name), A.BooleanType)
+
+    def _scale(self, e: A.Expr) -> A.ScaleType | None:
+        if isinstance(e, A.Name):
+            t = self.measures.get(e.name)
+            if isinstance(t, A.ScaleType):
+                return t
+        return None
+
+    def seconds(self, d: A.Duration, snap: dict[str, Z3]) -> Z3:
+        """A duration in seconds."""
+        return self.value(d.value, snap) * A.TIME_UNITS.get(d.unit.lower(), 1)
+
+    # ------------------------------------------------------------------ responses
+    def chosen(
+        self, defeaters: Sequence[A.Defeater], snap: dict[str, Z3], semantics: HedgeSemantics | None = None
+    ) -> list[Z3]:
+        """For each clause (0: the default), the condition under which it applies (under
+        ``semantics``, by default the reading's)."""
+        c = [self.truth(d.condition, snap) for d in defeaters]
+        k = len(c)
+        if (semantics or self.reading.semantics) == HedgeSemantics.LAST_WINS:
+            out = [z3.And(*(z3.Not(x) for x in c))] if c else [z3.BoolVal(True)]
+            out += [z3.And(c[i], *(z3.Not(x) for x in c[i + 1 :])) for i in range(k)]
+            return out
+        out = [z3.Not(c[0])] if c else [z3.BoolVal(True)]
+        for i in range(k):
+            rest = [z3.Not(c[i + 1])] if i + 1 < k else []
+            out.append(z3.And(*c[: i + 1], *rest))
+        return out
+
+    def chosen_at(self, response: A.Response, clause: int, snap: dict[str, Z3]) -> Z3:
+        """Clause ``clause`` of ``response`` applies on ``snap``."""
+        return self.chosen(response.defeaters, snap)[clause]
+
+    def assumptions(self, snap: dict[str, Z3]) -> Z3:
+        """The measure relations on one snapshot, each guarded by its relation literal."""
+        return z3.And(
+            *(
+                z3.Implies(lit, self._measure_relation(rel, snap))
+                for lit, rel in zip(self.relation_lit, self.spec.relations)
+                if isinstance(rel, A.MeasureRelation)
+            )
+        )
+
+    def rule_holds(self, rule: A.Rule, x: Slot) -> Z3:
+        """``rule`` is met at slot ``x``: if ``x`` is present and triggers it, its response holds."""
+        fires = z3.And(x.present, self.truth(rule.trigger.condition, x.snap))
+        return z3.Implies(fires, self.holds(rule.response, x))
+
+    def fires(self, rule: A.Rule, x: Slot) -> Z3:
+        """``x`` is present and triggers ``rule``."""
+        return z3.And(x.present, self.truth(rule.trigger.condition, x.snap))
+
+    def holds(self, response: A.Response | None, x: Slot, *, untimed: float | str | None = "reading") -> Z3:
+        """``response``, started by slot ``x``, is met (``untimed`` overrides the reading's)."""
+        u = self.reading.untimed if untimed == "reading" else untimed
+        assert not isinstance(u, str)
+        return self._response(response, x.t, _After(slot=x), x.snap, u)
+
+    def _response(
+        self, resp: A.Response | None, start: Z3, after: _After, snap: dict[str, Z3], untimed: float | None
+    ) -> Z3:
+        if resp is None:
+            return z3.BoolVal(True)
+        if not resp.defeaters:
+            return z3.And(*(self._item(it, start, after, snap, untimed) for it in resp.items))
+        conds = self.chosen(resp.defeaters, snap)
+        parts = [z3.Implies(conds[0], self._response(A.Response(resp.items), start, after, snap, untimed))]
+        for d, cond in zip(resp.defeaters, conds[1:]):
+            parts.append(z3.Implies(cond, self._response(d.response, start, after, snap, untimed)))
+        return z3.And(*parts)
+
+    def window(
+        self, occ: A.Occurrence, has_otherwise: bool, start: Z3, snap: dict[str, Z3], untimed: float | None
+    ) -> tuple[Z3, Z3 | None]:
+        """The absolute window ``[lo, hi]`` of an occurrence started at ``start`` (hi None: none)."""
+        if occ.limit is not None:
+            hi = start + self.seconds(occ.limit.hi, snap)
+            lo = start + self.seconds(occ.limit.lo, snap) if occ.limit.lo is not None else start
+            return lo, hi
+        if occ.eventually:
+            return start, None
+        if occ.negated or has_otherwise:
+            return start, start
+        return start, None if untimed is None else start + untimed
+
+    def occurs(self, event: str, lo: Z3, hi: Z3 | None, after: Callable[[Slot], Z3]) -> Z3:
+        """Some present occurrence of ``event`` in ``[lo, hi]`` after the raising step."""
+        return z3.Or(
+            *(
+                z3.And(y.present, lo <= y.t, *([y.t <= hi] if hi is not None else []), after(y))
+                for y in self.by_event.get(event, ())
+            )
+        )
+
+    def _item(
+        self, it: A.ResponseItem, start: Z3, after: _After, snap: dict[str, Z3], untimed: float | None
+    ) -> Z3:
+        occ = it.occurrence
+        lo, hi = self.window(occ, it.otherwise is not None, start, snap, untimed)
+        if occ.negated:
+            ok = z3.Not(self.occurs(occ.event, lo, hi, after))
+            if it.otherwise is None:
+                return ok
+            breaks = [
+                (y, z3.And(y.present, lo <= y.t, *([y.t <= hi] if hi is not None else []), after(y)))
+                for y in self.by_event.get(occ.event, ())
+            ]
+            firsts = []
+            for y, by in breaks:
+                first = z3.And(by, *(z3.Not(z3.And(bz, _before(z, y))) for (z, bz) in breaks if z is not y))
+                firsts.append(
+                    z3.And(first, self._response(it.otherwise, y.t, _After(slot=y), y.snap, untimed))
+                )
+            return z3.Or(ok, *firsts)
+        ok = self.occurs(occ.event, lo, hi, after)
+        if it.alternative is not None:
+            ok = z3.Or(ok, self._branch(it.alternative, start, after, snap, untimed))
+        if it.otherwise is not None and hi is not None:
+            at = z3.If(hi < lo, start, hi)
+            fb = Fallback(at, z3.Not(ok), {m: self._var(m, f"o{next(self._fresh)}") for m in self.measures})
+            self._domain(fb.snap)
+            for other in self.fallbacks:
+                self.solver.add(
+                    z3.Implies(
+                        z3.And(fb.started, other.started, fb.at == other.at),
+                        z3.And(*(fb.snap[m] == other.snap[m] for m in self.measures)),
+                    )
+                )
+            for lit, rel in zip(self.relation_lit, self.spec.relations):
+                if isinstance(rel, A.MeasureRelation):
+                    self.solver.add(z3.Implies(lit, self._measure_relation(rel, fb.snap)))
+            self.fallbacks.append(fb)
+            ok = z3.Or(ok, self._response(it.otherwise, at, _After(at=at), fb.snap, untimed))
+        return ok
+
+    def _branch(
+        self, resp: A.Response, start: Z3, after: _After, snap: dict[str, Z3], untimed: float | None
+    ) -> Z3:
+        """An ``else`` alternative: every item of its chosen clause occurs in its own window."""
+        if resp.defeaters:
+            conds = self.chosen(resp.defeaters, snap)
+            parts = [z3.Implies(conds[0], self._branch(A.Response(resp.items), start, after, snap, untimed))]
+            for d, cond in zip(resp.defeaters, conds[1:]):
+                sub = d.response
+                parts.append(
+                    z3.Implies(
+                        cond,
+                        z3.BoolVal(False) if sub is None else self._branch(sub, start, after, snap, untimed),
+                    )
+                )
+            return z3.And(*parts)
+        out = []
+        for it in resp.items:
+            if it.occurrence.negated:
+                return z3.BoolVal(False)
+            lo, hi = self.window(it.occurrence, it.otherwise is not None, start, snap, untimed)
+            out.append(self.occurs(it.occurrence.event, lo, hi, after))
+        return z3.And(*out) if out else z3.BoolVal(False)
+
+    # ------------------------------------------------------------------ relations
+    def _relation(self, rel: A.Relation) -> Z3:
+        every = self.slots
+        if isinstance(rel, A.EventRelation):
+            a, b = self.by_event.get(rel.first, []), self.by_event.get(rel.second, [])
+
+            def with_(xs: list[Slot], ys: list[Slot]) -> Z3:
+                return z3.And(
+                    *(z3.Implies(x.present, z3.Or(*(z3.And(y.present, y.t == x.t) for y in ys))) for x in xs)
+                )
+
+            if rel.kind == "witness":
+                return with_(a, b)
+            if rel.kind == "equal":
+                return z3.And(with_(a, b), with_(b, a))
+            if rel.kind in ("mutualExclusive", "isContradictoryWith"):
+                return z3.And(
+                    *(z3.Not(z3.And(x.present, y.present, x.t == y.t)) for x in a for y in b if x is not y)
+                )
+            if rel.kind == "happenBefore":
+                return z3.And(
+                    *(z3.Implies(y.present, z3.Or(*(z3.And(x.present, x.t < y.t) for x in a))) for y in b)
+                )
+            raise AssertionError(f"unknown relation {rel.kind}")
+        if isinstance(rel, A.MeasureRelation):
+            return z3.And(*(z3.Implies(s.present, self._measure_relation(rel, s.snap)) for s in every))
+        if isinstance(rel, A.EventMeasureRelation):
+            es = self.by_event.get(rel.event, [])
+            if rel.kind == "causation":
+                return z3.And(
+                    *(
+                        z3.Implies(
+                            z3.And(s.present, self.truth(rel.condition, s.snap)),
+                            z3.Or(*(z3.And(y.present, y.t == s.t) for y in es)),
+                        )
+                        for s in every
+                    )
+                )
+            want = self.truth if rel.kind == "includes" else (lambda c, s: z3.Not(self.truth(c, s)))
+            return z3.And(*(z3.Implies(s.present, want(rel.condition, s.snap)) for s in es))
+        if isinstance(rel, A.UntilRelation):
+            starts = self.by_event.get(rel.trigger.event, [])
+            ends = self.by_event.get(rel.until_event, [])
+            parts = []
+            for a_ in starts:
+                on = z3.And(a_.present, self.truth(rel.trigger.condition, a_.snap))
+                for y in every:
+                    after_a = _After(slot=a_)(y)
+                    stopped = z3.Or(
+                        *(
+                            z3.And(
+                                b.present,
+                                self.truth(rel.until_condition, b.snap),
+                                _After(slot=a_)(b),
+                                z3.Not(_After(slot=y)(b)),
+                            )
+                            for b in ends
+                        )
+                    )
+                    parts.append(
+                        z3.Implies(
+                            z3.And(on, y.present, after_a, z3.Not(stopped)), self.truth(rel.condition, y.snap)
+                        )
+                    )
+            return z3.And(*parts)
+        if isinstance(rel, A.ForRelation):
+            starts = self.by_event.get(rel.trigger.event, [])
+            parts = []
+            for a_ in starts:
+                on = z3.And(a_.present, self.truth(rel.trigger.condition, a_.snap))
+                end = a_.t + self.seconds(rel.duration, a_.snap)
+                for y in every:
+                    parts.append(
+                        z3.Implies(
+                            z3.And(on, y.present, _After(slot=a_)(y), y.t <= end),
+                            self.truth(rel.condition, y.snap),
+                        )
+                    )
+            return z3.And(*parts)
+        raise AssertionError(f"unknown relation {rel!r}")
+
+    def _measure_relation(self, rel: A.MeasureRelation, snap: dict[str, Z3]) -> Z3:
+        p = self.truth(rel.first, snap)
+        if rel.kind == "invariant" or rel.second is None:
+            return p
+        q = self.truth(rel.second, snap)
+        if rel.kind == "imply":
+            return z3.Implies(p, q)
+        if rel.kind == "iff":
+            return p == q
+        return z3.Implies(p, z3.Not(q))  # mutualExclusive, opposite (§9.2)
+
+    # ------------------------------------------------------------------ solving
+    def check(self, assumptions: Sequence[Z3]) -> z3.CheckSatResult:
+        """Solve under ``assumptions`` (rule and relation literals, goal literals)."""
+        assert self._unfolded, "unfold() first"
+        return self.solver.check(*assumptions)
+
+    def fresh(self, name: str) -> Z3:
+        """A new assumption literal."""
+        return z3.Bool(f"{name}!{next(self._fresh)}")
+
+
+def _before(z: Slot, y: Slot) -> Z3:
+    """``z`` comes before ``y`` in the trace."""
+    return z3.Or(z.t < y.t, z3.And(z.t == y.t, z.pos < y.pos))
+
+
+def _occurrences(resp: A.Response | None, *, everything: bool) -> Iterator[tuple[str, str]]:
+    """The events ``resp`` can owe, with where: every positive occurrence, and the event
+    of a prohibition that has an ``otherwise`` (breaking it starts the fallback); with
+    ``everything``, every event it names."""
+    if resp is None:
+        return
+    for it in resp.items:
+        occ = it.occurrence
+        if not occ.negated or it.otherwise is not None or everything:
+            yield occ.event, f"{'not ' if occ.negated else ''}{occ.event}"
+        yield from _occurrences(it.otherwise, everything=everything)
+        yield from _occurrences(it.alternative, everything=everything)
+    for d in resp.defeaters:
+        yield from _occurrences(d.response, everything=everything)
+
+
+@dataclass
+class Outcome:
+    """The answer to one question: ``sat`` (a trace exists), ``unsat`` or ``unknown``."""
+
+    status: str
+    model: Z3 = None
+    core: tuple[str, ...] = ()
+    extra: dict[str, Any] = field(default_factory=dict)

@@ -1,0 +1,203 @@
+"""Witness traces: a solver's model as a trace, checked by the reference semantics.
+
+Every trace the analysis shows is first judged by :func:`cosleec.semantics.judge` -- the
+independent oracle ``cosleec conforms`` uses -- and its verdicts become the timeline a
+person reads. A witness the oracle does not confirm is flagged (it would be a bug in the
+encoding), never silently shown.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any
+
+import z3
+
+from cosleec.analysis.encoding import Encoding
+from cosleec.analysis.findings import Witness
+from cosleec.lang import Specification
+from cosleec.lang import ast as A
+from cosleec.semantics import Judgement, Options, Step, Value, judge
+
+
+def steps(enc: Encoding, model: Any) -> list[Step]:
+    """The trace a model describes: each present occurrence, preceded by the values it
+    reads; each started ``otherwise`` snapshot after every occurrence at its instant; then
+    one last step far enough on that every deadline of the trace has passed."""
+    present = [s for s in enc.slots if z3.is_true(model.eval(s.present, model_completion=True))]
+    at: dict[int, float] = {s.id: _number(model.eval(s.t, model_completion=True)) for s in present}
+    order = sorted(present, key=lambda s: (at[s.id], model.eval(s.pos, model_completion=True).as_long()))
+    fallbacks = []
+    for fb in enc.fallbacks:
+        if z3.is_true(model.eval(fb.started, model_completion=True)):
+            fallbacks.append((_number(model.eval(fb.at, model_completion=True)), fb.snap))
+    fallbacks.sort(key=lambda x: x[0])
+    out: list[Step] = []
+    fi = 0
+    for s in order:
+        t = at[s.id]
+        while fi < len(fallbacks) and fallbacks[fi][0] < t:
+            out.append(Step(fallbacks[fi][0], None, _values(enc, model, fallbacks[fi][1])))
+            fi += 1
+        out.append(Step(t, s.event, _values(enc, model, s.snap)))
+    for when, snap in fallbacks[fi:]:
+        out.append(Step(when, None, _values(enc, model, snap)))
+    last = max((s.t for s in out), default=0.0)
+    out.append(Step(last + _horizon(enc.spec)))
+    return out
+
+
+def _values(enc: Encoding, model: Any, snap: dict[str, Any]) -> dict[str, Value | None]:
+    out: dict[str, Value | None] = {}
+    for m, var in snap.items():
+        v = model.eval(var, model_completion=True)
+        t = enc.measures[m]
+        if isinstance(t, A.BooleanType):
+            out[m] = z3.is_true(v)
+        elif isinstance(t, A.ScaleType):
+            out[m] = t.literals[v.as_long()]
+        else:
+            out[m] = _number(v)
+    return out
+
+
+def _number(v: Any) -> float:
+    if z3.is_int_value(v):
+        return float(v.as_long())
+    if z3.is_rational_value(v):
+        f = float(v.numerator_as_long()) / float(v.denominator_as_long())
+        return int(f) if f == int(f) else f  # type: ignore[return-value]
+    if z3.is_algebraic_value(v):
+        return float(v.approx(12).as_decimal(12).rstrip("?"))
+    raise ValueError(f"not a number: {v}")
+
+
+def _horizon(spec: Specification) -> float:
+    """Longer than any chain of written deadlines: the sum of every literal duration, plus one."""
+    total = 1.0
+
+    def walk(resp: A.Response | None) -> None:
+        nonlocal total
+        if resp is None:
+            return
+        for it in resp.items:
+            lim = it.occurrence.limit
+            if lim is not None:
+                for d in (lim.lo, lim.hi):
+                    if d is not None and isinstance(d.value, A.IntLit):
+                        total += abs(d.value.value) * A.TIME_UNITS.get(d.unit.lower(), 1)
+            walk(it.otherwise)
+            walk(it.alternative)
+        for clause in resp.defeaters:
+            walk(clause.response)
+
+    for r in spec.rules:
+        walk(r.response)
+    return min(total, 1e9)
+
+
+def final_breaches(j: Judgement) -> list[Any]:
+    """The breaches nothing makes up for: a missed item whose ``otherwise`` started is
+    judged by that ``otherwise``'s own verdicts."""
+    started = {(v.instance, v.key.rsplit("/o:", 1)[0]) for v in j.verdicts if "/o:" in v.key}
+    return [v for v in j.verdicts if v.breach and (v.instance, v.key) not in started]
+
+
+def timeline(spec: Specification, trace: Sequence[Step], j: Judgement, *, limit: int = 40) -> list[str]:
+    """The trace as lines a person reads: the values the rules that fired read (each when it
+    changes), what occurred, and what the reference semantics made of each obligation."""
+    fired = {f.rule for f in j.firings if f.fired is not None}
+    shown = set().union(*(_reads(r) for r in spec.rules if r.name in fired)) if fired else set()
+    out: list[str] = []
+    last: dict[str, object] = {}
+    for s in trace:
+        parts = []
+        changed = {k: v for k, v in s.values.items() if k in shown and last.get(k, ...) != v}
+        last.update(s.values)
+        if changed:
+            parts.append("set " + ", ".join(f"{k}={_show(v)}" for k, v in sorted(changed.items())))
+        if s.event is not None:
+            parts.append(s.event)
+        out.append(f"t={_show(s.t)}: " + ("; ".join(parts) if parts else "(time passes)"))
+    for f in j.firings:
+        if f.fired:
+            clause = "default response" if not f.clause else f"clause {f.clause}"
+            out.append(f"  {f.rule} fires at t={_show(f.time)} ({clause})")
+    open_ = j.pending
+    for v in j.verdicts:
+        when = "" if v.at is None else f" at t={_show(v.at)}"
+        status = "pending (no deadline)" if v in open_ else v.status
+        out.append(f"  {v.rule}: {v.describe()} {status}{when}")
+    if len(out) > limit:
+        out = [*out[: limit - 1], f"  ... ({len(out) - limit + 1} more lines)"]
+    return out
+
+
+def _reads(rule: A.Rule) -> set[str]:
+    """The names a rule's conditions and deadlines mention (measures among them)."""
+    out: set[str] = set()
+
+    def expr(e: A.Expr | None) -> None:
+        if isinstance(e, A.Name):
+            out.add(e.name)
+        elif isinstance(e, A.Not):
+            expr(e.operand)
+        elif isinstance(e, A.BinOp | A.Compare):
+            expr(e.left)
+            expr(e.right)
+
+    def resp(r: A.Response | None) -> None:
+        if r is None:
+            return
+        for it in r.items:
+            if it.occurrence.limit is not None:
+                expr(it.occurrence.limit.hi.value)
+                if it.occurrence.limit.lo is not None:
+                    expr(it.occurrence.limit.lo.value)
+            resp(it.otherwise)
+            resp(it.alternative)
+        for d in r.defeaters:
+            expr(d.condition)
+            resp(d.response)
+
+    expr(rule.trigger.condition)
+    resp(rule.response)
+    return out
+
+
+def _show(v: object) -> str:
+    if isinstance(v, float):
+        return f"{v:g}"
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return str(v)
+
+
+def witness(
+    enc: Encoding,
+    model: Any,
+    options: Options,
+    *,
+    confirm: Callable[[Judgement], bool] | None = None,
+    shows: Iterable[A.Rule] = (),
+) -> Witness:
+    """The model as a witness, judged by the reference semantics: ``confirm`` says whether
+    the judgement shows what the witness should (default: the rules hold on it); each rule of
+    ``shows`` (a concern or purpose read as a rule) must fire and be met at least once."""
+    trace = steps(enc, model)
+    j = judge(enc.spec, trace, options)
+    ok = confirm(j) if confirm is not None else not final_breaches(j)
+    for rule in shows:
+        probe = Specification(enc.spec.definitions, (rule,), path=enc.spec.path)
+        pj = judge(probe, trace, Options(semantics=options.semantics, untimed=0.0))
+        fired = {f.instance for f in pj.firings if f.fired and f.instance is not None}
+        waiting = {v.id for v in pj.pending}
+        good = [
+            i
+            for i in fired
+            if all(
+                not v.breach and (v.negated or v.id not in waiting) for v in pj.verdicts if v.instance == i
+            )
+        ]
+        ok = ok and bool(good)
+    return Witness(tuple(trace), tuple(timeline(enc.spec, trace, j)), ok)

@@ -1,0 +1,275 @@
+"""``cosleec analyse``: conflicting, redundant and dead rules, found before the robot runs them.
+
+Exit codes: 0 nothing found, 1 something found (or a file has errors), 2 a usage or input
+error. Text output is compiler style (file:line:col, the line with a caret, notes at the
+rules involved, a hint), then whether the finding is proved or holds up to a bound, and the
+witness as a timeline; ``--json`` prints one document; ``--sarif FILE`` writes SARIF 2.1.0;
+``--witnesses DIR`` writes each witness as a trace ``cosleec conforms`` reads.
+"""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+import importlib
+import json
+import math
+import re
+import sys
+from pathlib import Path
+
+from rich.text import Text
+
+from cosleec.analysis import CHECKS, DEFAULT_BOUND, Coverage, FileReport, Settings, analyse_file, sarif
+from cosleec.cli.common import add_clause_options, add_priority_options, console, expand
+from cosleec.errors import UserError
+from cosleec.lang import HedgeSemantics, SleecError, cycle, load, parse_priority
+
+USAGE_ERROR = 2
+STYLE = {"error": "bold red", "warning": "yellow", "note": "cyan"}
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register ``cosleec analyse`` and its options."""
+    p = sub.add_parser(
+        "analyse",
+        aliases=["analyze"],
+        help="find conflicting, redundant and dead rules (z3), with minimal causes and witnesses",
+        description="Analyse rule sets with z3 on the reference semantics. Exit 0: nothing found; 1: "
+        "something found; 2: a usage or input error. Checks: "
+        + "; ".join(f"{k}: {v}" for k, v in CHECKS.items()),
+    )
+    p.add_argument(
+        "files", nargs="+", metavar="FILE", help="rule files (a directory means its *.sleec files)"
+    )
+    p.add_argument(
+        "--check",
+        metavar="LIST",
+        help="comma-separated checks to run (default: all): " + ", ".join(CHECKS),
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON document instead of text")
+    p.add_argument("--sarif", metavar="FILE", help="also write the findings as SARIF 2.1.0 to FILE")
+    p.add_argument("--witnesses", metavar="DIR", help="write each witness as a JSON Lines trace in DIR")
+    p.add_argument(
+        "--bound",
+        type=_positive,
+        default=DEFAULT_BOUND,
+        metavar="N",
+        help=f"occurrences per event the search may use (default {DEFAULT_BOUND}); a result that needs "
+        "more says 'up to bound N'",
+    )
+    p.add_argument(
+        "--timeout",
+        type=_seconds,
+        default=20.0,
+        metavar="S",
+        help="seconds each solver question may take (default 20); unanswered ones are listed",
+    )
+    p.add_argument(
+        "--untimed",
+        default="none",
+        metavar="none|S",
+        help="an untimed obligation: none = must happen some time (default), or within S seconds "
+        "(0: at the same instant, as LEGOS/N-Check)",
+    )
+    add_clause_options(p, unknown=False)
+    add_priority_options(p)
+    p.add_argument(
+        "--legos-compat",
+        action="store_true",
+        help="read files as LEGOS does (cross-scale literals, duplicate names), with warnings",
+    )
+    p.add_argument(
+        "--tasks", metavar="MODULE", help="a module with install(manager): report unimplemented clauses"
+    )
+    p.add_argument(
+        "--mapping", metavar="YAML", help="a Context Listener mapping: report inputs it never produces"
+    )
+    p.set_defaults(run=run)
+
+
+def _positive(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not a whole number") from None
+    if not 1 <= n <= 1000:
+        raise argparse.ArgumentTypeError(f"{n} is out of range (1 to 1000)")
+    return n
+
+
+def _seconds(text: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not a number of seconds") from None
+    if not math.isfinite(x) or x <= 0:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not a positive number of seconds")
+    return x
+
+
+def _checks(text: str | None) -> list[str]:
+    if text is None:
+        return list(CHECKS)
+    out = []
+    for name in (n.strip() for n in text.split(",")):
+        if not name:
+            continue
+        if name not in CHECKS:
+            close = difflib.get_close_matches(name, list(CHECKS), n=1)
+            raise UserError(
+                f"unknown check {name[:40]!r}" + (f" (did you mean {close[0]}?)" if close else ""),
+                hint="one or more of: " + ", ".join(CHECKS),
+            )
+        out.append(name)
+    return out
+
+
+def _untimed(text: str) -> float | None:
+    if text == "none":
+        return None
+    try:
+        x = float(text)
+    except ValueError:
+        x = math.nan
+    if not math.isfinite(x) or x < 0:
+        raise UserError(f"--untimed {text[:40]!r} is neither none nor a non-negative number of seconds")
+    return x
+
+
+def run(args: argparse.Namespace) -> int:
+    """Analyse every file; print the findings; write SARIF and witnesses when asked."""
+    try:
+        checks = _checks(args.check)
+        untimed = _untimed(args.untimed)
+        given = [pair for text in args.priority for pair in parse_priority(text)]
+    except UserError as e:
+        print(f"cosleec: {e.render()}", file=sys.stderr)
+        return USAGE_ERROR
+    except SleecError as e:
+        print(e.render(), file=sys.stderr)
+        return USAGE_ERROR
+    loop = cycle(given)
+    if loop:
+        print(f"cosleec: the priorities given form a cycle: {' > '.join(loop)}", file=sys.stderr)
+        return USAGE_ERROR
+    files = expand(args.files)
+    settings = Settings(
+        semantics=HedgeSemantics(args.semantics),
+        untimed=untimed,
+        bound=args.bound,
+        timeout=args.timeout,
+        priorities=frozenset(given),
+    )
+    reports = []
+    for f in files:
+        coverage = _coverage(args, f)
+        reports.append(analyse_file(f, settings, checks, legos_compat=args.legos_compat, coverage=coverage))
+    if args.witnesses:
+        _write_witnesses(Path(args.witnesses), reports)
+    if args.sarif:
+        try:
+            Path(args.sarif).write_text(json.dumps(sarif(reports, checks), indent=2) + "\n", encoding="utf-8")
+        except OSError as e:
+            raise UserError(f"cannot write the SARIF file: {e.strerror or e}", where=args.sarif) from None
+    if args.json:
+        print(json.dumps(_json(reports), indent=2))
+    else:
+        _text(reports)
+    if any(r.failed for r in reports):
+        return 1
+    return 1 if any(r.findings for r in reports) else 0
+
+
+def _coverage(args: argparse.Namespace, path: Path) -> Coverage | None:
+    if not args.tasks and not args.mapping:
+        return None
+    unimplemented: tuple[str, ...] | None = None
+    measures = events = None
+    try:
+        spec = load(path, legos_compat=True) if args.legos_compat else load(path)  # type: ignore[call-arg]
+    except SleecError:
+        return None  # the file's own errors are reported by the analysis
+    if args.tasks:
+        from cosleec.runtime import Manager, RuleSet  # the runtime is needed only to bind the tasks
+
+        try:
+            module = importlib.import_module(args.tasks)
+        except ImportError as e:
+            raise UserError(
+                f"cannot import the task module {args.tasks!r}: {e}",
+                hint="give a module on the Python path (PYTHONPATH) that defines install(manager)",
+            ) from None
+        install = getattr(module, "install", None)
+        if not callable(install):
+            raise UserError(f"module {args.tasks!r} has no install(manager) function")
+        manager = Manager(RuleSet.from_spec(spec))
+        install(manager)
+        unimplemented = tuple(manager.implementations.missing())
+    if args.mapping:
+        from cosleec.nodes import Mapping
+
+        m = Mapping.load(args.mapping)
+        measures = frozenset(e.name for e in m.entries if e.kind == "measure")
+        events = frozenset(e.name for e in m.entries if e.kind == "event")
+    return Coverage(unimplemented, measures, events)
+
+
+def _write_witnesses(d: Path, reports: list[FileReport]) -> None:
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        for r in reports:
+            stem = Path(r.path).stem
+            for f in r.findings:
+                if f.witness is not None:
+                    name = re.sub(r"[^A-Za-z0-9_.-]+", "_", f"{stem}--{f.code}--{f.subject}") + ".jsonl"
+                    (d / name).write_text(f.witness.jsonl(), encoding="utf-8")
+    except OSError as e:
+        raise UserError(f"cannot write the witnesses: {e.strerror or e}", where=str(d)) from None
+
+
+def _json(reports: list[FileReport]) -> dict[str, object]:
+    return {
+        "files": [
+            {
+                "path": r.path,
+                "ok": not r.failed,
+                "diagnostics": [d.to_json() for d in r.diagnostics if d.is_error],
+                "findings": [f.to_json() for f in r.findings],
+                "unknown": r.unknown,
+                "seconds": {k: round(v, 4) for k, v in r.seconds.items()},
+            }
+            for r in reports
+        ]
+    }
+
+
+def _text(reports: list[FileReport]) -> None:
+    out = console()
+    for r in reports:
+        if r.failed:
+            for d in r.diagnostics:
+                if d.is_error:
+                    out.print(Text(d.render(r.source)))
+            out.print(Text.assemble(f"{r.path}: ", ("has errors, not analysed", "bold red"),
+                                    " (--legos-compat reads the LEGOS case studies as LEGOS does)"))  # fmt: skip
+            continue
+        for f in r.findings:
+            lines = f.diagnostic().render(r.source).split("\n")
+            sev = f" {f.severity}: "
+            loc, _, msg = lines[0].partition(sev)
+            out.print(Text.assemble(loc, (sev, STYLE[str(f.severity)]), (f"[{f.code}] ", "bold"), msg))
+            for extra in lines[1:]:
+                out.print(Text(extra))
+            if f.situation:
+                out.print(Text(f"    situation: {f.situation}"))
+            if f.witness is not None:
+                out.print(Text("    witness" + ("" if f.witness.confirmed else " (NOT confirmed by the reference "
+                                                 "semantics: please report this)") + ":"))  # fmt: skip
+                for line in f.witness.timeline:
+                    out.print(Text(f"      {line}"))
+        for u in r.unknown:
+            out.print(Text.assemble(f"{r.path}: ", ("undecided", "yellow"), f": {u}"))
+        n = len(r.findings)
+        summary = "no findings" if n == 0 else f"{n} finding{'s' if n != 1 else ''}"
+        out.print(Text(f"{r.path}: {summary} ({r.seconds.get('total', 0.0):.2f} s)"))
