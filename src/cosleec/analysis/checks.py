@@ -39,7 +39,8 @@ import z3
 from cosleec.analysis.cores import Undecided, minimal_core
 from cosleec.analysis.encoding import Encoding, Reading, Slot
 from cosleec.analysis.findings import BOUNDED, PROVED, Finding
-from cosleec.analysis.witness import witness
+from cosleec.analysis.witness import reads as _reads
+from cosleec.analysis.witness import show, snapshot, witness
 from cosleec.lang import HedgeSemantics, Severity, Specification, closure, pairs
 from cosleec.lang import ast as A
 from cosleec.semantics import Options
@@ -162,7 +163,10 @@ class Analysis:
     # ------------------------------------------------------------------ N-Check's checks
     def vacuous_conflicts(self) -> None:
         """Rules whose trigger can never occur while every rule holds."""
+        possible: set[str] = set()  # rules a trace already showed triggered with every rule met
         for rule in self.spec.rules:
+            if rule.name in possible:
+                continue
 
             def make(bound: int, rule: A.Rule = rule) -> tuple[Encoding, Any]:
                 enc, x = self.encoding(rule.trigger.event, bound)
@@ -171,7 +175,17 @@ class Analysis:
                 return enc, goal
 
             asked = self.deepen(make, None, f"vacuous conflict of {rule.name}")
-            if asked is None or asked[0] != z3.unsat:
+            if asked is None:
+                continue
+            if asked[0] == z3.sat:
+                enc, model = asked[1], asked[1].solver.model()
+                for s in enc.slots:
+                    if z3.is_true(model.eval(s.present, model_completion=True)):
+                        possible.update(
+                            r.name
+                            for r in enc.rules_by_event.get(s.event, ())
+                            if z3.is_true(model.eval(enc.fires(r, s), model_completion=True))
+                        )
                 continue
             _, enc, goal, cands = asked
             try:
@@ -482,14 +496,10 @@ class Analysis:
         if any(f.code == "situational-conflict" and f.rules == core for f in self.findings):
             return
         status, bound = self.status(fixed)
+        reads = _reads(ro) | _reads(rp)
         situation = "; ".join(
-            f"{x.event} at t={_num(model.eval(x.t, model_completion=True))}"
-            + (
-                " with "
-                + ", ".join(f"{m}={model.eval(v, model_completion=True)}" for m, v in sorted(x.snap.items()))
-                if x.snap
-                else ""
-            )
+            f"{x.event} at t={show(model, x.t)}"
+            + (" with " + snapshot(fixed, model, x.snap, reads) if reads & x.snap.keys() else "")
             for x in dict.fromkeys([xp, xo])
         )
         self.findings.append(
@@ -525,11 +535,6 @@ def _overlap(j: Any, event: str, owing: str, banning: str) -> bool:
                 if olo <= (inf if phi is None else phi) and plo <= (inf if ohi is None else ohi):
                     return True
     return False
-
-
-def _num(v: Any) -> str:
-    s = str(v)
-    return s[:-1] if s.endswith("?") else s
 
 
 def _clause(rule: str, k: int) -> str:

@@ -15,7 +15,7 @@ import z3
 from cosleec.analysis.checks import Analysis
 from cosleec.analysis.encoding import Encoding, Slot
 from cosleec.analysis.findings import PROVED, Finding
-from cosleec.analysis.witness import witness
+from cosleec.analysis.witness import reads, snapshot, witness
 from cosleec.lang import HedgeSemantics, Severity
 from cosleec.lang import ast as A
 from cosleec.semantics import Judgement
@@ -29,8 +29,9 @@ def _probe(a: Analysis, rule: A.Rule) -> tuple[Encoding, Slot, list[Any]]:
     return enc, x, [enc.fires(rule, x), enc.assumptions(x.snap), *enc.relation_lit]
 
 
-def _values(model: Any, x: Slot) -> str:
-    return ", ".join(f"{m}={model.eval(v, model_completion=True)}" for m, v in sorted(x.snap.items()))
+def _values(enc: Encoding, model: Any, x: Slot, rule: A.Rule) -> str:
+    """The values of the measures ``rule`` reads, as the model has them."""
+    return snapshot(enc, model, x.snap, reads(rule))
 
 
 def unselectable(a: Analysis) -> None:
@@ -79,7 +80,7 @@ def semantics_differ(a: Analysis) -> None:
         model = enc.solver.model()
         pick_lw = next(i for i, c in enumerate(lw) if z3.is_true(model.eval(c, model_completion=True)))
         pick_ne = next(i for i, c in enumerate(ne) if z3.is_true(model.eval(c, model_completion=True)))
-        situation = _values(model, x)
+        situation = _values(enc, model, x, rule)
         a.findings.append(
             Finding(
                 code="semantics-differ",
@@ -132,7 +133,7 @@ def negative_deadlines(a: Analysis) -> None:
             if a.solve(enc, [*base, bad], f"deadline in {rule.name}") != z3.sat:
                 continue
             model = enc.solver.model()
-            situation = _values(model, x)
+            situation = _values(enc, model, x, rule)
             a.findings.append(
                 Finding(
                     code="negative-deadline",

@@ -107,7 +107,7 @@ def timeline(spec: Specification, trace: Sequence[Step], j: Judgement, *, limit:
     """The trace as lines a person reads: the values the rules that fired read (each when it
     changes), what occurred, and what the reference semantics made of each obligation."""
     fired = {f.rule for f in j.firings if f.fired is not None}
-    shown = set().union(*(_reads(r) for r in spec.rules if r.name in fired)) if fired else set()
+    shown = set().union(*(reads(r) for r in spec.rules if r.name in fired)) if fired else set()
     out: list[str] = []
     last: dict[str, object] = {}
     for s in trace:
@@ -133,7 +133,7 @@ def timeline(spec: Specification, trace: Sequence[Step], j: Judgement, *, limit:
     return out
 
 
-def _reads(rule: A.Rule) -> set[str]:
+def reads(rule: A.Rule) -> set[str]:
     """The names a rule's conditions and deadlines mention (measures among them)."""
     out: set[str] = set()
 
@@ -163,6 +163,20 @@ def _reads(rule: A.Rule) -> set[str]:
     expr(rule.trigger.condition)
     resp(rule.response)
     return out
+
+
+def snapshot(enc: Encoding, model: Any, snap: dict[str, Any], names: set[str]) -> str:
+    """``m=value, ...`` for the measures of ``names`` in a snapshot (scale values by literal)."""
+    shown = _values(enc, model, {m: v for m, v in snap.items() if m in names})
+    return ", ".join(f"{m}={_show(v)}" for m, v in sorted(shown.items()))
+
+
+def show(model: Any, var: Any) -> str:
+    """A model's value of ``var`` as a person reads it (``0.25``, ``true``), not as z3 prints it."""
+    v = model.eval(var, model_completion=True)
+    if z3.is_bool(v):
+        return "true" if z3.is_true(v) else "false"
+    return _show(_number(v))
 
 
 def _show(v: object) -> str:
