@@ -40,7 +40,7 @@ from cosleec.analysis.cores import Undecided, minimal_core
 from cosleec.analysis.encoding import Encoding, Reading, Slot
 from cosleec.analysis.findings import BOUNDED, PROVED, Finding
 from cosleec.analysis.witness import reads as _reads
-from cosleec.analysis.witness import show, snapshot, witness
+from cosleec.analysis.witness import show, smallest, snapshot, witness
 from cosleec.lang import HedgeSemantics, Severity, Specification, closure, pairs
 from cosleec.lang import ast as A
 from cosleec.semantics import Options
@@ -268,7 +268,8 @@ class Analysis:
             answer, enc, goal, cands = asked
             status, bound = self.status(enc)
             if kind == "concern" and answer == z3.sat:
-                w = witness(enc, enc.solver.model(), self.settings.options, shows=[_as_rule(s)])
+                model = smallest(enc, [goal, *(lit for _, lit in cands)])
+                w = witness(enc, model, self.settings.options, shows=[_as_rule(s)])
                 self.findings.append(
                     Finding(
                         code="concern-raised",

@@ -8,6 +8,7 @@ encoding), never silently shown.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
@@ -18,6 +19,22 @@ from cosleec.analysis.findings import Witness
 from cosleec.lang import Specification
 from cosleec.lang import ast as A
 from cosleec.semantics import Judgement, Options, Step, Value, judge
+
+
+def smallest(enc: Encoding, assumptions: list[Any]) -> Any:
+    """A model with as few occurrences as one pass can leave out: each occurrence the last
+    model used (but the probes), latest first, is left out if the question stays satisfiable.
+    The solver must just have answered sat under ``assumptions``."""
+    model = enc.solver.model()
+    out = list(assumptions)
+    probes = [s for s in enc.slots if s.depth == 0]
+    for s in reversed(enc.slots):
+        if s in probes or not z3.is_true(model.eval(s.present, model_completion=True)):
+            continue
+        trial = [*out, z3.Not(s.present)]
+        if enc.check(trial) == z3.sat:
+            out, model = trial, enc.solver.model()
+    return model
 
 
 def steps(enc: Encoding, model: Any) -> list[Step]:
@@ -96,11 +113,41 @@ def _horizon(spec: Specification) -> float:
     return min(total, 1e9)
 
 
-def final_breaches(j: Judgement) -> list[Any]:
-    """The breaches nothing makes up for: a missed item whose ``otherwise`` started is
-    judged by that ``otherwise``'s own verdicts."""
-    started = {(v.instance, v.key.rsplit("/o:", 1)[0]) for v in j.verdicts if "/o:" in v.key}
-    return [v for v in j.verdicts if v.breach and (v.instance, v.key) not in started]
+def final_breaches(spec: Specification, j: Judgement) -> list[Any]:
+    """The breaches nothing makes up for: a missed item that has an ``otherwise`` is judged
+    by that ``otherwise`` (which may impose nothing, or its own verdicts)."""
+    return [v for v in j.verdicts if v.breach and not _has_fallback(spec, v.key)]
+
+
+_KEY = re.compile(r"^(?P<rule>.+?)(?:\.(?P<clause>\d+))?(?P<path>(?:~\d+)*:\d+(?:/o(?:~\d+)*:\d+)*)$")
+
+
+def _has_fallback(spec: Specification, key: str) -> bool:
+    """Whether the item a verdict key names (``R1.2:0/o~1:0``, the reference's naming) has an
+    ``otherwise``; an ``else`` branch (``/e``) or an unknown key counts as having none."""
+    m = _KEY.match(key)
+    rules = {r.name: r for r in spec.rules}
+    if m is None or m["rule"] not in rules:
+        return False
+    resp: A.Response | None = rules[m["rule"]].response
+    if m["clause"] is not None:
+        assert resp is not None
+        resp = resp.defeaters[int(m["clause"]) - 1].response
+    else:
+        resp = A.Response(resp.items) if resp is not None else None
+    item: A.ResponseItem | None = None
+    for part in re.findall(r"/o|~\d+|:\d+", m["path"]):
+        if resp is None and part != "/o":
+            return False
+        if part == "/o":
+            resp = item.otherwise if item is not None else None
+        elif part.startswith("~"):
+            assert resp is not None
+            resp = resp.defeaters[int(part[1:]) - 1].response
+        else:
+            assert resp is not None
+            item = resp.items[int(part[1:])]
+    return item is not None and item.otherwise is not None
 
 
 def timeline(spec: Specification, trace: Sequence[Step], j: Judgement, *, limit: int = 40) -> list[str]:
@@ -200,7 +247,7 @@ def witness(
     ``shows`` (a concern or purpose read as a rule) must fire and be met at least once."""
     trace = steps(enc, model)
     j = judge(enc.spec, trace, options)
-    ok = confirm(j) if confirm is not None else not final_breaches(j)
+    ok = confirm(j) if confirm is not None else not final_breaches(enc.spec, j)
     for rule in shows:
         probe = Specification(enc.spec.definitions, (rule,), path=enc.spec.path)
         pj = judge(probe, trace, Options(semantics=options.semantics, untimed=0.0))

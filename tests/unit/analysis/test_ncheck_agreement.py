@@ -19,24 +19,42 @@ from cosleec.testing import corpus_dir
 DATA = Path(__file__).resolve().parents[2] / "data" / "analysis" / "ncheck_answers.json"
 CODES = {"red": "redundant", "c": "vacuous-conflict", "con": "concern-raised", "pur": "purpose-blocked"}
 
+# Two deliberate differences of the reference semantics explain every disagreement:
+ORDER = (
+    "causal order within an instant: an obligation or prohibition counts only occurrences after the step "
+    "that raised it (the trigger is never its own response); N-Check has no order within an instant"
+)
+VALUES = (
+    "values per occurrence: two occurrences at one instant may read different values (a context update "
+    "between them); N-Check has one snapshot per instant"
+)
+
 # (file, N-Check check) -> (only N-Check flags, only cosleec flags, why)
 KNOWN = {
     ("NickF0211__LEGOS-SLEEC__Autocar__Autocar-corrected.sleec", "red"): (
         {"R17bb", "R27I"},
         set(),
-        "not yet explained: both are in demand cycles, where cosleec answers up to its bound",
+        # R27I `when UserTurnOnSystem and not consent then not RecordPeople` is implied, for N-Check,
+        # by R1 (TurnOnSensors at the same instant) and R27II (TurnOnSensors and not consent: not
+        # RecordPeople): a RecordPeople before TurnOnSensors, or consent changing in between, escapes
+        # R27II here. R17bb likewise through R17b and R19.
+        f"{ORDER}; {VALUES}",
     ),
     ("NickF0211__LEGOS-SLEEC__Autocar__Autocar-corrected.sleec", "con"): (
         set(),
         {"c9"},
-        "c9 is `not ReadyToDrive eventually`: not yet explained",
+        # c9 `when ReadyToDrive then not ReadyToDrive eventually`: for N-Check the trigger itself
+        # breaks the response, so the concern can never be raised
+        ORDER,
     ),
-    ("NickF0211__LEGOS-SLEEC__Autocar__Autocar.sleec", "con"): (
+    ("NickF0211__LEGOS-SLEEC__Autocar__Autocar.sleec", "con"): (set(), {"c9"}, ORDER),
+    ("NickF0211__LEGOS-SLEEC__CSI__CSI-corrected.sleec", "con"): (
         set(),
-        {"c9"},
-        "c9 is `not ReadyToDrive eventually`: not yet explained",
+        {"c5"},
+        # c5 `when ActionHumanRandom then RobotMoving`: R18 owes AskPermission at that instant and R19
+        # forbids RobotMoving at it; a RobotMoving before AskPermission in the instant is not forbidden
+        ORDER,
     ),
-    ("NickF0211__LEGOS-SLEEC__CSI__CSI-corrected.sleec", "con"): (set(), {"c5"}, "not yet explained"),
 }
 
 
