@@ -37,10 +37,10 @@ from typing import Any
 import z3
 
 from cosleec.analysis.cores import Undecided, minimal_core
-from cosleec.analysis.encoding import Encoding, Reading, Slot
+from cosleec.analysis.encoding import After, Encoding, Reading, Slot
 from cosleec.analysis.findings import BOUNDED, PROVED, Finding
 from cosleec.analysis.witness import reads as _reads
-from cosleec.analysis.witness import show, smallest, snapshot, witness
+from cosleec.analysis.witness import show, smallest, snapshot, then, witness
 from cosleec.lang import HedgeSemantics, Severity, Specification, closure, pairs
 from cosleec.lang import ast as A
 from cosleec.semantics import Options
@@ -454,72 +454,115 @@ class Analysis:
         plo: Any,
         phi: Any,
     ) -> None:
-        """The obligation's whole window forbidden: fix that situation, check it against every rule."""
+        """N-Check's situational conflict, proved: a history the rules allow (it can be
+        continued without breaking any rule), after which one more trigger cannot be answered.
+
+        The candidate comes from the clash: the obligation still pending (its event has not
+        occurred since it was raised) when the prohibition starts, and its whole remaining
+        window forbidden. The history is pinned (times and values); it must be satisfiable
+        without the later trigger and unsatisfiable with it.
+        """
         if hi is None:
             return  # an obligation without deadline can always wait
-        covered = z3.And(plo <= lo, *([hi <= phi] if phi is not None else []))
-        if self.solve(enc, [*base, covered], "situation") != z3.sat:
-            return
-        model = enc.solver.model()
-        fixed = Encoding(
-            self.spec, self.constants, self.settings.reading, self.settings.bound,
-            timeout_ms=int(self.settings.timeout * 1000),
-        )  # fmt: skip
-        slots = []
-        for x in dict.fromkeys([xo, xp]):
-            s = fixed.probe(x.event)
-            slots.append((x, s))
+        event = io.occurrence.event
+        remaining = z3.If(lo >= xp.t, lo, xp.t)
+        covered = z3.And(plo <= remaining, *([hi <= phi] if phi is not None else []))
+        pending = z3.Not(enc.occurs(event, lo, xp.t, After(slot=xo))) if xo is not xp else z3.BoolVal(True)
+        orders = [z3.BoolVal(True)] if xo is xp else [After(slot=xp)(xo), After(slot=xo)(xp)]
+        for order in orders:  # each trigger in turn as the one that cannot be answered
+            if self.solve(enc, [*base, covered, pending, order], "situation") == z3.sat:
+                self._pinned(enc.solver.model(), ro, ko, io, xo, rp, kp, xp)
+
+    def _pinned(
+        self, model: Any, ro: A.Rule, ko: int, io: A.ResponseItem, xo: Slot, rp: A.Rule, kp: int, xp: Slot
+    ) -> None:
+        """The candidate situation of ``model``: the history before the later trigger pinned."""
+        event = io.occurrence.event
+        probes = list(dict.fromkeys([xo, xp]))
+        probes.sort(key=lambda x: (_value(model, x.t), _value(model, x.pos)))
+        fixed = self._new()
+        pinned: dict[int, Slot] = {}
+        for n, x in enumerate(probes):
+            pinned[x.id] = fixed.probe(x.event) if n + 1 < len(probes) else fixed.free(x.event)
         fixed.unfold()
+        last = pinned[probes[-1].id]
         pins = []
-        for x, s in slots:
+        for x in probes:
+            s = pinned[x.id]
             pins.append(s.t == model.eval(x.t, model_completion=True))
             pins += [s.snap[m] == model.eval(v, model_completion=True) for m, v in x.snap.items()]
-        order = []
-        if len(slots) == 2:
-            (a, sa), (b, sb) = slots
-            first = z3.is_true(
-                model.eval(z3.Or(a.t < b.t, z3.And(a.t == b.t, a.pos < b.pos)), model_completion=True)
+        if len(probes) == 2:
+            pins.append(pinned[probes[0].id].pos < last.pos)
+        if xo is not xp:  # the obligation is still pending when the later trigger comes
+            so = pinned[xo.id]
+            pins.append(
+                z3.Not(
+                    z3.Or(
+                        *(
+                            z3.And(y.present, After(slot=so)(y), z3.Not(After(slot=last)(y)))
+                            for y in fixed.by_event.get(event, ())
+                        )
+                    )
+                )
             )
-            order.append(sa.pos < sb.pos if first else sb.pos < sa.pos)
-        goal = fixed.fresh("situation")
-        fixed.solver.add(z3.Implies(goal, z3.And(*pins, *order)))
+        history, situation_goal = fixed.fresh("history"), fixed.fresh("situation")
+        fixed.solver.add(z3.Implies(history, z3.And(*pins, z3.Not(last.present))))
+        fixed.solver.add(z3.Implies(situation_goal, z3.And(*pins, last.present)))
         cands = self.candidates(fixed)
-        answer = self.solve(fixed, [goal, *(lit for _, lit in cands)], "situational conflict")
-        if answer != z3.unsat:
+        lits = [lit for _, lit in cands]
+        if self.solve(fixed, [history, *lits], "situational conflict: the history") != z3.sat:
+            return  # the rules do not allow the history itself
+        allowed = fixed.solver.model()
+        if self.solve(fixed, [situation_goal, *lits], "situational conflict") != z3.unsat:
             return
+        later = ro if probes[-1] is xo else rp
         try:
-            core = minimal_core(fixed, [goal], cands)
+            core = minimal_core(fixed, [situation_goal], cands)
         except Undecided as u:
-            self.unknown.append(f"situational conflict of {ro.name}: core not minimised ({u})")
+            self.unknown.append(f"situational conflict of {later.name}: core not minimised ({u})")
             return
         if any(f.code == "vacuous-conflict" and f.subject in core for f in self.findings):
             return
-        if any(f.code == "situational-conflict" and f.rules == core for f in self.findings):
+        if any(
+            f.code == "situational-conflict" and f.subject == later.name and f.rules == core
+            for f in self.findings
+        ):
             return
         status, bound = self.status(fixed)
         reads = _reads(ro) | _reads(rp)
         situation = "; ".join(
             f"{x.event} at t={show(model, x.t)}"
             + (" with " + snapshot(fixed, model, x.snap, reads) if reads & x.snap.keys() else "")
-            for x in dict.fromkeys([xp, xo])
+            for x in probes
         )
+        if xo is not xp:
+            situation += f"; no `{event}` in between"
         self.findings.append(
             Finding(
                 code="situational-conflict",
-                subject=ro.name,
-                message=f"rules {', '.join(core)} conflict in a situation: {_clause(rp.name, kp)} forbids "
-                f"`{io.occurrence.event}` for the whole window in which {_clause(ro.name, ko)} owes it",
+                subject=later.name,
+                message=f"rule {later.name} cannot be answered in a situation the rules allow: "
+                f"{_clause(rp.name, kp)} forbids `{event}` for the whole window in which "
+                f"{_clause(ro.name, ko)} owes it (the cause: {', '.join(core)})",
                 path=self.spec.path,
-                span=ro.span,
+                span=later.span,
                 rules=core,
-                related=self.related(core, ro.name),
+                related=self.related(core, later.name),
                 hint="add an unless clause for this situation to one of the rules, or declare which prevails "
                 "in a priority block",
                 status=status,
                 bound=bound,
                 situation=situation,
+                witness=then(fixed, allowed, last, self.settings.options),
             )
         )
+
+
+def _value(model: Any, var: Any) -> float:
+    v = model.eval(var, model_completion=True)
+    if z3.is_int_value(v):
+        return float(v.as_long())
+    return float(v.numerator_as_long()) / float(v.denominator_as_long())
 
 
 def _overlap(j: Any, event: str, owing: str, banning: str) -> bool:

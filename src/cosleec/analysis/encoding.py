@@ -87,7 +87,7 @@ class Fallback:
 
 
 @dataclass(frozen=True)
-class _After:
+class After:
     """Which occurrences come after the step that raised an obligation: after slot ``slot``
     in causal order, or strictly after time ``at`` (an ``otherwise`` started by a deadline)."""
 
@@ -95,6 +95,7 @@ class _After:
     at: Z3 = None
 
     def __call__(self, y: Slot) -> Z3:
+        """``y`` comes after the raising step."""
         if self.slot is not None:
             x = self.slot
             if y is x:
@@ -174,6 +175,11 @@ class Encoding:
         s = self._slot(event, 0, why)
         self.solver.add(s.present)
         return s
+
+    def free(self, event: str, why: str = "probe") -> Slot:
+        """An occurrence of ``event`` the question may or may not include (its presence is
+        part of the question's goal)."""
+        return self._slot(event, 0, why)
 
     def demand(self, slot: Slot, response: A.Response | None) -> None:
         """A question's formula will ask ``response`` of ``slot``: unfold a slot for every
@@ -336,10 +342,10 @@ class Encoding:
         """``response``, started by slot ``x``, is met (``untimed`` overrides the reading's)."""
         u = self.reading.untimed if untimed == "reading" else untimed
         assert not isinstance(u, str)
-        return self._response(response, x.t, _After(slot=x), x.snap, u)
+        return self._response(response, x.t, After(slot=x), x.snap, u)
 
     def _response(
-        self, resp: A.Response | None, start: Z3, after: _After, snap: dict[str, Z3], untimed: float | None
+        self, resp: A.Response | None, start: Z3, after: After, snap: dict[str, Z3], untimed: float | None
     ) -> Z3:
         if resp is None:
             return z3.BoolVal(True)
@@ -375,7 +381,7 @@ class Encoding:
         )
 
     def _item(
-        self, it: A.ResponseItem, start: Z3, after: _After, snap: dict[str, Z3], untimed: float | None
+        self, it: A.ResponseItem, start: Z3, after: After, snap: dict[str, Z3], untimed: float | None
     ) -> Z3:
         occ = it.occurrence
         lo, hi = self.window(occ, it.otherwise is not None, start, snap, untimed)
@@ -391,7 +397,7 @@ class Encoding:
             for y, by in breaks:
                 first = z3.And(by, *(z3.Not(z3.And(bz, _before(z, y))) for (z, bz) in breaks if z is not y))
                 firsts.append(
-                    z3.And(first, self._response(it.otherwise, y.t, _After(slot=y), y.snap, untimed))
+                    z3.And(first, self._response(it.otherwise, y.t, After(slot=y), y.snap, untimed))
                 )
             return z3.Or(ok, *firsts)
         ok = self.occurs(occ.event, lo, hi, after)
@@ -412,11 +418,11 @@ class Encoding:
                 if isinstance(rel, A.MeasureRelation):
                     self.solver.add(z3.Implies(lit, self._measure_relation(rel, fb.snap)))
             self.fallbacks.append(fb)
-            ok = z3.Or(ok, self._response(it.otherwise, at, _After(at=at), fb.snap, untimed))
+            ok = z3.Or(ok, self._response(it.otherwise, at, After(at=at), fb.snap, untimed))
         return ok
 
     def _branch(
-        self, resp: A.Response, start: Z3, after: _After, snap: dict[str, Z3], untimed: float | None
+        self, resp: A.Response, start: Z3, after: After, snap: dict[str, Z3], untimed: float | None
     ) -> Z3:
         """An ``else`` alternative: every item of its chosen clause occurs in its own window."""
         if resp.defeaters:
@@ -486,14 +492,14 @@ class Encoding:
             for a_ in starts:
                 on = z3.And(a_.present, self.truth(rel.trigger.condition, a_.snap))
                 for y in every:
-                    after_a = _After(slot=a_)(y)
+                    after_a = After(slot=a_)(y)
                     stopped = z3.Or(
                         *(
                             z3.And(
                                 b.present,
                                 self.truth(rel.until_condition, b.snap),
-                                _After(slot=a_)(b),
-                                z3.Not(_After(slot=y)(b)),
+                                After(slot=a_)(b),
+                                z3.Not(After(slot=y)(b)),
                             )
                             for b in ends
                         )
@@ -513,7 +519,7 @@ class Encoding:
                 for y in every:
                     parts.append(
                         z3.Implies(
-                            z3.And(on, y.present, _After(slot=a_)(y), y.t <= end),
+                            z3.And(on, y.present, After(slot=a_)(y), y.t <= end),
                             self.truth(rel.condition, y.snap),
                         )
                     )

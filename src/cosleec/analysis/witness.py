@@ -37,11 +37,12 @@ def smallest(enc: Encoding, assumptions: list[Any]) -> Any:
     return model
 
 
-def steps(enc: Encoding, model: Any) -> list[Step]:
+def steps(enc: Encoding, model: Any, also: Any = None) -> list[Step]:
     """The trace a model describes: each present occurrence, preceded by the values it
     reads; each started ``otherwise`` snapshot after every occurrence at its instant; then
-    one last step far enough on that every deadline of the trace has passed."""
-    present = [s for s in enc.slots if z3.is_true(model.eval(s.present, model_completion=True))]
+    one last step far enough on that every deadline of the trace has passed. ``also`` is a slot
+    to include as if present (at the time and values the model gives it)."""
+    present = [s for s in enc.slots if s is also or z3.is_true(model.eval(s.present, model_completion=True))]
     at: dict[int, float] = {s.id: _number(model.eval(s.t, model_completion=True)) for s in present}
     order = sorted(present, key=lambda s: (at[s.id], model.eval(s.pos, model_completion=True).as_long()))
     fallbacks = []
@@ -62,6 +63,14 @@ def steps(enc: Encoding, model: Any) -> list[Step]:
     last = max((s.t for s in out), default=0.0)
     out.append(Step(last + _horizon(enc.spec)))
     return out
+
+
+def then(enc: Encoding, history: Any, last: Any, options: Options) -> Witness:
+    """A history the rules allow (a model without the ``last`` slot, whose time, order and
+    values it pins), then the ``last`` trigger: the reference semantics must find a breach."""
+    trace = steps(enc, history, also=last)
+    j = judge(enc.spec, trace, options)
+    return Witness(tuple(trace), tuple(timeline(enc.spec, trace, j)), bool(final_breaches(enc.spec, j)))
 
 
 def _values(enc: Encoding, model: Any, snap: dict[str, Any]) -> dict[str, Value | None]:
