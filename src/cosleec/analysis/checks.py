@@ -554,6 +554,7 @@ class Analysis:
                 bound=bound,
                 situation=situation,
                 witness=then(fixed, allowed, last, self.settings.options),
+                extra={"triggers": [ro.name, rp.name] if xo is xp else [later.name]},
             )
         )
 

@@ -1,0 +1,190 @@
+"""``cosleec analyse``: exit codes, text and JSON output, options."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from cosleec.analysis import CHECKS
+from cosleec.cli.main import main
+
+from .support import sleec, write
+
+CONFLICT = "R1 when A then B within 5 seconds\nR2 when A then not B within 10 seconds"
+CLEAN = "R1 when A then B within 5 seconds\nR2 when C then D within 3 seconds"
+
+
+def _run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    rc = main(["analyse", *args])
+    out, err = capsys.readouterr()
+    assert "Traceback" not in out + err and "internal error" not in out + err
+    return rc, out, err
+
+
+def test_exit_0_when_nothing_is_found_and_1_when_something_is(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    clean = write(tmp_path, CLEAN, name="clean.sleec")
+    conflict = write(tmp_path, CONFLICT, name="conflict.sleec")
+    rc, out, _ = _run(capsys, str(clean))
+    assert rc == 0 and f"{clean}: no findings" in out
+    rc, out, _ = _run(capsys, str(conflict))
+    assert rc == 1 and f"{conflict}: " in out
+    rc, _, _ = _run(capsys, str(clean), str(conflict))
+    assert rc == 1
+    # checks that find nothing in the file: 0
+    rc, _, _ = _run(capsys, "--check", "redundant,negative-deadline", str(conflict))
+    assert rc == 0
+
+
+def test_a_missing_or_broken_file_is_reported_with_exit_1(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    missing = tmp_path / "missing.sleec"
+    rc, out, err = _run(capsys, str(missing))
+    assert rc == 1 and "cannot read file" in out + err and "not analysed" in out
+    broken = tmp_path / "broken.sleec"
+    broken.write_text("def_start event A def_end rule_start R1 when A then G rule_end\n")
+    rc, out, _ = _run(capsys, str(broken), str(write(tmp_path, CLEAN)))
+    assert rc == 1 and "`G` is not declared" in out and "not analysed" in out
+    rc, out, _ = _run(capsys, "--json", str(missing))
+    (doc,) = json.loads(out)["files"]
+    assert rc == 1 and doc["ok"] is False and doc["findings"] == [] and doc["diagnostics"]
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--check", "vacuous-conflit"], "did you mean vacuous-conflict?"),
+        (["--check", "redundant,situationl-conflict"], "did you mean situational-conflict?"),
+        (["--check", "nothing-like-it"], "unknown check"),
+        (["--bound", "0"], "--bound"),
+        (["--bound", "1001"], "--bound"),
+        (["--bound", "two"], "--bound"),
+        (["--timeout", "0"], "--timeout"),
+        (["--timeout", "nan"], "--timeout"),
+        (["--untimed", "-1"], "--untimed"),
+        (["--untimed", "soon"], "--untimed"),
+        (["--semantics", "nestd"], "--semantics"),
+        (["--priority", "R1 >"], "priority"),
+        (["--priority", "R1 > R2", "--priority", "R2 > R1"], "cycle"),
+    ],
+)
+def test_usage_errors_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], message: str
+) -> None:
+    path = write(tmp_path, CONFLICT)
+    rc, out, err = _run(capsys, *args, str(path))
+    assert rc == 2 and message in err
+    assert out == ""  # nothing analysed
+
+
+def test_no_file_is_a_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["analyse"]) == 2
+    capsys.readouterr()
+
+
+def test_text_output_is_compiler_style(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, CONFLICT)
+    rc, out, _ = _run(capsys, "--check", "vacuous-conflict", str(path))
+    assert rc == 1
+    lines = out.splitlines()
+    head = next(
+        i for i, line in enumerate(lines) if line.startswith(f"{path}:3:1: error: [vacuous-conflict]")
+    )
+    assert lines[head].endswith("because of R2 [proved]")
+    assert lines[head + 1].strip() == "R1 when A then B within 5 seconds"
+    assert re.fullmatch(r" *\^~*", lines[head + 2])
+    assert lines[head + 2].index("^") == lines[head + 1].index("R1")
+    assert f"{path}:4:1: note: R2 is part of the cause" in out
+    assert "hint: " in out
+    assert lines[-1].startswith(f"{path}: 2 findings (")
+
+
+def test_text_output_of_a_bounded_finding(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, "R1 when A then A within [1 seconds, 2 seconds]")
+    rc, out, _ = _run(capsys, "--bound", "3", "--check", "vacuous-conflict", str(path))
+    assert rc == 1 and re.search(
+        rf"{re.escape(str(path))}:3:1: error: \[vacuous-conflict\] .* \[up to bound 3\]", out
+    )
+
+
+def test_json_output(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    a = write(tmp_path, CONFLICT, name="a.sleec")
+    b = write(tmp_path, CLEAN, name="b.sleec")
+    rc, out, _ = _run(capsys, "--json", str(a), str(b))
+    assert rc == 1
+    files = json.loads(out)["files"]
+    assert [f["path"] for f in files] == [str(a), str(b)]
+    assert all(f["ok"] for f in files) and files[1]["findings"] == []
+    found = files[0]["findings"]
+    assert {(f["code"], f["subject"]) for f in found} >= {
+        ("vacuous-conflict", "R1"),
+        ("vacuous-conflict", "R2"),
+    }
+    for f in found:
+        assert f["code"] in CHECKS and f["status"] in ("proved", "bounded")
+        assert isinstance(f["rules"], list) and f["line"] >= 3 and f["col"] >= 1
+        assert f["severity"] in ("error", "warning", "note")
+        assert (f["bound"] is None) == (f["status"] == "proved")
+    vac = next(f for f in found if f["subject"] == "R1" and f["code"] == "vacuous-conflict")
+    assert vac["rules"] == ["R1", "R2"] and vac["line"] == 3 and vac["witness"] is None
+    rt = next(f for f in found if f["code"] == "runtime-conflict")
+    assert rt["witness"]["confirmed"] is True and rt["witness"]["timeline"]
+    trace = rt["witness"]["trace"]
+    assert [s["event"] for s in trace if "event" in s] == ["A"] and "event" not in trace[-1]
+
+
+def test_check_selects_checks(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, CONFLICT)
+    for checks in ("vacuous-conflict", "runtime-conflict", "vacuous-conflict, runtime-conflict"):
+        rc, out, _ = _run(capsys, "--json", "--check", checks, str(path))
+        codes = {f["code"] for f in json.loads(out)["files"][0]["findings"]}
+        assert rc == 1 and codes == {c.strip() for c in checks.split(",")}
+
+
+def test_priority_option_settles_a_runtime_conflict(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = write(tmp_path, "R1 when A then B within 5 seconds\nR2 when C then not B within 3 seconds")
+    rc, _, _ = _run(capsys, "--check", "runtime-conflict", str(path))
+    assert rc == 1
+    for given in ("R1 > R2", "R2 > R1"):
+        rc, out, _ = _run(capsys, "--check", "runtime-conflict", "--priority", given, str(path))
+        assert rc == 0 and "no findings" in out, given
+
+
+def test_semantics_and_untimed_options(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, "R1 when A then B within 5 seconds unless x then C unless (not x) then D")
+    rc, out, _ = _run(capsys, "--json", "--check", "unselectable-clause", str(path))
+    assert rc == 1 and [f["subject"] for f in json.loads(out)["files"][0]["findings"]] == ["R1.0"]
+    rc, out, _ = _run(capsys, "--json", "--check", "unselectable-clause", "--semantics", "nested", str(path))
+    assert rc == 1 and [f["subject"] for f in json.loads(out)["files"][0]["findings"]] == ["R1.2"]
+    untimed = write(tmp_path, "R1 when A then B\nR2 when A then not B within 5 seconds", name="untimed.sleec")
+    assert _run(capsys, "--check", "vacuous-conflict", str(untimed))[0] == 0
+    assert _run(capsys, "--check", "vacuous-conflict", "--untimed", "0", str(untimed))[0] == 1
+    assert _run(capsys, "--check", "vacuous-conflict", "--untimed", "5.5", str(untimed))[0] == 0
+
+
+def test_a_directory_stands_for_its_rule_files(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    d = tmp_path / "rules"
+    d.mkdir()
+    (d / "a.sleec").write_text(sleec(CONFLICT))
+    (d / "b.sleec").write_text(sleec(CLEAN))
+    (d / "notes.txt").write_text("not rules")
+    rc, out, _ = _run(capsys, "--json", str(d))
+    assert rc == 1 and [Path(f["path"]).name for f in json.loads(out)["files"]] == ["a.sleec", "b.sleec"]
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    rc, out, err = _run(capsys, str(empty))
+    assert rc != 0 and "no .sleec file" in err
+
+
+def test_the_analyze_spelling_and_legos_compat(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, CLEAN)
+    assert main(["analyze", str(path)]) == 0
+    assert main(["analyse", "--legos-compat", str(path)]) == 0
+    capsys.readouterr()
