@@ -80,6 +80,8 @@ class Analysis:
     findings: list[Finding] = field(default_factory=list)
     unknown: list[str] = field(default_factory=list)
     _by_event: dict[tuple[str, int], Encoding] = field(default_factory=dict)
+    # one z3 context per file: terms built for another file cannot change this one's answers
+    ctx: z3.Context = field(default_factory=z3.Context)
 
     # ------------------------------------------------------------------ helpers
     def encoding(self, event: str, bound: int) -> tuple[Encoding, Slot]:
@@ -106,6 +108,7 @@ class Analysis:
             self.settings.reading,
             self.settings.bound if bound is None else bound,
             timeout_ms=int(self.settings.timeout * 1000),
+            ctx=self.ctx,
         )
 
     def deepen(
@@ -332,7 +335,7 @@ class Analysis:
             parts.append(enc.truth(cur.trigger.condition, slot.snap))
             parts += [enc.holds(r, slot, untimed=0.0) for r in cur.responses]
             cur = cur.meanwhile
-        enc.solver.add(z3.Implies(goal, z3.And(*parts)))
+        enc.solver.add(z3.Implies(goal, z3.And(*parts, enc.ctx)))
         return enc, goal
 
     # ------------------------------------------------------------------ runtime conflicts
@@ -423,7 +426,7 @@ class Analysis:
             overlap = z3.And(
                 *([lo <= phi] if phi is not None else []), *([plo <= hi] if hi is not None else [])
             )
-            alone = z3.And(*(z3.Not(s.present) for s in enc.slots if s.id not in probes))
+            alone = z3.And(*(z3.Not(s.present) for s in enc.slots if s.id not in probes), enc.ctx)
             what = f"runtime conflict {_clause(ro.name, ko)} / {_clause(rp.name, kp)}"
             if (
                 self.solve(enc, [*base, overlap, alone], what) == z3.sat
@@ -467,8 +470,10 @@ class Analysis:
         event = io.occurrence.event
         remaining = z3.If(lo >= xp.t, lo, xp.t)
         covered = z3.And(plo <= remaining, *([hi <= phi] if phi is not None else []))
-        pending = z3.Not(enc.occurs(event, lo, xp.t, After(slot=xo))) if xo is not xp else z3.BoolVal(True)
-        orders = [z3.BoolVal(True)] if xo is xp else [After(slot=xp)(xo), After(slot=xo)(xp)]
+        pending = (
+            z3.Not(enc.occurs(event, lo, xp.t, After(slot=xo))) if xo is not xp else z3.BoolVal(True, enc.ctx)
+        )
+        orders = [z3.BoolVal(True, enc.ctx)] if xo is xp else [After(slot=xp)(xo), After(slot=xo)(xp)]
         for order in orders:  # each trigger in turn as the one that cannot be answered
             if self.solve(enc, [*base, covered, pending, order], "situation") == z3.sat:
                 self._pinned(enc.solver.model(), ro, ko, io, xo, rp, kp, xp)

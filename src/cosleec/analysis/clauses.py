@@ -23,7 +23,9 @@ from cosleec.semantics import Judgement
 
 def _probe(a: Analysis, rule: A.Rule) -> tuple[Encoding, Slot, list[Any]]:
     """A one-occurrence encoding of ``rule``'s trigger, and what always holds of it."""
-    enc = Encoding(a.spec, a.constants, a.settings.reading, 1, timeout_ms=int(a.settings.timeout * 1000))
+    enc = Encoding(
+        a.spec, a.constants, a.settings.reading, 1, timeout_ms=int(a.settings.timeout * 1000), ctx=a.ctx
+    )
     x = enc.probe(rule.trigger.event)
     enc.unfold(children=False)
     return enc, x, [enc.fires(rule, x), enc.assumptions(x.snap), *enc.relation_lit]

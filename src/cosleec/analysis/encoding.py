@@ -99,7 +99,7 @@ class After:
         if self.slot is not None:
             x = self.slot
             if y is x:
-                return z3.BoolVal(False)
+                return z3.BoolVal(False, y.present.ctx)
             return z3.Or(y.t > x.t, z3.And(y.t == x.t, y.pos > x.pos))
         return y.t > self.at
 
@@ -120,13 +120,15 @@ class Encoding:
         bound: int,
         *,
         timeout_ms: int = 0,
+        ctx: z3.Context | None = None,
     ) -> None:
+        self.ctx = ctx if ctx is not None else z3.Context()
         self.spec = spec
         self.constants = constants
         self.reading = reading
         self.bound = max(1, bound)
         self.measures = {m.name: m.type for m in spec.measures}
-        self.solver = z3.Solver()
+        self.solver = z3.Solver(ctx=self.ctx)
         self.solver.set("random_seed", 0)
         if timeout_ms:
             self.solver.set("timeout", timeout_ms)
@@ -136,8 +138,8 @@ class Encoding:
         self.rules_by_event: dict[str, list[A.Rule]] = {}
         for r in spec.rules:
             self.rules_by_event.setdefault(r.trigger.event, []).append(r)
-        self.rule_lit = {r.name: z3.Bool(f"rule!{i}") for i, r in enumerate(spec.rules)}
-        self.relation_lit = [z3.Bool(f"relation!{i}") for i in range(len(spec.relations))]
+        self.rule_lit = {r.name: z3.Bool(f"rule!{i}", self.ctx) for i, r in enumerate(spec.rules)}
+        self.relation_lit = [z3.Bool(f"relation!{i}", self.ctx) for i in range(len(spec.relations))]
         self.complete = not any(isinstance(r, A.UntilRelation) for r in spec.relations)
         self._extra: list[tuple[Slot, list[tuple[str, str]]]] = []
         self._ids = itertools.count()
@@ -148,7 +150,16 @@ class Encoding:
     def _slot(self, event: str, depth: int, why: str) -> Slot:
         n = next(self._ids)
         snap = {m: self._var(m, f"s{n}") for m in self.measures}
-        s = Slot(n, event, depth, z3.Real(f"t{n}"), z3.Int(f"p{n}"), z3.Bool(f"in{n}"), snap, why)
+        s = Slot(
+            n,
+            event,
+            depth,
+            z3.Real(f"t{n}", self.ctx),
+            z3.Int(f"p{n}", self.ctx),
+            z3.Bool(f"in{n}", self.ctx),
+            snap,
+            why,
+        )
         self.slots.append(s)
         self.by_event.setdefault(event, []).append(s)
         self.solver.add(s.t >= 0)
@@ -159,10 +170,10 @@ class Encoding:
         t = self.measures[measure]
         name = f"{prefix}!{measure}"
         if isinstance(t, A.BooleanType):
-            return z3.Bool(name)
+            return z3.Bool(name, self.ctx)
         if isinstance(t, A.ScaleType):
-            return z3.Int(name)
-        return z3.Real(name)
+            return z3.Int(name, self.ctx)
+        return z3.Real(name, self.ctx)
 
     def _domain(self, snap: dict[str, Z3]) -> None:
         for m, v in snap.items():
@@ -235,9 +246,9 @@ class Encoding:
     def truth(self, e: A.Expr | None, snap: dict[str, Z3]) -> Z3:
         """The condition ``e`` on a snapshot (None: true)."""
         if e is None:
-            return z3.BoolVal(True)
+            return z3.BoolVal(True, self.ctx)
         if isinstance(e, A.BoolLit):
-            return z3.BoolVal(e.value)
+            return z3.BoolVal(e.value, self.ctx)
         if isinstance(e, A.Name):
             return snap[e.name]
         if isinstance(e, A.Not):
@@ -264,15 +275,15 @@ class Encoding:
     def value(self, e: A.Expr, snap: dict[str, Z3], scale: A.ScaleType | None = None) -> Z3:
         """A numeric (or scale position) expression on a snapshot."""
         if isinstance(e, A.IntLit):
-            return z3.IntVal(e.value) if scale is not None else z3.RealVal(e.value)
+            return z3.IntVal(e.value, self.ctx) if scale is not None else z3.RealVal(e.value, self.ctx)
         if isinstance(e, A.Name):
             if e.name in self.measures:
                 return snap[e.name]
             if e.name in self.constants:
                 v = self.constants[e.name]
-                return z3.IntVal(v) if scale is not None else z3.RealVal(v)
+                return z3.IntVal(v, self.ctx) if scale is not None else z3.RealVal(v, self.ctx)
             if scale is not None and e.name in scale.literals:
-                return z3.IntVal(scale.literals.index(e.name))
+                return z3.IntVal(scale.literals.index(e.name), self.ctx)
             raise AssertionError(f"unresolved name {e.name!r}")
         if isinstance(e, A.BinOp) and e.op in ("+", "-", "*"):
             a, b = self.value(e.left, snap, scale), self.value(e.right, snap, scale)
@@ -306,13 +317,13 @@ class Encoding:
         c = [self.truth(d.condition, snap) for d in defeaters]
         k = len(c)
         if (semantics or self.reading.semantics) == HedgeSemantics.LAST_WINS:
-            out = [z3.And(*(z3.Not(x) for x in c))] if c else [z3.BoolVal(True)]
+            out = [z3.And(*(z3.Not(x) for x in c), self.ctx)] if c else [z3.BoolVal(True, self.ctx)]
             out += [z3.And(c[i], *(z3.Not(x) for x in c[i + 1 :])) for i in range(k)]
             return out
-        out = [z3.Not(c[0])] if c else [z3.BoolVal(True)]
+        out = [z3.Not(c[0])] if c else [z3.BoolVal(True, self.ctx)]
         for i in range(k):
             rest = [z3.Not(c[i + 1])] if i + 1 < k else []
-            out.append(z3.And(*c[: i + 1], *rest))
+            out.append(z3.And(*c[: i + 1], *rest, self.ctx))
         return out
 
     def chosen_at(self, response: A.Response, clause: int, snap: dict[str, Z3]) -> Z3:
@@ -326,7 +337,8 @@ class Encoding:
                 z3.Implies(lit, self._measure_relation(rel, snap))
                 for lit, rel in zip(self.relation_lit, self.spec.relations)
                 if isinstance(rel, A.MeasureRelation)
-            )
+            ),
+            self.ctx,
         )
 
     def rule_holds(self, rule: A.Rule, x: Slot) -> Z3:
@@ -348,14 +360,14 @@ class Encoding:
         self, resp: A.Response | None, start: Z3, after: After, snap: dict[str, Z3], untimed: float | None
     ) -> Z3:
         if resp is None:
-            return z3.BoolVal(True)
+            return z3.BoolVal(True, self.ctx)
         if not resp.defeaters:
-            return z3.And(*(self._item(it, start, after, snap, untimed) for it in resp.items))
+            return z3.And(*(self._item(it, start, after, snap, untimed) for it in resp.items), self.ctx)
         conds = self.chosen(resp.defeaters, snap)
         parts = [z3.Implies(conds[0], self._response(A.Response(resp.items), start, after, snap, untimed))]
         for d, cond in zip(resp.defeaters, conds[1:]):
             parts.append(z3.Implies(cond, self._response(d.response, start, after, snap, untimed)))
-        return z3.And(*parts)
+        return z3.And(*parts, self.ctx)
 
     def window(
         self, occ: A.Occurrence, has_otherwise: bool, start: Z3, snap: dict[str, Z3], untimed: float | None
@@ -377,7 +389,8 @@ class Encoding:
             *(
                 z3.And(y.present, lo <= y.t, *([y.t <= hi] if hi is not None else []), after(y))
                 for y in self.by_event.get(event, ())
-            )
+            ),
+            self.ctx,
         )
 
     def _item(
@@ -411,7 +424,7 @@ class Encoding:
                 self.solver.add(
                     z3.Implies(
                         z3.And(fb.started, other.started, fb.at == other.at),
-                        z3.And(*(fb.snap[m] == other.snap[m] for m in self.measures)),
+                        z3.And(*(fb.snap[m] == other.snap[m] for m in self.measures), self.ctx),
                     )
                 )
             for lit, rel in zip(self.relation_lit, self.spec.relations):
@@ -433,17 +446,19 @@ class Encoding:
                 parts.append(
                     z3.Implies(
                         cond,
-                        z3.BoolVal(False) if sub is None else self._branch(sub, start, after, snap, untimed),
+                        z3.BoolVal(False, self.ctx)
+                        if sub is None
+                        else self._branch(sub, start, after, snap, untimed),
                     )
                 )
-            return z3.And(*parts)
+            return z3.And(*parts, self.ctx)
         out = []
         for it in resp.items:
             if it.occurrence.negated:
-                return z3.BoolVal(False)
+                return z3.BoolVal(False, self.ctx)
             lo, hi = self.window(it.occurrence, it.otherwise is not None, start, snap, untimed)
             out.append(self.occurs(it.occurrence.event, lo, hi, after))
-        return z3.And(*out) if out else z3.BoolVal(False)
+        return z3.And(*out, self.ctx) if out else z3.BoolVal(False, self.ctx)
 
     # ------------------------------------------------------------------ relations
     def _relation(self, rel: A.Relation) -> Z3:
@@ -453,7 +468,11 @@ class Encoding:
 
             def with_(xs: list[Slot], ys: list[Slot]) -> Z3:
                 return z3.And(
-                    *(z3.Implies(x.present, z3.Or(*(z3.And(y.present, y.t == x.t) for y in ys))) for x in xs)
+                    *(
+                        z3.Implies(x.present, z3.Or(*(z3.And(y.present, y.t == x.t) for y in ys), self.ctx))
+                        for x in xs
+                    ),
+                    self.ctx,
                 )
 
             if rel.kind == "witness":
@@ -462,15 +481,22 @@ class Encoding:
                 return z3.And(with_(a, b), with_(b, a))
             if rel.kind in ("mutualExclusive", "isContradictoryWith"):
                 return z3.And(
-                    *(z3.Not(z3.And(x.present, y.present, x.t == y.t)) for x in a for y in b if x is not y)
+                    *(z3.Not(z3.And(x.present, y.present, x.t == y.t)) for x in a for y in b if x is not y),
+                    self.ctx,
                 )
             if rel.kind == "happenBefore":
                 return z3.And(
-                    *(z3.Implies(y.present, z3.Or(*(z3.And(x.present, x.t < y.t) for x in a))) for y in b)
+                    *(
+                        z3.Implies(y.present, z3.Or(*(z3.And(x.present, x.t < y.t) for x in a), self.ctx))
+                        for y in b
+                    ),
+                    self.ctx,
                 )
             raise AssertionError(f"unknown relation {rel.kind}")
         if isinstance(rel, A.MeasureRelation):
-            return z3.And(*(z3.Implies(s.present, self._measure_relation(rel, s.snap)) for s in every))
+            return z3.And(
+                *(z3.Implies(s.present, self._measure_relation(rel, s.snap)) for s in every), self.ctx
+            )
         if isinstance(rel, A.EventMeasureRelation):
             es = self.by_event.get(rel.event, [])
             if rel.kind == "causation":
@@ -478,13 +504,14 @@ class Encoding:
                     *(
                         z3.Implies(
                             z3.And(s.present, self.truth(rel.condition, s.snap)),
-                            z3.Or(*(z3.And(y.present, y.t == s.t) for y in es)),
+                            z3.Or(*(z3.And(y.present, y.t == s.t) for y in es), self.ctx),
                         )
                         for s in every
-                    )
+                    ),
+                    self.ctx,
                 )
             want = self.truth if rel.kind == "includes" else (lambda c, s: z3.Not(self.truth(c, s)))
-            return z3.And(*(z3.Implies(s.present, want(rel.condition, s.snap)) for s in es))
+            return z3.And(*(z3.Implies(s.present, want(rel.condition, s.snap)) for s in es), self.ctx)
         if isinstance(rel, A.UntilRelation):
             starts = self.by_event.get(rel.trigger.event, [])
             ends = self.by_event.get(rel.until_event, [])
@@ -502,14 +529,15 @@ class Encoding:
                                 z3.Not(After(slot=y)(b)),
                             )
                             for b in ends
-                        )
+                        ),
+                        self.ctx,
                     )
                     parts.append(
                         z3.Implies(
                             z3.And(on, y.present, after_a, z3.Not(stopped)), self.truth(rel.condition, y.snap)
                         )
                     )
-            return z3.And(*parts)
+            return z3.And(*parts, self.ctx)
         if isinstance(rel, A.ForRelation):
             starts = self.by_event.get(rel.trigger.event, [])
             parts = []
@@ -523,7 +551,7 @@ class Encoding:
                             self.truth(rel.condition, y.snap),
                         )
                     )
-            return z3.And(*parts)
+            return z3.And(*parts, self.ctx)
         raise AssertionError(f"unknown relation {rel!r}")
 
     def _measure_relation(self, rel: A.MeasureRelation, snap: dict[str, Z3]) -> Z3:
@@ -545,7 +573,7 @@ class Encoding:
 
     def fresh(self, name: str) -> Z3:
         """A new assumption literal."""
-        return z3.Bool(f"{name}!{next(self._fresh)}")
+        return z3.Bool(f"{name}!{next(self._fresh)}", self.ctx)
 
 
 def _before(z: Slot, y: Slot) -> Z3:

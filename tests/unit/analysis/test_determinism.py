@@ -78,13 +78,6 @@ def test_the_order_of_the_files_does_not_change_their_findings_and_cores(tmp_pat
     assert _cores(cli_json(*files)) == _cores(cli_json(*reversed(files), hashseed="7"))
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG (determinism, run.py/encoding.py): every Encoding shares z3's global context, so "
-    "the models z3 returns for one file depend on what was solved before it in the process; "
-    "`analyse a b` and `analyse b a` give b different situations and witness traces (the "
-    "findings and cores agree)",
-)
 def test_the_order_of_the_files_does_not_change_their_situations_and_witnesses(tmp_path: Path) -> None:
     files = _files(tmp_path)
     forward = {d["path"]: d for d in cli_json(*files)["files"]}
