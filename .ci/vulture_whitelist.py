@@ -44,7 +44,7 @@ _.numeric_type  #
 _.scale_type  #
 _.constant_decl  #
 _.const_int  #
-_.const_neg  #
+_.const_signed  #
 _.const_name  #
 _.const_arrow  #
 _.fluent_decl  #
@@ -62,7 +62,8 @@ _.rel_op  #
 _.mul  #
 _.bool_lit  #
 _.int_lit  #
-_.neg_int  #
+_.signed_int  #
+_.sign  #
 _.decimal_lit  #
 _.arrow_name  #
 _.braced_name  #

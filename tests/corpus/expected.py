@@ -11,6 +11,10 @@ CROSS_SCALE = (
 )
 DUP_RULE = "two rules share a name (§11.17)"
 DUP_PURPOSE = "two purposes share a name (§5)"
+BSN = (
+    CROSS_SCALE + "; `{riskLevel} > autonomyConcern` compares a scale with a number; purpose P6's "
+    "unbraced `riskLevel` in a comparison is LEGOS syntax too (§11.9)"
+)
 
 REJECTED: dict[str, tuple[frozenset[str], str]] = {
     "UoY-RoboStar__SLEEC-TK__sleec-core__CaseStudies__DAISY.sleec": (
@@ -31,14 +35,8 @@ REJECTED: dict[str, tuple[frozenset[str], str]] = {
     ),
     "NickF0211__LEGOS-SLEEC__ASPEN__aspen-corrected.sleec": (frozenset({"scale-literal"}), CROSS_SCALE),
     "NickF0211__LEGOS-SLEEC__ASPEN__aspen.sleec": (frozenset({"scale-literal"}), CROSS_SCALE),
-    "NickF0211__LEGOS-SLEEC__BSN__BSN-corrected.sleec": (
-        frozenset({"mixed-dialect", "scale-literal", "type"}),
-        "purpose P6 uses riskLevel unbraced and compares it with another scale's literal (§11.9)",
-    ),
-    "NickF0211__LEGOS-SLEEC__BSN__BSN.sleec": (
-        frozenset({"mixed-dialect", "scale-literal", "type"}),
-        "purpose P6 uses riskLevel unbraced and compares it with another scale's literal (§11.9)",
-    ),
+    "NickF0211__LEGOS-SLEEC__BSN__BSN-corrected.sleec": (frozenset({"scale-literal", "type"}), BSN),
+    "NickF0211__LEGOS-SLEEC__BSN__BSN.sleec": (frozenset({"scale-literal", "type"}), BSN),
     "NickF0211__LEGOS-SLEEC__dressingAssist__DRESSASSIST-corrected.sleec": (
         frozenset({"duplicate-rule"}),
         DUP_RULE,

@@ -74,3 +74,21 @@ def test_every_parsed_corpus_file_round_trips_in_both_dialects(corpus: list[Path
             assert again.spec == result.spec, (path.name, dialect)
             count += 1
     assert count >= 2 * 190
+
+
+def test_legos_defects_are_read_as_legos_reads_them(corpus: list[Path]) -> None:
+    """Every LEGOS-dialect file rejected only for what LEGOS-SLEEC lets through (cross-scale
+    literals, a scale against a number, duplicate names) is ok under ``legos_compat`` (§11 item 18),
+    and the specification it gives checks clean without the option."""
+    lenient = {"scale-literal", "type", "duplicate-rule", "duplicate-name"}
+    count = 0
+    for name, (codes, _) in REJECTED.items():
+        result = analyse_file(CORPUS / name)
+        if str(result.dialect) != "legos" or not codes <= lenient:
+            continue
+        compat = analyse_file(CORPUS / name, legos_compat=True)
+        assert compat.ok and compat.spec is not None, (name, compat.render())
+        again = analyse(format_spec(compat.spec, "legos"))
+        assert again.ok and again.spec == compat.spec, name
+        count += 1
+    assert count >= 18

@@ -97,3 +97,33 @@ def test_hostile_rule_files_are_user_errors_not_internal_errors(tmp_path: Path, 
     )
     assert main(["check", str(long)]) == 1  # before: 70, Python's int() digit limit
     assert "4,300 digits" in capsys.readouterr().err
+
+
+DUPLICATE = "def_start event E event F def_end rule_start R1 when E then F\nR1 when F then E rule_end\n"
+
+
+def test_check_legos_compat(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    dup = tmp_path / "dup.sleec"
+    dup.write_text(DUPLICATE)
+    assert main(["check", str(dup)]) == 1
+    assert "error: rule `R1` is defined twice" in capsys.readouterr().out
+    assert main(["check", "--legos-compat", str(dup)]) == 0
+    out = capsys.readouterr().out
+    assert f"{dup}:2:1: warning: rule `R1` is defined twice" in out and "`R1__2`" in out
+    assert "hint: give each rule a name of its own" in out and "ok (tk, 2 rules" in out
+    assert main(["check", "--legos-compat", "--json", str(dup)]) == 0
+    (doc,) = json.loads(capsys.readouterr().out)["files"]
+    assert doc["ok"] is True and doc["diagnostics"][0]["severity"] == "warning"
+
+
+def test_fmt_refuses_a_name_legos_would_cut_in_two(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    f = tmp_path / "cut.sleec"
+    f.write_text("def_start event E event notStop def_end rule_start\nR1 when E then notStop\nrule_end\n")
+    assert main(["fmt", str(f), "--dialect", "legos"]) == 1
+    err = capsys.readouterr().err
+    assert f"{f}:2:16: error: the response event `notStop` begins with the keyword `not`" in err
+    assert "reads it as `not Stop`" in err
+    assert main(["fmt", str(f), "--dialect", "tk"]) == 0  # SLEEC-TK reserves its keywords: no cut
+    assert "R1 when E then notStop" in capsys.readouterr().out

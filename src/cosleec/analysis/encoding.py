@@ -563,7 +563,7 @@ class Encoding:
             return z3.Implies(p, q)
         if rel.kind == "iff":
             return p == q
-        return z3.Implies(p, z3.Not(q))  # mutualExclusive, opposite (§9.2)
+        return z3.Implies(p, z3.Not(q))  # mutualExclusive, opposite (docs/reference/sleec-language.md §9.2)
 
     # ------------------------------------------------------------------ solving
     def check(self, assumptions: Sequence[Z3]) -> z3.CheckSatResult:

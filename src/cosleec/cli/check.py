@@ -32,6 +32,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "--strict-precedence", action="store_true", help="mixed and/or without parentheses is an error"
     )
     p.add_argument("--lint", action="store_true", help="also warn about naming conventions and style")
+    p.add_argument(
+        "--legos-compat",
+        action="store_true",
+        help="accept what LEGOS-SLEEC accepts (cross-scale literals, scales compared with numbers, "
+        "duplicate rule/concern/purpose names) with a warning each, read as LEGOS-SLEEC reads them",
+    )
     add_clause_options(
         p,
         unknown=False,
@@ -47,7 +53,10 @@ def run(args: argparse.Namespace) -> int:
     """
     files = expand(args.files)
     opts = Options(
-        strict_precedence=args.strict_precedence, lint=args.lint, semantics=HedgeSemantics(args.semantics)
+        strict_precedence=args.strict_precedence,
+        lint=args.lint,
+        semantics=HedgeSemantics(args.semantics),
+        legos_compat=args.legos_compat,
     )
     results = [
         analyse_file(f, dialect=args.dialect, strict=args.strict, infer_defs=args.infer_defs, options=opts)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from cosleec.lang import analyse_file, format_spec
+from cosleec.lang import Diagnostic, Dialect, Severity, analyse_file, format_spec, legos_misreads
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -25,10 +25,31 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
 
 
 def run(args: argparse.Namespace) -> int:
-    """Print the file in canonical form; on errors print the diagnostics to stderr and return 1."""
+    """Print the file in canonical form; on errors print the diagnostics to stderr and return 1.
+
+    Printing in the LEGOS dialect, a name that LEGOS-SLEEC's parser would cut in two
+    (``notStop`` read as ``not Stop``, docs/reference/sleec-language.md §11 item 10) is an error:
+    the file would not mean to LEGOS-SLEEC what it means to cosleec.
+    """
     result = analyse_file(args.file, infer_defs=args.infer_defs)
     if result.spec is None or not result.ok:
         print(result.render(), file=sys.stderr)
         return 1
+    out = Dialect(args.dialect) if args.dialect else result.spec.dialect
+    if out is Dialect.LEGOS:
+        misread = [
+            Diagnostic(
+                severity=Severity.ERROR,
+                code="legos-keyword-prefix",
+                message=message,
+                span=span,
+                path=result.path,
+                hint="rename it: LEGOS-SLEEC would read the printed file differently",
+            )
+            for message, span in legos_misreads(result.spec)
+        ]
+        if misread:
+            print("\n".join(d.render(result.source) for d in misread), file=sys.stderr)
+            return 1
     sys.stdout.write(format_spec(result.spec, args.dialect))
     return 0

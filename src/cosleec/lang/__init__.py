@@ -21,6 +21,7 @@ from cosleec.lang import ast, priorities
 from cosleec.lang.ast import Dialect, Specification
 from cosleec.lang.checker import Options, SymbolTable, check
 from cosleec.lang.diagnostics import Diagnostic, DiagnosticSink, Severity, SleecError
+from cosleec.lang.dialect import legos_misreads
 from cosleec.lang.frontend import DIALECTS, CheckResult, analyse, analyse_file, load, parse, read_source
 from cosleec.lang.hedges import HedgeSemantics, Unknowns, candidates, choose, decisive
 from cosleec.lang.infer import infer_definitions
@@ -63,6 +64,7 @@ __all__ = [
     "decisive",
     "format_spec",
     "infer_definitions",
+    "legos_misreads",
     "load",
     "pairs",
     "parse",

@@ -56,14 +56,21 @@ class BoolLit:
     """A boolean literal in a condition: ``true`` or ``false``."""
 
     value: bool
+    parenthesized: int = field(default=0, compare=False, kw_only=True)
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
 class IntLit:
-    """An integer literal, e.g. ``30`` in ``within 30 seconds``; a written ``-3`` is one literal."""
+    """An integer literal, e.g. ``30`` in ``within 30 seconds``; a written ``-3`` is one literal.
+
+    ``sign`` is the sign as written (``""``, ``"+"`` or ``"-"``, followed by a space when
+    something separates it from the digits, as in ``- 3``): only the dialect checks read it.
+    """
 
     value: int
+    sign: str = field(default="", compare=False, kw_only=True)
+    parenthesized: int = field(default=0, compare=False, kw_only=True)
     span: Span = _span()
 
 
@@ -72,6 +79,7 @@ class DecimalLit:
     """A decimal literal: no SLEEC analyser accepts one, so the checker rejects it by name."""
 
     text: str
+    parenthesized: int = field(default=0, compare=False, kw_only=True)
     span: Span = _span()
 
 
@@ -81,13 +89,14 @@ class Name:
 
     Which one is decided by the checker (names are resolved by kind, strictly). ``braced``
     (LEGOS ``{m}``) and ``arrow`` (LEGOS ``->C``) record how it was written; they do not
-    take part in equality.
+    take part in equality. On every expression node, ``parenthesized`` counts the pairs of
+    parentheses written around it (0: none); it too is only a record of the text.
     """
 
     name: str
     braced: bool = field(default=False, compare=False, kw_only=True)
     arrow: bool = field(default=False, compare=False, kw_only=True)
-    parenthesized: bool = field(default=False, compare=False, kw_only=True)
+    parenthesized: int = field(default=0, compare=False, kw_only=True)
     span: Span = _span()
 
 
@@ -96,7 +105,7 @@ class Not:
     """Boolean negation of a condition: ``not userUndressed``."""
 
     operand: Expr
-    parenthesized: bool = field(default=False, compare=False, kw_only=True)
+    parenthesized: int = field(default=0, compare=False, kw_only=True)
     span: Span = _span()
 
 
@@ -107,7 +116,7 @@ class BinOp:
     op: str
     left: Expr
     right: Expr
-    parenthesized: bool = field(default=False, compare=False, kw_only=True)
+    parenthesized: int = field(default=0, compare=False, kw_only=True)
     span: Span = _span()
 
 
@@ -118,7 +127,7 @@ class Compare:
     op: str
     left: Expr
     right: Expr
-    parenthesized: bool = field(default=False, compare=False, kw_only=True)
+    parenthesized: int = field(default=0, compare=False, kw_only=True)
     span: Span = _span()
 
 
@@ -126,7 +135,9 @@ Expr: TypeAlias = BoolLit | IntLit | DecimalLit | Name | Not | BinOp | Compare
 
 BOOL_OPS = frozenset({"and", "or"})
 ARITH_OPS = frozenset({"+", "-", "*"})
-REL_OPS = frozenset({"<", "<=", ">", ">=", "=", "<>"})  # the grammar's `rel_op` (a parser test holds them equal)
+REL_OPS = frozenset(
+    {"<", "<=", ">", ">=", "=", "<>"}
+)  # the grammar's `rel_op` (a parser test holds them equal)
 
 # ---------------------------------------------------------------------------- responses
 
@@ -275,6 +286,7 @@ class ConstantDecl:
     name: str
     value: int | str
     arrow: bool = field(default=False, compare=False, kw_only=True)
+    sign: str = field(default="", compare=False, kw_only=True)  # as on IntLit
     span: Span = _span()
 
 
@@ -384,9 +396,11 @@ BlockKind: TypeAlias = Literal["def", "rule", "concern", "purpose", "relation", 
 
 @dataclass(frozen=True, slots=True)
 class BlockMark:
-    """Where a block opened; used to check block order and duplicates."""
+    """Where a block opened; used to check block order and duplicates. ``empty``: the
+    block has nothing between its start and end words."""
 
     kind: BlockKind
+    empty: bool = field(default=False, kw_only=True)
     span: Span = _span()
 
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 from cosleec.lang import ast as A
 from cosleec.lang import hedges
+from cosleec.lang.compat import LegosReading, apply, fresh_name, holds, mirrored, ordinal
 from cosleec.lang.diagnostics import QUOTE_LIMIT, DiagnosticSink, clip
 from cosleec.lang.priorities import check_priorities
 
@@ -46,6 +47,10 @@ class Options:
     # per rule (or concern, purpose), diagnostics of one code kept before the rest are
     # folded into one "... and N more" summary (DiagnosticSink.folding); 0 keeps them all
     repeat_limit: int = 20
+    # read what LEGOS-SLEEC lets through as it does (cross-scale literals, scales compared
+    # with numbers, duplicate rule, concern and purpose names): a warning each, and
+    # check_and_read's specification carries LEGOS-SLEEC's reading (compat.py)
+    legos_compat: bool = False
 
 
 @dataclass
@@ -83,6 +88,8 @@ class Checker:
         self._owners_of: dict[str, list[str]] = {}  # scale literal -> the measures whose scale has it
         self._cycles: set[frozenset[str]] = set()
         self._suggestions: dict[tuple[str, str], str | None] = {}  # _did_you_mean's answers
+        self.reading = LegosReading()  # what legos_compat reads differently (compat.py)
+        self._taken: dict[int, set[str]] = {}  # id(a renames map of reading) -> names in use there
 
     # ------------------------------------------------------------------ entry point
     def run(self) -> SymbolTable:
@@ -256,14 +263,24 @@ class Checker:
     # ------------------------------------------------------------------ rules
     def _rules(self) -> None:
         names: dict[str, A.Rule] = {}
-        for r in self.spec.rules:
+        nth: dict[str, int] = {}
+        for i, r in enumerate(self.spec.rules):
             if r.name in names:
-                self.sink.error(
-                    "duplicate-rule",
-                    f"rule `{clip(r.name)}` is defined twice",
-                    r.span,
-                    related=((f"`{clip(r.name)}` first defined here", names[r.name].span),),
-                )
+                related = ((f"`{clip(r.name)}` first defined here", names[r.name].span),)
+                if self.opt.legos_compat:
+                    new = self._rename(self.reading.rules, i, r.name, nth, self.spec.rules)
+                    self.sink.warning(
+                        "duplicate-rule",
+                        f"rule `{clip(r.name)}` is defined twice; LEGOS-SLEEC keeps both rules (it "
+                        f"never compares rule names), and so does cosleec, calling this one `{clip(new)}`",
+                        r.span,
+                        related=related,
+                        hint="give each rule a name of its own",
+                    )
+                else:
+                    self.sink.error(
+                        "duplicate-rule", f"rule `{clip(r.name)}` is defined twice", r.span, related=related
+                    )
             else:
                 names[r.name] = r
             self._check_name(r.name, r.span)
@@ -574,6 +591,8 @@ class Checker:
                 m = self.table.measures[lt[1]]
                 assert isinstance(m.type, A.ScaleType)
                 if lit not in m.type.literals:
+                    if self.opt.legos_compat and self._legos_literal(e, lit_side, lit, m.name, m.type):
+                        return BOOL
                     owners = self._owners(lit)
                     self.sink.error(
                         "scale-literal",
@@ -589,6 +608,8 @@ class Checker:
                 self.sink.error(
                     "type", f"`{e.op}` compares two scale literals; one side must be a measure", e.span
                 )
+                return BOOL
+            if self.opt.legos_compat and lt == NUM and self._legos_number(lit_side, lit):
                 return BOOL
             owners = self._owners(lit)
             self.sink.error(
@@ -609,22 +630,154 @@ class Checker:
             )
             return BOOL
         if lt != rt:
+            if self.opt.legos_compat and self._legos_scale_number(e, lt, rt):
+                return BOOL
             self.sink.error("type", f"`{e.op}` compares {_type_word(lt)} with {_type_word(rt)}", e.span)
         del other
         return BOOL
 
+    # ------------------------------------------------------------------ legos_compat
+    # LEGOS-SLEEC reads a scale literal as its position in its own scale and a scale measure
+    # as its position in its scale, and compares positions as integers (compat.py). Each
+    # method below reads one such comparison that way, warns, records the reading and returns
+    # True; it returns False (the caller reports the error) where LEGOS-SLEEC has no reading.
+
+    def _legos_position(self, lit: str) -> int | None:
+        """``lit``'s position in LEGOS-SLEEC's one table of literals: its index in its scale,
+        the same in every scale that has it (or None: LEGOS-SLEEC's table asserts that)."""
+        found = set()
+        for owner in self._owners_of.get(lit, ()):
+            t = self.table.measures[owner].type
+            assert isinstance(t, A.ScaleType)
+            found.add(t.literals.index(lit))
+        return found.pop() if len(found) == 1 else None
+
+    def _legos_literal(self, e: A.Compare, node: A.Expr, lit: str, measure: str, scale: A.ScaleType) -> bool:
+        """``{measure} op lit`` with ``lit`` a literal of another scale."""
+        p = self._legos_position(lit)
+        if p is None:
+            return False
+        owners = self._owners(lit)
+        head = (
+            f"`{clip(lit)}` is not in the scale of `{clip(measure)}` "
+            f"({clip(', '.join(scale.literals), 4 * QUOTE_LIMIT)}); LEGOS-SLEEC reads a scale "
+            f"literal as its position in its own scale, and `{clip(lit)}` is the {ordinal(p)} of "
+            f"`{owners}`'s"
+        )
+        if p < len(scale.literals):
+            new = scale.literals[p]
+            self.reading.replace(node, _renamed(node, new))
+            self.sink.warning(
+                "scale-literal",
+                f"{head}, so cosleec reads it as `{clip(new)}`, the {ordinal(p)} of `{clip(measure)}`'s",
+                _span(node),
+                hint=f"write `{clip(new)}` if that is what is meant",
+            )
+            return True
+        op = e.op if node is e.right else mirrored(e.op)  # with the measure on the left
+        value = holds(op, 0, p)  # every position of the scale is below p
+        self._legos_constant(e, value)
+        self.sink.warning(
+            "scale-literal",
+            f"{head}, beyond the {len(scale.literals)} of `{clip(measure)}`'s: LEGOS-SLEEC compares "
+            f"the positions, so the comparison is always {str(value).lower()}, and cosleec reads it "
+            f"as `{str(value).lower()}`",
+            _span(node),
+            hint=f"compare with a literal of `{clip(measure)}`: "
+            f"{clip(', '.join(scale.literals), 4 * QUOTE_LIMIT)}",
+        )
+        return True
+
+    def _legos_number(self, node: A.Expr, lit: str) -> bool:
+        """A scale literal compared with a number (a numeric measure, say)."""
+        p = self._legos_position(lit)
+        if p is None:
+            return False
+        parens = node.parenthesized
+        self.reading.replace(node, A.IntLit(p, parenthesized=parens, span=node.span))
+        self.sink.warning(
+            "type",
+            f"scale literal `{clip(lit)}` (of `{self._owners(lit)}`) is compared with a number; "
+            f"LEGOS-SLEEC reads a scale literal as its position in its scale, so cosleec reads it "
+            f"as {p}",
+            _span(node),
+            hint="compare a number with a number, a scale measure with its own literals",
+        )
+        return True
+
+    def _legos_scale_number(self, e: A.Compare, lt: Type, rt: Type) -> bool:
+        """A scale measure compared with a constant number."""
+        if isinstance(lt, tuple) and lt[0] == "scale" and rt == NUM:
+            measure, number, op = lt[1], e.right, e.op
+        elif isinstance(rt, tuple) and rt[0] == "scale" and lt == NUM:
+            measure, number, op = rt[1], e.left, mirrored(e.op)
+        else:
+            return False
+        c = self._const_eval(number)
+        if c is None:
+            return False
+        scale = self.table.measures[measure].type
+        assert isinstance(scale, A.ScaleType)
+        shown = f"`{clip(number.name)}` = {c}" if isinstance(number, A.Name) else f"{c}"
+        head = (
+            f"`{e.op}` compares the scale of `{clip(measure)}` with a number ({shown}); LEGOS-SLEEC "
+            f"compares the measure's position in its scale (0 to {len(scale.literals) - 1}) with it"
+        )
+        hint = (
+            f"compare with a literal of `{clip(measure)}`: {clip(', '.join(scale.literals), 4 * QUOTE_LIMIT)}"
+        )
+        if 0 <= c < len(scale.literals):
+            new = scale.literals[c]
+            self.reading.replace(number, A.Name(new, parenthesized=number.parenthesized, span=number.span))
+            self.sink.warning(
+                "type",
+                f"{head}, so cosleec reads {c} as `{clip(new)}`, the {ordinal(c)} of `{clip(measure)}`'s",
+                e.span,
+                hint=hint,
+            )
+            return True
+        value = holds(op, 0, c)  # every position is on the same side of c
+        self._legos_constant(e, value)
+        self.sink.warning(
+            "type",
+            f"{head}: always {str(value).lower()}, and cosleec reads it as `{str(value).lower()}`",
+            e.span,
+            hint=hint,
+        )
+        return True
+
+    def _legos_constant(self, e: A.Compare, value: bool) -> None:
+        self.reading.replace(e, A.BoolLit(value, parenthesized=e.parenthesized, span=e.span))
+
     # ------------------------------------------------------------------ LEGOS blocks
     def _situations(self) -> None:
-        for block, items in (("concern", self.spec.concerns), ("purpose", self.spec.purposes)):
+        for block, items, renames in (
+            ("concern", self.spec.concerns, self.reading.concerns),
+            ("purpose", self.spec.purposes, self.reading.purposes),
+        ):
             seen: dict[str, A.Situation] = {}
-            for s in items:
+            nth: dict[str, int] = {}
+            for i, s in enumerate(items):
                 if s.name in seen:
-                    self.sink.error(
-                        "duplicate-name",
-                        f"{block} `{clip(s.name)}` is defined twice",
-                        s.span,
-                        related=(("first defined here", seen[s.name].span),),
-                    )
+                    related = (("first defined here", seen[s.name].span),)
+                    if self.opt.legos_compat:
+                        new = self._rename(renames, i, s.name, nth, items)
+                        self.sink.warning(
+                            "duplicate-name",
+                            f"{block} `{clip(s.name)}` is defined twice; LEGOS-SLEEC keeps both (it "
+                            f"never compares {block} names), and so does cosleec, calling this one "
+                            f"`{clip(new)}`",
+                            s.span,
+                            related=related,
+                            hint=f"give each {block} a name of its own",
+                        )
+                    else:
+                        self.sink.error(
+                            "duplicate-name",
+                            f"{block} `{clip(s.name)}` is defined twice",
+                            s.span,
+                            related=related,
+                        )
                 seen.setdefault(s.name, s)
                 with self.sink.folding(f"{block} `{clip(s.name)}`", self.opt.repeat_limit):
                     cur: A.Situation | None = s
@@ -665,6 +818,26 @@ class Checker:
                 self._trigger(rel.trigger)
                 self._condition(rel.condition)
                 self._duration(rel.duration)
+
+    def _rename(
+        self,
+        renames: dict[int, str],
+        i: int,
+        name: str,
+        nth: dict[str, int],
+        items: Sequence[A.Rule] | Sequence[A.Situation],
+    ) -> str:
+        """The new name of item ``i`` of ``items``, a later definition of ``name``
+        (legos_compat): :func:`compat.fresh_name`, clear of every name of ``items`` and of
+        the new names given so far; ``nth`` counts the definitions of each name."""
+        taken = self._taken.get(id(renames))
+        if taken is None:
+            taken = self._taken[id(renames)] = {x.name for x in items}
+        nth[name] = nth.get(name, 1) + 1
+        new = fresh_name(name, nth[name], taken)
+        taken.add(new)
+        renames[i] = new
+        return new
 
     def _owners(self, lit: str) -> str:
         """The measures whose scale has ``lit``, for a message: `` `a`, `b` `` without the outer
@@ -744,6 +917,12 @@ def _span(e: A.Expr) -> A.Span:
     return e.span
 
 
+def _renamed(node: A.Expr, name: str) -> A.Name:
+    """A scale literal ``node`` (a Name) read as the literal ``name``, written as it was."""
+    assert isinstance(node, A.Name)
+    return A.Name(name, parenthesized=node.parenthesized, span=node.span)
+
+
 def _kind_word(d: A.Definition) -> str:
     if isinstance(d, A.EventDecl):
         return "an event"
@@ -767,4 +946,15 @@ def check(spec: A.Specification, sink: DiagnosticSink, options: Options | None =
     return Checker(spec, sink, options or Options()).run()
 
 
-__all__ = ["Options", "SymbolTable", "check"]
+def check_and_read(
+    spec: A.Specification, sink: DiagnosticSink, options: Options | None = None
+) -> tuple[A.Specification, SymbolTable]:
+    """:func:`check`, and the specification as the checks read it: ``spec`` itself, except
+    under ``legos_compat``, where it is rebuilt with LEGOS-SLEEC's reading of the defects
+    that option lets through (:mod:`cosleec.lang.compat`)."""
+    checker = Checker(spec, sink, options or Options())
+    table = checker.run()
+    return apply(spec, checker.reading), table
+
+
+__all__ = ["Options", "SymbolTable", "check", "check_and_read"]

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from cosleec.errors import ConfigurationError
 from cosleec.lang import ast as A
-from cosleec.lang.checker import Options, SymbolTable, check
+from cosleec.lang.checker import Options, SymbolTable, check_and_read
 from cosleec.lang.diagnostics import Diagnostic, DiagnosticSink, Severity, SleecError
 from cosleec.lang.dialect import check_mixed, check_strict, collect, detect
 from cosleec.lang.infer import infer_definitions
@@ -75,6 +75,7 @@ def analyse(
     strict: bool = False,
     infer_defs: bool = False,
     options: Options | None = None,
+    legos_compat: bool = False,
 ) -> CheckResult:
     """Parse and check SLEEC text. Never raises for bad input: problems are diagnostics.
 
@@ -82,13 +83,19 @@ def analyse(
     :func:`load` when a bad file should stop you. ``dialect`` is one of :data:`DIALECTS`:
     ``auto`` detects it, ``tk``/``legos`` also report what that tool would reject, ``paper``
     reads the CO-SLEEC paper's notation. ``strict`` rejects cosleec's extensions;
-    ``infer_defs`` infers the declarations of a file without a def block.
+    ``infer_defs`` infers the declarations of a file without a def block. ``legos_compat``
+    (or ``Options(legos_compat=True)``) accepts what LEGOS-SLEEC accepts -- scale literals
+    compared across scales, scales compared with numbers, duplicate rule, concern and purpose
+    names -- with a warning each, and the result's ``spec`` carries LEGOS-SLEEC's reading of
+    them (docs/reference/sleec-language.md §11 item 18).
     """
     if dialect not in DIALECTS:
         raise ConfigurationError(f"unknown dialect {dialect!r}; expected one of {', '.join(DIALECTS)}")
     opts = options or Options()
     if strict:
         opts = replace(opts, strict_extensions=True)
+    if legos_compat:
+        opts = replace(opts, legos_compat=True)
     if dialect == "tk":
         opts = replace(opts, tk_names=True)
     sink = DiagnosticSink(path)
@@ -117,7 +124,7 @@ def analyse(
         elif evidence is not None:
             check_mixed(facts, evidence, sink)
         spec = replace(spec, dialect=detected)
-    symbols = check(spec, sink, opts)
+    spec, symbols = check_and_read(spec, sink, opts)
     return CheckResult(
         path=path, source=text, spec=spec, dialect=detected, diagnostics=sink.sorted(), symbols=symbols
     )
@@ -153,13 +160,22 @@ def analyse_file(
     strict: bool = False,
     infer_defs: bool = False,
     options: Options | None = None,
+    legos_compat: bool = False,
 ) -> CheckResult:
     """:func:`analyse` a rule file; an unreadable file is a diagnostic too."""
     text, problem = read_source(path)
     if text is None:
         assert problem is not None
         return CheckResult(path=str(path), source="", spec=None, dialect=None, diagnostics=[problem])
-    return analyse(text, str(path), dialect=dialect, strict=strict, infer_defs=infer_defs, options=options)
+    return analyse(
+        text,
+        str(path),
+        dialect=dialect,
+        strict=strict,
+        infer_defs=infer_defs,
+        options=options,
+        legos_compat=legos_compat,
+    )
 
 
 def parse(
@@ -170,9 +186,18 @@ def parse(
     strict: bool = False,
     infer_defs: bool = False,
     options: Options | None = None,
+    legos_compat: bool = False,
 ) -> A.Specification:
     """Parse and check; raise :class:`SleecError` carrying every diagnostic on any error."""
-    result = analyse(text, path, dialect=dialect, strict=strict, infer_defs=infer_defs, options=options)
+    result = analyse(
+        text,
+        path,
+        dialect=dialect,
+        strict=strict,
+        infer_defs=infer_defs,
+        options=options,
+        legos_compat=legos_compat,
+    )
     if not result.ok or result.spec is None:
         raise SleecError(result.diagnostics, text)
     return result.spec
@@ -185,9 +210,17 @@ def load(
     strict: bool = False,
     infer_defs: bool = False,
     options: Options | None = None,
+    legos_compat: bool = False,
 ) -> A.Specification:
     """Read, parse and check a rule file; raise :class:`SleecError` on any error."""
-    result = analyse_file(path, dialect=dialect, strict=strict, infer_defs=infer_defs, options=options)
+    result = analyse_file(
+        path,
+        dialect=dialect,
+        strict=strict,
+        infer_defs=infer_defs,
+        options=options,
+        legos_compat=legos_compat,
+    )
     if not result.ok or result.spec is None:
         raise SleecError(result.diagnostics, result.source)
     return result.spec

@@ -139,7 +139,7 @@ def assemble(blocks: list[Block], path: str, sink: DiagnosticSink) -> A.Specific
     marks = []
     first_rule = next((i for i, b in enumerate(blocks) if b.kind == "rule"), len(blocks))
     for i, b in enumerate(blocks):
-        marks.append(A.BlockMark(b.kind, span=b.span))
+        marks.append(A.BlockMark(b.kind, empty=not b.items, span=b.span))
         if b.kind in seen:
             sink.error(
                 "duplicate-block",
@@ -245,6 +245,14 @@ def _special_message(
             "comparison-chain",
             f"a comparison cannot be chained (`a < b {value} c`)",
             "combine two comparisons with `and`",
+        )
+    if "until" in values and "for" in values:
+        return (
+            "relation-end",
+            f"unexpected {'end of file' if ttype == END else f'`{value}`'}: a relation `when E then p` "
+            "needs `until F` (or `for T`) after its condition",
+            "LEGOS-SLEEC's grammar makes `until` optional, but its analyser stops ('unsupported "
+            "yet') on a relation without it, so the form has no meaning to follow",
         )
     if value == "{" and values == {"("}:
         return ("scale-braces", "scale literals are listed in parentheses: `scale(low, medium, high)`", None)

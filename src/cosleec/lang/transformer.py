@@ -123,20 +123,22 @@ class ToAst(Transformer[Token, Any]):
         return A.ScaleType(tuple(ident(t) for t in c), literal_spans=tuple(tok_span(t) for t in c))
 
     def constant_decl(self, c: list[Any]) -> A.ConstantDecl:
-        value, arrow = c[1]
-        return A.ConstantDecl(ident(c[0]), value, arrow=arrow, span=tok_span(c[0]))
+        value, arrow, sign = c[1]
+        return A.ConstantDecl(ident(c[0]), value, arrow=arrow, sign=sign, span=tok_span(c[0]))
 
-    def const_int(self, c: list[Any]) -> tuple[int, bool]:
-        return int(c[0].value), False
+    def const_int(self, c: list[Any]) -> tuple[int, bool, str]:
+        return int(c[0].value), False, ""
 
-    def const_neg(self, c: list[Any]) -> tuple[int, bool]:
-        return -int(c[0].value), False
+    def const_signed(self, c: list[Any]) -> tuple[int, bool, str]:
+        sign, digits = c
+        value = int(digits.value)
+        return (-value if sign.value == "-" else value), False, _sign(sign, digits)
 
-    def const_name(self, c: list[Any]) -> tuple[str, bool]:
-        return ident(c[0]), False
+    def const_name(self, c: list[Any]) -> tuple[str, bool, str]:
+        return ident(c[0]), False, ""
 
-    def const_arrow(self, c: list[Any]) -> tuple[str, bool]:
-        return ident(c[0]), True
+    def const_arrow(self, c: list[Any]) -> tuple[str, bool, str]:
+        return ident(c[0]), True, ""
 
     def fluent_decl(self, c: list[Any]) -> A.FluentDecl:
         return A.FluentDecl(ident(c[0]), c[1], c[2], span=tok_span(c[0]))
@@ -226,10 +228,17 @@ class ToAst(Transformer[Token, Any]):
     def int_lit(self, c: list[Any]) -> A.IntLit:
         return A.IntLit(int(c[0].value), span=tok_span(c[0]))
 
-    def neg_int(self, c: list[Any]) -> A.IntLit:
-        t = c[0]
-        line, col, value = t.line, t.column, t.value
-        return A.IntLit(-int(value), span=A.Span(line, max(col - 1, 1), line, col + len(value)))
+    def signed_int(self, c: list[Any]) -> A.IntLit:
+        sign, digits = c
+        value = int(digits.value)
+        return A.IntLit(
+            -value if sign.value == "-" else value,
+            sign=_sign(sign, digits),
+            span=join(tok_span(sign), tok_span(digits)),
+        )
+
+    def sign(self, c: list[Any]) -> Any:
+        return c[0]
 
     def decimal_lit(self, c: list[Any]) -> A.DecimalLit:
         return A.DecimalLit(c[0].value, span=tok_span(c[0]))
@@ -244,18 +253,23 @@ class ToAst(Transformer[Token, Any]):
         return A.Name(ident(c[0]), braced=True, span=tok_span(c[0]))
 
     def paren(self, c: list[Any]) -> A.Expr:
-        """Remember parentheses (they matter only to dialect checks and warnings)."""
+        """Count parentheses (they matter only to dialect checks and warnings)."""
         e = c[0]
         t = type(e)
+        n = e.parenthesized + 1
         if t is A.Name:
-            return A.Name(e.name, braced=e.braced, arrow=e.arrow, parenthesized=True, span=e.span)
+            return A.Name(e.name, braced=e.braced, arrow=e.arrow, parenthesized=n, span=e.span)
         if t is A.BinOp:
-            return A.BinOp(e.op, e.left, e.right, parenthesized=True, span=e.span)
+            return A.BinOp(e.op, e.left, e.right, parenthesized=n, span=e.span)
         if t is A.Compare:
-            return A.Compare(e.op, e.left, e.right, parenthesized=True, span=e.span)
+            return A.Compare(e.op, e.left, e.right, parenthesized=n, span=e.span)
         if t is A.Not:
-            return A.Not(e.operand, parenthesized=True, span=e.span)
-        return e  # type: ignore[no-any-return]
+            return A.Not(e.operand, parenthesized=n, span=e.span)
+        if t is A.IntLit:
+            return A.IntLit(e.value, sign=e.sign, parenthesized=n, span=e.span)
+        if t is A.BoolLit:
+            return A.BoolLit(e.value, parenthesized=n, span=e.span)
+        return A.DecimalLit(e.text, parenthesized=n, span=e.span)
 
     # -- LEGOS concerns and purposes
     def situation(self, c: list[Any]) -> A.Situation:
@@ -299,6 +313,14 @@ class ToAst(Transformer[Token, Any]):
 
     measure_rel = event_rel
     event_measure_rel = event_rel
+
+
+def _sign(sign: Any, digits: Any) -> str:
+    """A number's sign as written: ``"-"`` or ``"+"``, with a space after it when anything
+    (a space, a comment, a line break) separates it from the digits."""
+    attached = sign.line == digits.line and sign.column + 1 == digits.column
+    v: str = sign.value
+    return v if attached else v + " "
 
 
 def _span_of(node: Any) -> A.Span:

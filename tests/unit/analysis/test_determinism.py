@@ -6,8 +6,6 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-import pytest
-
 from cosleec.analysis import CHECKS, Settings, analyse_file
 
 from .support import cli_json, sleec

@@ -95,6 +95,34 @@ def test_legos_forms() -> None:
     assert r.response.items[0].occurrence.negated
 
 
+def test_a_sign_is_part_of_the_number_and_its_spacing_is_recorded() -> None:
+    # (a signed number is LEGOS syntax, the rest TK: a dialect mix, but the tree is built)
+    spec = analyse(DEFS + "rule_start\nR when E and x > - 3 and x < +4 and x <> -5 then F\nrule_end").spec
+    assert spec is not None
+    c = spec.rules[0].trigger.condition
+    assert c == A.BinOp(
+        "and",
+        A.BinOp("and", A.Compare(">", n("x"), A.IntLit(-3)), A.Compare("<", n("x"), A.IntLit(4))),
+        A.Compare("<>", n("x"), A.IntLit(-5)),
+    )
+    lits = [cmp.right for cmp in (c.left.left, c.left.right, c.right)]  # type: ignore[union-attr]
+    assert [(lit.sign, lit.span[1], lit.span[3]) for lit in lits] == [
+        ("- ", 18, 21),
+        ("+", 30, 32),
+        ("-", 42, 44),
+    ]
+    (r,) = rules("R when E and ((x - 3) > 0) then F")  # after a number, `-` is subtraction
+    assert r.trigger.condition == A.Compare(">", A.BinOp("-", n("x"), A.IntLit(3)), A.IntLit(0))
+
+
+def test_parentheses_are_counted() -> None:
+    (r,) = rules("R when E and ((x > 3)) and (((a))) and (2) > x then F")
+    c = r.trigger.condition
+    assert isinstance(c, A.BinOp) and isinstance(c.left, A.BinOp) and isinstance(c.right, A.Compare)
+    assert (c.left.left.parenthesized, c.left.right.parenthesized, c.right.left.parenthesized) == (2, 3, 1)
+    assert c.parenthesized == 0
+
+
 def test_tk_keyword_escape_and_comments() -> None:
     spec = parse(
         "/* block\n comment */ def_start event ^E // line\n event F def_end rule_start R when E then F rule_end"
