@@ -95,8 +95,8 @@ class Analysis:
                     for wanted in s.responses:
                         enc.demand(enc.slots[0], wanted)
             for rule in self.spec.rules:
-                if rule.trigger.event == event:
-                    enc.demand(enc.slots[0], rule.response)
+                if rule.trigger.event == event:  # denying a rule's response (redundancy)
+                    enc.demand(enc.slots[0], rule.response, breaches=True)
             enc.unfold()
             self._by_event[(event, bound)] = enc
         return enc, enc.slots[0]
@@ -137,6 +137,10 @@ class Analysis:
         ]
         out += [(f"relation {i + 1}", lit) for i, lit in enumerate(enc.relation_lit)]
         return out
+
+    def in_order(self, names: set[str]) -> tuple[str, ...]:
+        """``names`` (rules) in file order."""
+        return tuple(r.name for r in self.spec.rules if r.name in names)
 
     def status(self, enc: Encoding) -> tuple[str, int | None]:
         """Whether an unsat answer of ``enc`` is a proof, or holds up to the bound."""
@@ -378,13 +382,13 @@ class Analysis:
             self.findings.append(
                 Finding(
                     code="runtime-conflict",
-                    subject=f"{ro.name}/{rp.name}",
+                    subject=f"{_clause(ro.name, ko)}/{_clause(rp.name, kp)}",
                     message=f"{_clause(ro.name, ko)} can owe `{event}` while {_clause(rp.name, kp)} forbids it, "
                     "in overlapping windows"
                     + (" (two activations of the rule)" if same and xo is not xp else ""),
                     path=self.spec.path,
                     span=io.occurrence.span or ro.span,
-                    rules=tuple(dict.fromkeys((ro.name, rp.name))),
+                    rules=self.in_order({ro.name, rp.name}),
                     related=((f"{_clause(rp.name, kp)} forbids `{event}` here", ip.occurrence.span),),
                     hint=f"declare which prevails (priority_start {ro.name} > {rp.name} priority_end), or "
                     "separate the clauses' conditions",

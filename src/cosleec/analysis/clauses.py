@@ -69,6 +69,7 @@ def unselectable(a: Analysis) -> None:
 
 def semantics_differ(a: Analysis) -> None:
     """Rules where last-wins and nested choose different clauses, with such a situation."""
+    sem = a.settings.semantics  # the witness is judged under it
     for rule in a.spec.rules:
         ds = rule.response.defeaters
         if len(ds) < 2:
@@ -98,7 +99,12 @@ def semantics_differ(a: Analysis) -> None:
                 status=PROVED,
                 situation=situation,
                 witness=witness(
-                    enc, model, a.settings.options, confirm=functools.partial(_picked, clause=pick_lw)
+                    enc,
+                    model,
+                    a.settings.options,
+                    confirm=functools.partial(
+                        _picked, clause=pick_lw if sem == HedgeSemantics.LAST_WINS else pick_ne
+                    ),
                 ),
                 severity=Severity.NOTE,
             )

@@ -192,11 +192,17 @@ class Encoding:
         part of the question's goal)."""
         return self._slot(event, 0, why)
 
-    def demand(self, slot: Slot, response: A.Response | None) -> None:
+    def demand(self, slot: Slot, response: A.Response | None, *, breaches: bool = False) -> None:
         """A question's formula will ask ``response`` of ``slot``: unfold a slot for every
-        occurrence it names (negated ones too: denying a prohibition needs an occurrence)."""
+        occurrence it names (negated ones too: denying a prohibition needs an occurrence).
+        With ``breaches``, ``response`` is a rule's (whose slots the unfolding creates
+        anyway): only the occurrences that break its prohibitions."""
         if response is not None:
-            self._extra.append((slot, [(e, f"{why}") for e, why in _occurrences(response, everything=True)]))
+            found = list(_occurrences(response, everything=True))
+            if breaches:  # less what the rule's own demands already unfold
+                for owed in _occurrences(response, everything=False):
+                    found.remove(owed)
+            self._extra.append((slot, found))
 
     def unfold(self, *, children: bool = True) -> None:
         """Create the demanded slots, breadth first, at most ``bound`` per event, and add

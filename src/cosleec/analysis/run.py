@@ -15,7 +15,7 @@ from pathlib import Path
 from cosleec.analysis import clauses
 from cosleec.analysis.checks import Analysis, Settings
 from cosleec.analysis.findings import CHECKS, PROVED, FileReport, Finding
-from cosleec.lang import Severity, Specification
+from cosleec.lang import CheckResult, Severity, Specification
 from cosleec.lang import analyse_file as check_file
 from cosleec.lang import ast as A
 
@@ -92,13 +92,8 @@ def analyse_file(
     return report
 
 
-def _check(path: str | Path, legos_compat: bool):  # type: ignore[no-untyped-def]
-    if legos_compat:
-        try:
-            return check_file(path, legos_compat=True)  # type: ignore[call-arg]
-        except TypeError:  # pragma: no cover - an older front end
-            pass
-    return check_file(path)
+def _check(path: str | Path, legos_compat: bool) -> CheckResult:
+    return check_file(path, legos_compat=legos_compat)
 
 
 def _timed(fn: Callable[[], None], seconds: dict[str, float], key: str) -> None:

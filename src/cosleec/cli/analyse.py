@@ -187,7 +187,7 @@ def _coverage(args: argparse.Namespace, path: Path) -> Coverage | None:
     unimplemented: tuple[str, ...] | None = None
     measures = events = None
     try:
-        spec = load(path, legos_compat=True) if args.legos_compat else load(path)  # type: ignore[call-arg]
+        spec = load(path, legos_compat=args.legos_compat)
     except SleecError:
         return None  # the file's own errors are reported by the analysis
     if args.tasks:

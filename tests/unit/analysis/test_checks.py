@@ -596,12 +596,6 @@ def test_no_semantics_difference_with_one_defeater_or_graded_conditions(tmp_path
         assert subjects(run(tmp_path, rule, checks="semantics-differ"), "semantics-differ") == set()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG clauses.py semantics_differ: the witness is judged with the chosen semantics "
-    "(a.settings.options) but confirmed against the clause last-wins picks, so under "
-    "--semantics nested every semantics-differ witness is 'NOT confirmed'",
-)
 def test_semantics_differ_witness_is_confirmed_under_nested(tmp_path: Path) -> None:
     r = run(
         tmp_path,
@@ -715,7 +709,7 @@ def test_runtime_conflict_between_two_activations_of_one_rule(tmp_path: Path) ->
         "R1 when A then B within 5 seconds unless x then not B within 5 seconds",
         checks="runtime-conflict",
     )
-    f = of(r, "runtime-conflict")["R1/R1"]
+    f = of(r, "runtime-conflict")["R1/R1.1"]
     assert f.rules == ("R1",) and "two activations" in f.message
 
 
@@ -728,11 +722,6 @@ def test_no_runtime_conflict_without_a_prohibition_of_the_owed_event(tmp_path: P
     assert r.findings == []
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG checks.py runtime_conflicts: Finding.rules is (obligation's rule, prohibition's "
-    "rule), not in file order as Finding's docstring promises",
-)
 def test_runtime_conflict_rules_are_in_file_order(tmp_path: Path) -> None:
     r = run(
         tmp_path,

@@ -102,12 +102,6 @@ def test_sarif_of_the_curtain_example_validates(tmp_path: Path, capsys: pytest.C
     assert len(log["runs"][0]["results"]) == len(doc["files"][0]["findings"]) >= 5
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG sarif.py _result / checks.py runtime_conflicts: partialFingerprints are "
-    "code:subject:rules, and the curtain example's two runtime conflicts (R1 and R1.2 against R2) "
-    "both have subject 'R1/R2', so two distinct results share one fingerprint",
-)
 def test_sarif_fingerprints_are_unique(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = tmp_path / "curtains.sleec"
     shutil.copy(ROOT / "examples" / "analysis" / "curtains.sleec", path)

@@ -79,13 +79,6 @@ def test_the_cli_prints_and_writes_the_bound(tmp_path: Path, capsys: pytest.Capt
     assert "[proved]" in out and "up to bound" not in out
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG checks.py Analysis.encoding: the probe's own rules are demanded twice (by "
-    "Encoding.unfold's _demands and again by enc.demand(...)), so each obligation of the probe "
-    "takes two slots: four rules `when A then B within ...` need 8 B slots > 6 and every answer "
-    "is 'up to bound 6' although there is no cycle at all",
-)
 def test_one_event_owed_by_four_rules_is_still_proved(tmp_path: Path) -> None:
     r = run(
         tmp_path,

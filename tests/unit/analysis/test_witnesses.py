@@ -145,12 +145,6 @@ def test_witnesses_dir_holds_the_witnesses_of_one_file(
         assert read_trace(trace)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG cli/analyse.py _write_witnesses: the file name is {stem}--{code}--{subject}, and "
-    "the runtime conflicts R1/R2 and R1.2/R2 of the curtain example share subject 'R1/R2', so one "
-    "witness overwrites the other (3 witnesses, 2 files)",
-)
 def test_witnesses_dir_keeps_every_witness_of_the_curtain_example(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
