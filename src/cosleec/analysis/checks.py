@@ -361,16 +361,13 @@ class Analysis:
         """Clauses that can owe and forbid an event in overlapping windows (and, with
         ``situational``, the situations where that leaves a trigger unanswerable)."""
         above = closure([*self.settings.priorities, *pairs(self.spec)])
-        settled_note = []
         for ro, ko, io, rp, kp, ip in self.clashes():
-            found = self._clash(ro, ko, io, rp, kp, ip)
-            if found is None:
-                continue
-            enc, xo, xp, base, (lo, hi, plo, phi) = found
-            what = f"{_clause(ro.name, ko)} and {_clause(rp.name, kp)} on {io.occurrence.event}"
             if (ro.name, rp.name) in above or (rp.name, ro.name) in above:
-                settled_note.append(what)
+                continue  # a declared priority settles it
+            found = list(self._clash(ro, ko, io, rp, kp, ip))
+            if not found:
                 continue
+            enc, xo, xp, base, (lo, hi, plo, phi) = found[0]
             event = io.occurrence.event
             w = witness(
                 enc,
@@ -396,15 +393,16 @@ class Analysis:
                     witness=w,
                 )
             )
-            if situational:
-                self._situational(enc, ro, ko, io, xo, rp, kp, ip, xp, base, lo, hi, plo, phi)
-        del settled_note
+            if situational:  # one occurrence triggering both, and two occurrences
+                for enc, xo, xp, base, (lo, hi, plo, phi) in found:
+                    self._situational(enc, ro, ko, io, xo, rp, kp, ip, xp, base, lo, hi, plo, phi)
 
     def _clash(
         self, ro: A.Rule, ko: int, io: A.ResponseItem, rp: A.Rule, kp: int, ip: A.ResponseItem
-    ) -> tuple[Encoding, Slot, Slot, list[Any], tuple[Any, Any, Any, Any]] | None:
-        """A situation where the obligation and the prohibition overlap: one occurrence
-        triggering both when it can, else two; no other occurrence (the smallest witness)."""
+    ) -> Iterator[tuple[Encoding, Slot, Slot, list[Any], tuple[Any, Any, Any, Any]]]:
+        """Situations where the obligation and the prohibition overlap: one occurrence
+        triggering both (when the rules share their trigger), then two; with no other
+        occurrence when that is possible (the smallest witness)."""
         shared = ro.trigger.event == rp.trigger.event
         for one in [True, False] if shared else [False]:
             if one and ro is rp and ko != kp:
@@ -436,8 +434,7 @@ class Analysis:
                 self.solve(enc, [*base, overlap, alone], what) == z3.sat
                 or self.solve(enc, [*base, overlap], what) == z3.sat
             ):
-                return enc, xo, xp, base, (lo, hi, plo, phi)
-        return None
+                yield enc, xo, xp, base, (lo, hi, plo, phi)
 
     def _item_window(
         self, enc: Encoding, rule: A.Rule, clause: int, it: A.ResponseItem, x: Slot
@@ -532,8 +529,9 @@ class Analysis:
             return
         if any(f.code == "vacuous-conflict" and f.subject in core for f in self.findings):
             return
-        if any(
-            f.code == "situational-conflict" and f.subject == later.name and f.rules == core
+        triggers = [ro.name, rp.name] if xo is xp else [later.name]
+        if any(  # the same cause, and the same triggers unanswerable, already shown
+            f.code == "situational-conflict" and f.rules == core and set(triggers) <= set(f.extra["triggers"])
             for f in self.findings
         ):
             return
@@ -563,7 +561,7 @@ class Analysis:
                 bound=bound,
                 situation=situation,
                 witness=then(fixed, allowed, last, self.settings.options),
-                extra={"triggers": [ro.name, rp.name] if xo is xp else [later.name]},
+                extra={"triggers": triggers},
             )
         )
 

@@ -284,12 +284,6 @@ def test_a_check_answers_the_same_whatever_else_is_checked(tmp_path: Path) -> No
 ONE_OVERLAPS = "R1 when A then B within [5 seconds, 7 seconds]\nR2 when A then not B within 5 seconds"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG checks.py Analysis._clash/_situational: _clash returns the one-occurrence "
-    "situation (its windows overlap), where the prohibition cannot cover the obligation, and "
-    "the two-occurrence situation (A at 0, A at 2) is never tried",
-)
 def test_situational_conflict_when_one_occurrence_only_overlaps(tmp_path: Path) -> None:
     """Like [6, 7] vs 5 s (found), with [5, 7]: A at 0 owes B in [5, 7], A at 2 forbids [2, 7]."""
     r = run(tmp_path, ONE_OVERLAPS, checks="situational-conflict")
