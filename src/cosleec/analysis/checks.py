@@ -470,7 +470,7 @@ class Analysis:
             return  # an obligation without deadline can always wait
         event = io.occurrence.event
         remaining = z3.If(lo >= xp.t, lo, xp.t)
-        covered = z3.And(plo <= remaining, *([hi <= phi] if phi is not None else []))
+        covered = z3.And(remaining <= hi, plo <= remaining, *([hi <= phi] if phi is not None else []))
         pending = (
             z3.Not(enc.occurs(event, lo, xp.t, After(slot=xo))) if xo is not xp else z3.BoolVal(True, enc.ctx)
         )
@@ -529,7 +529,10 @@ class Analysis:
             return
         if any(f.code == "vacuous-conflict" and f.subject in core for f in self.findings):
             return
-        triggers = [ro.name, rp.name] if xo is xp else [later.name]
+        # the rules of the cause that the later occurrence triggers: those it leaves unanswerable
+        triggers = [n for n in core if self.spec.rule(n).trigger.event == last.event] or [later.name]
+        if later.name not in triggers:
+            later = self.spec.rule(triggers[0])
         if any(  # the same cause, and the same triggers unanswerable, already shown
             f.code == "situational-conflict" and f.rules == core and set(triggers) <= set(f.extra["triggers"])
             for f in self.findings
