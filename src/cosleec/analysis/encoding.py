@@ -135,6 +135,7 @@ class Encoding:
         self.slots: list[Slot] = []
         self.by_event: dict[str, list[Slot]] = {}
         self.fallbacks: list[Fallback] = []
+        self.bans: dict[str, list[_Ban]] = {}
         self.rules_by_event: dict[str, list[A.Rule]] = {}
         for r in spec.rules:
             self.rules_by_event.setdefault(r.trigger.event, []).append(r)
@@ -226,6 +227,7 @@ class Encoding:
         if len(self.slots) > 1:
             self.solver.add(z3.Distinct(*(s.pos for s in self.slots)))
         self._unfolded = True
+        self._register_bans()
         for s in self.slots:
             for r in self.rules_by_event.get(s.event, ()):
                 self.solver.add(z3.Implies(self.rule_lit[r.name], self.rule_holds(r, s)))
@@ -363,7 +365,12 @@ class Encoding:
         return self._response(response, x.t, After(slot=x), x.snap, u)
 
     def _response(
-        self, resp: A.Response | None, start: Z3, after: After, snap: dict[str, Z3], untimed: float | None
+        self,
+        resp: A.Response | None,
+        start: Z3,
+        after: Callable[[Slot], Z3],
+        snap: dict[str, Z3],
+        untimed: float | None,
     ) -> Z3:
         if resp is None:
             return z3.BoolVal(True, self.ctx)
@@ -400,7 +407,12 @@ class Encoding:
         )
 
     def _item(
-        self, it: A.ResponseItem, start: Z3, after: After, snap: dict[str, Z3], untimed: float | None
+        self,
+        it: A.ResponseItem,
+        start: Z3,
+        after: Callable[[Slot], Z3],
+        snap: dict[str, Z3],
+        untimed: float | None,
     ) -> Z3:
         occ = it.occurrence
         lo, hi = self.window(occ, it.otherwise is not None, start, snap, untimed)
@@ -424,7 +436,16 @@ class Encoding:
             ok = z3.Or(ok, self._branch(it.alternative, start, after, snap, untimed))
         if it.otherwise is not None and hi is not None:
             at = z3.If(hi < lo, start, hi)
-            fb = Fallback(at, z3.Not(ok), {m: self._var(m, f"o{next(self._fresh)}") for m in self.measures})
+            fresh = {m: self._var(m, f"o{next(self._fresh)}") for m in self.measures}
+            refused, when, reads = self._refusal(occ.event, lo, hi, start, after, snap)
+            if refused is not None:  # refused: its fallback starts then, not at the deadline
+                ok = z3.And(z3.Not(refused), ok)
+                at = z3.If(refused, when, at)
+                for cond, values in reads:
+                    self.solver.add(
+                        z3.Implies(cond, z3.And(*(fresh[m] == values[m] for m in fresh), self.ctx))
+                    )
+            fb = Fallback(at, z3.Not(ok), fresh)
             self._domain(fb.snap)
             for other in self.fallbacks:
                 self.solver.add(
@@ -437,11 +458,63 @@ class Encoding:
                 if isinstance(rel, A.MeasureRelation):
                     self.solver.add(z3.Implies(lit, self._measure_relation(rel, fb.snap)))
             self.fallbacks.append(fb)
-            ok = z3.Or(ok, self._response(it.otherwise, at, After(at=at), fb.snap, untimed))
+            later = After(at=at) if refused is None else _Refused(at, refused, when, after)
+            ok = z3.Or(ok, self._response(it.otherwise, at, later, fb.snap, untimed))
         return ok
 
+    def _refusal(
+        self, event: str, lo: Z3, hi: Z3, start: Z3, after: Callable[[Slot], Z3], snap: dict[str, Z3]
+    ) -> tuple[Z3 | None, Z3, list[tuple[Z3, dict[str, Z3]]]]:
+        """When a prohibition in force covers an obligation's whole remaining window, the
+        reference semantics refuses it at once (the moment the second of the two is raised)
+        and starts its ``otherwise`` then. Returns (refused, when, [(case, values read)]);
+        prohibitions inside an ``otherwise`` are not counted (only a rule's own clauses)."""
+        cases = []
+        for b in self.bans.get(event, ()):
+            b_later = after(b.slot)  # the prohibition is raised after the obligation
+            now = z3.If(b_later, b.slot.t, start)
+            remaining = z3.If(lo >= now, lo, now)
+            covers = z3.And(b.lo <= remaining, *([hi <= b.hi] if b.hi is not None else []))
+            in_force = z3.And(b.active, now <= hi, *([now <= b.hi] if b.hi is not None else []))
+
+            def before_refusal(y: Slot, b_later: Z3 = b_later, now: Z3 = now, b: _Ban = b) -> Z3:
+                return z3.And(after(y), z3.Or(y.t < now, z3.And(y.t == now, b_later, y.pos < b.slot.pos)))
+
+            met_before = self.occurs(event, lo, hi, before_refusal)
+            cond = z3.And(in_force, covers, z3.Not(met_before))
+            values = {m: z3.If(b_later, b.slot.snap[m], snap[m]) for m in snap}
+            cases.append((cond, now, values))
+        if not cases:
+            return None, None, []
+        refused = z3.Or(*(c for c, _, _ in cases))
+        when = z3.Real(f"refused{next(self._fresh)}", self.ctx)
+        self.solver.add(z3.Implies(refused, z3.Or(*(z3.And(c, when == n) for c, n, _ in cases))))
+        for c, n, _ in cases:
+            self.solver.add(z3.Implies(c, when <= n))
+        reads = [(z3.And(c, when == n), v) for c, n, v in cases]
+        return refused, when, reads
+
+    def _register_bans(self) -> None:
+        """The prohibitions each slot's rules can raise (a clause's own items), for refusals."""
+        for x in self.slots:
+            for r in self.rules_by_event.get(x.event, ()):
+                for k, it in _clause_items(r.response):
+                    occ = it.occurrence
+                    if not occ.negated:
+                        continue
+                    lo, hi = self.window(occ, it.otherwise is not None, x.t, x.snap, self.reading.untimed)
+                    active = z3.And(
+                        self.rule_lit[r.name], self.fires(r, x), self.chosen_at(r.response, k, x.snap)
+                    )
+                    self.bans.setdefault(occ.event, []).append(_Ban(x, active, lo, hi))
+
     def _branch(
-        self, resp: A.Response, start: Z3, after: After, snap: dict[str, Z3], untimed: float | None
+        self,
+        resp: A.Response,
+        start: Z3,
+        after: Callable[[Slot], Z3],
+        snap: dict[str, Z3],
+        untimed: float | None,
     ) -> Z3:
         """An ``else`` alternative: every item of its chosen clause occurs in its own window."""
         if resp.defeaters:
@@ -580,6 +653,39 @@ class Encoding:
     def fresh(self, name: str) -> Z3:
         """A new assumption literal."""
         return z3.Bool(f"{name}!{next(self._fresh)}", self.ctx)
+
+
+@dataclass(frozen=True)
+class _Ban:
+    """A prohibition a rule can raise at ``slot``: in force when ``active``, over ``[lo, hi]``."""
+
+    slot: Slot
+    active: Z3
+    lo: Z3
+    hi: Z3 | None
+
+
+class _Refused:
+    """Which occurrences count for an ``otherwise`` that starts at ``at``: after the
+    refusal when the obligation was refused, else strictly after the deadline."""
+
+    def __init__(self, at: Z3, refused: Z3, when: Z3, creation: Callable[[Slot], Z3]) -> None:
+        self.at, self.refused, self.when, self.creation = at, refused, when, creation
+
+    def __call__(self, y: Slot) -> Z3:
+        """``y`` comes after the fallback's start."""
+        by_refusal = z3.Or(y.t > self.when, z3.And(y.t == self.when, self.creation(y)))
+        return z3.If(self.refused, by_refusal, y.t > self.at)
+
+
+def _clause_items(resp: A.Response) -> Iterator[tuple[int, A.ResponseItem]]:
+    """The top-level items of each clause of a rule's response: (clause, item)."""
+    for it in resp.items:
+        yield 0, it
+    for k, d in enumerate(resp.defeaters, 1):
+        if d.response is not None and not d.response.defeaters:
+            for it in d.response.items:
+                yield k, it
 
 
 def _before(z: Slot, y: Slot) -> Z3:

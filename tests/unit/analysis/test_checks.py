@@ -127,13 +127,6 @@ def test_the_reference_refuses_at_once_an_obligation_whose_window_is_forbidden(
     assert "R1 (default, otherwise) at 0 s: C in [0, 2]" in capsys.readouterr().out
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG encoding.py Encoding._item: an obligation whose whole window a prohibition "
-    "forbids is refused at once by the reference semantics (issue 12, prohibition wins) and "
-    "its otherwise starts then; the encoding starts it at the deadline, so it finds C at 6.5 "
-    "and misses this vacuous conflict",
-)
 def test_an_otherwise_after_a_refusal_starts_at_the_refusal(tmp_path: Path) -> None:
     r = run(tmp_path, OTHERWISE_REFUSED, checks="vacuous-conflict")
     assert subjects(r, "vacuous-conflict") == {"R1", "R2", "R3"}

@@ -155,12 +155,6 @@ def test_witnesses_dir_keeps_every_witness_of_the_curtain_example(
     assert len(list(out.iterdir())) == sum(f.witness is not None for f in findings)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG encoding.py: the reference semantics refuses R1's B at once (R2 forbids its whole "
-    "window) and starts the otherwise at 0, the encoding at the deadline 5; the concern's witness "
-    "(C at 6) is then 'NOT confirmed' (the reference sees C in [0, 2] violated)",
-)
 def test_a_concern_witness_through_a_refused_obligation_is_confirmed(tmp_path: Path) -> None:
     path = tmp_path / "refused.sleec"
     path.write_text(
