@@ -56,7 +56,7 @@ class Settings:
     semantics: HedgeSemantics = HedgeSemantics.LAST_WINS
     untimed: float | None = None
     bound: int = DEFAULT_BOUND
-    timeout: float = 20.0
+    timeout: float = 5.0
     priorities: frozenset[tuple[str, str]] = frozenset()
 
     @property
@@ -114,19 +114,33 @@ class Analysis:
     def deepen(
         self, make: Callable[[int], tuple[Encoding, Any]], without: str | None, what: str
     ) -> tuple[Any, Encoding, Any, list[tuple[str, Any]]] | None:
-        """Ask ``make(bound)``'s goal with every rule (but ``without``) at a small bound first:
-        a trace found there is a proof at any bound, and so is "none" when the unfolding
-        completed; only an inconclusive "none" is asked again at the full bound."""
-        full = self.settings.bound
-        for bound in sorted({min(2, full), full}):
+        """Ask ``make(bound)``'s goal with every rule (but ``without``) at bound 2, 3, 4, ...
+        up to the full bound: a trace found at any bound is a proof, and so is "none" once
+        the unfolding completes; an inconclusive "none" is asked again one bound up. When a
+        larger bound runs out of time, the answer is the last one the solver gave: "none"
+        up to that smaller bound (said in :attr:`unknown`)."""
+        last: tuple[Any, Encoding, Any, list[tuple[str, Any]]] | None = None
+        for bound in self.bounds():
             enc, goal = make(bound)
             cands = self.candidates(enc, without)
-            answer = self.solve(enc, [goal, *(lit for _, lit in cands)], what)
-            if answer is None:
-                return None
-            if answer == z3.sat or enc.complete or bound == full:
-                return answer, enc, goal, cands
-        return None  # pragma: no cover - the loop always returns at the full bound
+            answer = enc.check([goal, *(lit for _, lit in cands)])
+            if answer == z3.unknown:
+                if last is None:
+                    self.unknown.append(f"{what}: the solver gave up ({enc.solver.reason_unknown()})")
+                else:
+                    self.unknown.append(
+                        f"{what}: answered up to bound {last[1].bound} only (bound {bound} ran out of time)"
+                    )
+                return last
+            last = answer, enc, goal, cands
+            if answer == z3.sat or enc.complete:
+                return last
+        return last
+
+    def bounds(self) -> list[int]:
+        """The bounds a question is asked at, in turn: 2, 3, 4, then the full bound."""
+        full = self.settings.bound
+        return sorted({*range(min(2, full), min(4, full) + 1), full})
 
     def candidates(self, enc: Encoding, without: str | None = None) -> list[tuple[str, Any]]:
         """Rules (that some slot can trigger) and relations, as (name, literal), in file order."""
@@ -142,9 +156,23 @@ class Analysis:
         """``names`` (rules) in file order."""
         return tuple(r.name for r in self.spec.rules if r.name in names)
 
+    def core(self, enc: Encoding, goal: Any, cands: list[tuple[str, Any]], what: str) -> tuple[str, ...]:
+        """The minimal cause of an unsatisfiable ``goal``; when the solver runs out of time
+        while minimising, z3's own core (in file order), and :attr:`unknown` says so."""
+        try:
+            return minimal_core(enc, [goal], cands)
+        except Undecided as u:
+            self.unknown.append(f"{what}: the cause shown is not minimised ({u})")
+        names = {str(lit): name for name, lit in cands}
+        if enc.check([goal, *(lit for _, lit in cands)]) == z3.unsat:
+            found = {names[str(x)] for x in enc.solver.unsat_core() if str(x) in names}
+        else:
+            found = set(names.values())
+        return tuple(name for name, _ in cands if name in found)
+
     def status(self, enc: Encoding) -> tuple[str, int | None]:
         """Whether an unsat answer of ``enc`` is a proof, or holds up to the bound."""
-        return (PROVED, None) if enc.complete else (BOUNDED, self.settings.bound)
+        return (PROVED, None) if enc.complete else (BOUNDED, enc.bound)
 
     def span_of(self, name: str) -> A.Span:
         """Where a rule or relation is (relations are ``relation N``)."""
@@ -195,11 +223,7 @@ class Analysis:
                         )
                 continue
             _, enc, goal, cands = asked
-            try:
-                core = minimal_core(enc, [goal], cands)
-            except Undecided as u:
-                self.unknown.append(f"vacuous conflict of {rule.name}: core not minimised ({u})")
-                continue
+            core = self.core(enc, goal, cands, f"vacuous conflict of {rule.name}")
             status, bound = self.status(enc)
             others = [n for n in core if n != rule.name]
             cause = f"because of {', '.join(others)}" if others else "because of its own response"
@@ -238,11 +262,7 @@ class Analysis:
             if asked is None or asked[0] != z3.unsat:
                 continue
             _, enc, goal, cands = asked
-            try:
-                core = minimal_core(enc, [goal], cands)
-            except Undecided as u:
-                self.unknown.append(f"redundancy of {rule.name}: core not minimised ({u})")
-                continue
+            core = self.core(enc, goal, cands, f"redundancy of {rule.name}")
             status, bound = self.status(enc)
             why = (
                 f"the other rules already imply it: {', '.join(core)}"
@@ -291,11 +311,7 @@ class Analysis:
                     )
                 )
             elif kind == "purpose" and answer == z3.unsat:
-                try:
-                    core = minimal_core(enc, [goal], cands)
-                except Undecided as u:
-                    self.unknown.append(f"purpose {s.name}: core not minimised ({u})")
-                    continue
+                core = self.core(enc, goal, cands, f"purpose {s.name}")
                 self.findings.append(
                     Finding(
                         code="purpose-blocked",
@@ -479,14 +495,13 @@ class Analysis:
             if self.solve(enc, [*base, covered, pending, order], "situation") == z3.sat:
                 self._pinned(enc.solver.model(), ro, ko, io, xo, rp, kp, xp)
 
-    def _pinned(
-        self, model: Any, ro: A.Rule, ko: int, io: A.ResponseItem, xo: Slot, rp: A.Rule, kp: int, xp: Slot
-    ) -> None:
-        """The candidate situation of ``model``: the history before the later trigger pinned."""
-        event = io.occurrence.event
-        probes = list(dict.fromkeys([xo, xp]))
-        probes.sort(key=lambda x: (_value(model, x.t), _value(model, x.pos)))
-        fixed = self._new()
+    def _history(
+        self, model: Any, probes: list[Slot], event: str, xo: Slot, xp: Slot, bound: int
+    ) -> tuple[Encoding, Slot, Any, list[tuple[str, Any]], Any] | str | None:
+        """At ``bound``: the pinned history is allowed and the later trigger then cannot be
+        answered -> (encoding, the trigger's slot, goal, candidates, a model of the history);
+        None when not; ``"unknown"`` when the solver ran out of time."""
+        fixed = self._new(bound)
         pinned: dict[int, Slot] = {}
         for n, x in enumerate(probes):
             pinned[x.id] = fixed.probe(x.event) if n + 1 < len(probes) else fixed.free(x.event)
@@ -501,32 +516,52 @@ class Analysis:
             pins.append(pinned[probes[0].id].pos < last.pos)
         if xo is not xp:  # the obligation is still pending when the later trigger comes
             so = pinned[xo.id]
-            pins.append(
-                z3.Not(
-                    z3.Or(
-                        *(
-                            z3.And(y.present, After(slot=so)(y), z3.Not(After(slot=last)(y)))
-                            for y in fixed.by_event.get(event, ())
-                        )
-                    )
-                )
-            )
+            between = [
+                z3.And(y.present, After(slot=so)(y), z3.Not(After(slot=last)(y)))
+                for y in fixed.by_event.get(event, ())
+            ]
+            pins.append(z3.Not(z3.Or(*between, fixed.ctx)))
         history, situation_goal = fixed.fresh("history"), fixed.fresh("situation")
         fixed.solver.add(z3.Implies(history, z3.And(*pins, z3.Not(last.present))))
         fixed.solver.add(z3.Implies(situation_goal, z3.And(*pins, last.present)))
         cands = self.candidates(fixed)
         lits = [lit for _, lit in cands]
-        if self.solve(fixed, [history, *lits], "situational conflict: the history") != z3.sat:
-            return  # the rules do not allow the history itself
+        answer = fixed.check([history, *lits])
+        if answer != z3.sat:
+            return "unknown" if answer == z3.unknown else None
         allowed = fixed.solver.model()
-        if self.solve(fixed, [situation_goal, *lits], "situational conflict") != z3.unsat:
+        answer = fixed.check([situation_goal, *lits])
+        if answer != z3.unsat:
+            return "unknown" if answer == z3.unknown else None
+        return fixed, last, situation_goal, cands, allowed
+
+    def _pinned(
+        self, model: Any, ro: A.Rule, ko: int, io: A.ResponseItem, xo: Slot, rp: A.Rule, kp: int, xp: Slot
+    ) -> None:
+        """The candidate situation of ``model``: the history before the later trigger pinned."""
+        event = io.occurrence.event
+        probes = list(dict.fromkeys([xo, xp]))
+        probes.sort(key=lambda x: (_value(model, x.t), _value(model, x.pos)))
+        built: tuple[Encoding, Slot, Any, list[tuple[str, Any]], Any] | None = None
+        for b in self.bounds():
+            attempt = self._history(model, probes, event, xo, xp, b)
+            if attempt is None:
+                return  # the rules do not allow the history, or the trigger can be answered
+            if isinstance(attempt, str):  # out of time: the last answer stands, up to its bound
+                if built is not None:
+                    self.unknown.append(
+                        f"situational conflict: answered up to bound {built[0].bound} only "
+                        f"(bound {b} ran out of time)"
+                    )
+                break
+            built = attempt
+            if built[0].complete:
+                break
+        if built is None:
             return
+        fixed, last, situation_goal, cands, allowed = built
         later = ro if probes[-1] is xo else rp
-        try:
-            core = minimal_core(fixed, [situation_goal], cands)
-        except Undecided as u:
-            self.unknown.append(f"situational conflict of {later.name}: core not minimised ({u})")
-            return
+        core = self.core(fixed, situation_goal, cands, f"situational conflict of {later.name}")
         if any(f.code == "vacuous-conflict" and f.subject in core for f in self.findings):
             return
         # the rules of the cause that the later occurrence triggers: those it leaves unanswerable

@@ -61,9 +61,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument(
         "--timeout",
         type=_seconds,
-        default=20.0,
+        default=5.0,
         metavar="S",
-        help="seconds each solver question may take (default 20); unanswered ones are listed",
+        help="seconds each solver question may take (default 5); unanswered ones are listed",
     )
     p.add_argument(
         "--untimed",
