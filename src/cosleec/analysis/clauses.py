@@ -15,7 +15,7 @@ import z3
 from cosleec.analysis.checks import Analysis
 from cosleec.analysis.encoding import Encoding, Slot
 from cosleec.analysis.findings import PROVED, Finding
-from cosleec.analysis.witness import reads, snapshot, witness
+from cosleec.analysis.witness import reads, show, snapshot, witness
 from cosleec.lang import HedgeSemantics, Severity
 from cosleec.lang import ast as A
 from cosleec.semantics import Judgement
@@ -142,13 +142,20 @@ def negative_deadlines(a: Analysis) -> None:
                 continue
             model = enc.solver.model()
             situation = _values(enc, model, x, rule)
+            what = "prohibition" if it.occurrence.negated else "obligation"
+            then = "respected" if it.occurrence.negated else "violated"
+            if lim.lo is None:
+                window = f"its deadline is {show(model, hi)} seconds"
+            else:
+                window = (
+                    f"its window is [{show(model, enc.seconds(lim.lo, x.snap))}, {show(model, hi)}] seconds"
+                )
             a.findings.append(
                 Finding(
                     code="negative-deadline",
                     subject=rule.name,
-                    message=f"the deadline of `{it.occurrence.event}` in {rule.name} can be negative: with "
-                    f"{situation}, it is {model.eval(hi, model_completion=True)} seconds (the obligation is then "
-                    "violated at once)",
+                    message=f"the window of `{it.occurrence.event}` in {rule.name} can close before it opens: with "
+                    f"{situation}, {window} (the {what} is then {then} at once)",
                     path=a.spec.path,
                     span=lim.span or it.occurrence.span,
                     rules=(rule.name,),

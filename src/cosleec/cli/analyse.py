@@ -24,6 +24,7 @@ from cosleec.analysis import CHECKS, DEFAULT_BOUND, Coverage, FileReport, Settin
 from cosleec.cli.common import add_clause_options, add_priority_options, console, expand
 from cosleec.errors import UserError
 from cosleec.lang import HedgeSemantics, SleecError, cycle, load, parse_priority
+from cosleec.lang import analyse_file as check_file
 
 USAGE_ERROR = 2
 STYLE = {"error": "bold red", "warning": "yellow", "note": "cyan"}
@@ -122,6 +123,8 @@ def _checks(text: str | None) -> list[str]:
                 hint="one or more of: " + ", ".join(CHECKS),
             )
         out.append(name)
+    if not out:
+        raise UserError("--check names no check", hint="one or more of: " + ", ".join(CHECKS))
     return out
 
 
@@ -154,6 +157,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"cosleec: the priorities given form a cycle: {' > '.join(loop)}", file=sys.stderr)
         return USAGE_ERROR
     files = expand(args.files)
+    unknown = _unknown_rules(given, files, args.legos_compat)
+    if unknown:
+        print(f"cosleec: {unknown}", file=sys.stderr)
+        return USAGE_ERROR
     settings = Settings(
         semantics=HedgeSemantics(args.semantics),
         untimed=untimed,
@@ -179,6 +186,25 @@ def run(args: argparse.Namespace) -> int:
     if any(r.failed for r in reports):
         return 1
     return 1 if any(r.findings for r in reports) else 0
+
+
+def _unknown_rules(given: list[tuple[str, str]], files: list[Path], legos_compat: bool) -> str:
+    """A message naming a --priority rule no file declares (with the closest names), or ''."""
+    if not given:
+        return ""
+    names: set[str] = set()
+    for f in files:
+        result = check_file(f, legos_compat=legos_compat)
+        if result.spec is not None:
+            names.update(r.name for r in result.spec.rules)
+    for pair in given:
+        for name in pair:
+            if name not in names:
+                close = difflib.get_close_matches(name, sorted(names), n=3)
+                return f"--priority names rule {name[:40]!r}, which no file declares" + (
+                    f" (did you mean {', '.join(close)}?)" if close else ""
+                )
+    return ""
 
 
 def _coverage(args: argparse.Namespace, path: Path) -> Coverage | None:

@@ -121,7 +121,9 @@ def composition(g: GlobalState, d: Frame) -> tuple[Layer, ...]:
             ages = dict.fromkeys(comp, 0)  # captured layers: older than any activated inside
             for layer, stamp in d.added:
                 ages[layer] = max(stamp, ages.get(layer, 0))
-            comp = tuple(sorted(ages, key=lambda la: (-la.priority, -ages[la])))  # stable: keeps capture order
+            comp = tuple(
+                sorted(ages, key=lambda la: (-la.priority, -ages[la]))
+            )  # stable: keeps capture order
     else:
         stamped: dict[Layer, int] = {}
         for layer, stamp in g.layers:

@@ -127,7 +127,13 @@ class Node:
         self.session = uuid.uuid4().hex
         self._sender = uuid.uuid4().hex[:16]  # numbers what this node object publishes (_from, _n)
         # errors: messages a handler failed on in a way no message should cause (our bugs)
-        self.counters: dict[str, int] = {"received": 0, "processed": 0, "rejected": 0, "published": 0, "errors": 0}
+        self.counters: dict[str, int] = {
+            "received": 0,
+            "processed": 0,
+            "rejected": 0,
+            "published": 0,
+            "errors": 0,
+        }
         self._count_lock = threading.Lock()
         self._status_lock = threading.RLock()  # snapshots are published in the order they are taken
         self._status_seq = 0

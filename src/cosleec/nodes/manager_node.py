@@ -75,7 +75,9 @@ class ManagerNode(Node):
         # deployment the heartbeat (every 0.5 s) is enough and keeps the hot path short
         self.status_each = status_each
         self.clock: Clock = VirtualClock() if sim_time else MonotonicClock()
-        self.manager = Manager(rules, clock=self.clock, semantics=semantics, audit=audit, dispatch=False, **manager_kw)
+        self.manager = Manager(
+            rules, clock=self.clock, semantics=semantics, audit=audit, dispatch=False, **manager_kw
+        )
         # with a journal, decision ids go on across restarts: so does the session task nodes
         # de-duplicate by, and a decision published again after a restart is not run twice
         self.session = self.manager.lineage

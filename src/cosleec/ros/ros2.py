@@ -182,7 +182,10 @@ class Ros2Transport:
         """
         cls = message_class(type_name)
         sub = self.node.create_subscription(
-            cls, topic, self._guard.wrap(topic, lambda m: handler(to_dict(m))), self._qos(False),
+            cls,
+            topic,
+            self._guard.wrap(topic, lambda m: handler(to_dict(m))),
+            self._qos(False),
             event_callbacks=self._events(),
         )
         self._subs.append(sub)

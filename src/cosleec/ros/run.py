@@ -51,7 +51,8 @@ def load_module(name: str) -> Any:
         return importlib.import_module(name)
     except ImportError as e:
         raise UserError(
-            f"cannot import task module {name!r}: {e}", hint="check --module and that the module is on PYTHONPATH"
+            f"cannot import task module {name!r}: {e}",
+            hint="check --module and that the module is on PYTHONPATH",
         ) from None
 
 

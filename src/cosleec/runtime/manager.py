@@ -275,7 +275,9 @@ class Manager:
             priority_lead,
         )
         self.tracker.by_instance = bool(self.priorities.above)  # priorities act on activations
-        self.tracker.keep_started = self.priorities.semantics == CONFLICT_AWARE and bool(self.priorities.above)
+        self.tracker.keep_started = self.priorities.semantics == CONFLICT_AWARE and bool(
+            self.priorities.above
+        )
         self._held: dict[int, _Job] = {}  # decisions whose action is forbidden for now, by id
         self._cut: tuple[int, tuple[float, Tracked, str] | None] | None = None  # (tracker version, forced())
         # held decisions as last examined: (tracker version, when the next interval opens)

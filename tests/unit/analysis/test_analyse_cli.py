@@ -188,3 +188,34 @@ def test_the_analyze_spelling_and_legos_compat(tmp_path: Path, capsys: pytest.Ca
     assert main(["analyze", str(path)]) == 0
     assert main(["analyse", "--legos-compat", str(path)]) == 0
     capsys.readouterr()
+
+
+def test_a_check_list_that_names_no_check_is_a_usage_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = write(tmp_path, CONFLICT)
+    for empty in (",", " , ", ""):
+        rc, _, err = _run(capsys, "--check", empty, str(path))
+        assert rc == 2 and "names no check" in err
+
+
+def test_a_priority_naming_a_rule_no_file_declares_is_a_usage_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = write(tmp_path, CONFLICT)
+    rc, _, err = _run(capsys, "--priority", "R1 > R3", str(path))
+    assert rc == 2 and "'R3'" in err and "no file declares" in err
+    rc, _, err = _run(capsys, "--priority", "Rx1 > R2", str(path))
+    assert rc == 2 and "did you mean R1" in err
+    rc, out, _ = _run(capsys, "--priority", "R1 > R2", "--check", "runtime-conflict", str(path))
+    assert rc == 0 and "no findings" in out  # a priority the file declares settles the conflict
+
+
+def test_an_interval_that_can_close_before_it_opens_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rules = sleec("R1 when A then B within [{d} seconds, 10 seconds]")
+    path = tmp_path / "interval.sleec"
+    path.write_text(rules)
+    rc, out, _ = _run(capsys, "--check", "negative-deadline", str(path))
+    assert rc == 1 and re.search(r"its window is \[\d+(\.\d+)?, 10\] seconds", out), out
