@@ -30,6 +30,7 @@ question; cores may name them.
 from __future__ import annotations
 
 import functools
+import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -80,6 +81,7 @@ class Analysis:
     findings: list[Finding] = field(default_factory=list)
     unknown: list[str] = field(default_factory=list)
     _by_event: dict[tuple[str, int], Encoding] = field(default_factory=dict)
+    situational_seconds: float = 0.0  # the part of runtime_conflicts spent on situations
     # one z3 context per file: terms built for another file cannot change this one's answers
     ctx: z3.Context = field(default_factory=z3.Context)
 
@@ -225,6 +227,24 @@ class Analysis:
             _, enc, goal, cands = asked
             core = self.core(enc, goal, cands, f"vacuous conflict of {rule.name}")
             status, bound = self.status(enc)
+            if all(n.startswith("relation ") for n in core):  # no rule needed: the condition never holds
+                self.findings.append(
+                    Finding(
+                        code="dead-rule",
+                        subject=rule.name,
+                        message=f"rule {rule.name} can never fire: its trigger condition never holds"
+                        + (f" (given {', '.join(core)})" if core else ""),
+                        path=self.spec.path,
+                        span=rule.trigger.condition.span if rule.trigger.condition is not None else rule.span,
+                        rules=(rule.name, *core),
+                        related=self.related(core),
+                        hint="correct the condition (a comparison the wrong way round, a constant, a literal of "
+                        "another scale), or remove the rule",
+                        status=PROVED,
+                        severity=Severity.WARNING,
+                    )
+                )
+                continue
             others = [n for n in core if n != rule.name]
             cause = f"because of {', '.join(others)}" if others else "because of its own response"
             self.findings.append(
@@ -410,8 +430,10 @@ class Analysis:
                 )
             )
             if situational:  # one occurrence triggering both, and two occurrences
+                t0 = time.perf_counter()
                 for enc, xo, xp, base, (lo, hi, plo, phi) in found:
                     self._situational(enc, ro, ko, io, xo, rp, kp, ip, xp, base, lo, hi, plo, phi)
+                self.situational_seconds += time.perf_counter() - t0
 
     def _clash(
         self, ro: A.Rule, ko: int, io: A.ResponseItem, rp: A.Rule, kp: int, ip: A.ResponseItem

@@ -21,6 +21,7 @@ BOUNDED = "bounded"
 
 CHECKS: dict[str, str] = {
     "vacuous-conflict": "a rule whose trigger can never occur without some rule being broken (N-Check)",
+    "dead-rule": "a rule whose trigger condition can never hold (given measure domains and relations)",
     "situational-conflict": "a legal situation after which a rule's trigger cannot be answered (N-Check)",
     "redundant": "a rule the other rules already imply (N-Check)",
     "concern-raised": "an undesirable situation (concern) the rules allow, with a witness (N-Check)",
