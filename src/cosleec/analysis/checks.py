@@ -267,8 +267,11 @@ class Analysis:
             )
 
     def redundancies(self) -> None:
-        """Rules the other rules already imply."""
+        """Rules the other rules already imply (a dead rule, already reported, is not repeated)."""
+        dead = {f.subject for f in self.findings if f.code == "dead-rule"}
         for rule in self.spec.rules:
+            if rule.name in dead:
+                continue
 
             def make(bound: int, rule: A.Rule = rule) -> tuple[Encoding, Any]:
                 enc, x = self.encoding(rule.trigger.event, bound)
@@ -423,8 +426,13 @@ class Analysis:
                     span=io.occurrence.span or ro.span,
                     rules=self.in_order({ro.name, rp.name}),
                     related=((f"{_clause(rp.name, kp)} forbids `{event}` here", ip.occurrence.span),),
-                    hint=f"declare which prevails (priority_start {ro.name} > {rp.name} priority_end), or "
-                    "separate the clauses' conditions",
+                    hint=(
+                        f"declare which prevails (priority_start {ro.name} > {rp.name} priority_end), or "
+                        "separate the clauses' conditions"
+                        if not same
+                        else "separate the clauses' conditions, or shorten the prohibition so that a later "
+                        "activation can still be answered"
+                    ),
                     status=PROVED,
                     witness=w,
                 )

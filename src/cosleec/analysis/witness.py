@@ -162,7 +162,7 @@ def _has_fallback(spec: Specification, key: str) -> bool:
 def timeline(spec: Specification, trace: Sequence[Step], j: Judgement, *, limit: int = 40) -> list[str]:
     """The trace as lines a person reads: the values the rules that fired read (each when it
     changes), what occurred, and what the reference semantics made of each obligation."""
-    fired = {f.rule for f in j.firings if f.fired is not None}
+    fired = {f.rule for f in j.firings if f.fired}
     shown = set().union(*(reads(r) for r in spec.rules if r.name in fired)) if fired else set()
     out: list[str] = []
     last: dict[str, object] = {}
