@@ -38,7 +38,7 @@ from typing import Any
 import z3
 
 from cosleec.analysis.cores import Undecided, minimal_core
-from cosleec.analysis.encoding import After, Encoding, Reading, Slot
+from cosleec.analysis.encoding import After, Encoding, Reading, Slot, clause_items
 from cosleec.analysis.findings import BOUNDED, PROVED, Finding
 from cosleec.analysis.witness import reads as _reads
 from cosleec.analysis.witness import show, smallest, snapshot, then, witness
@@ -387,7 +387,7 @@ class Analysis:
         owes: dict[str, list[tuple[A.Rule, int, A.ResponseItem]]] = {}
         bans: dict[str, list[tuple[A.Rule, int, A.ResponseItem]]] = {}
         for r in self.spec.rules:
-            for k, it in _clause_items(r.response):
+            for k, it in clause_items(r.response):
                 (bans if it.occurrence.negated else owes).setdefault(it.occurrence.event, []).append(
                     (r, k, it)
                 )
@@ -659,16 +659,6 @@ def _overlap(j: Any, event: str, owing: str, banning: str) -> bool:
 
 def _clause(rule: str, k: int) -> str:
     return rule if k == 0 else f"{rule}.{k}"
-
-
-def _clause_items(resp: A.Response) -> Iterator[tuple[int, A.ResponseItem]]:
-    """The top-level items of each clause of a rule's response: (clause, item)."""
-    for it in resp.items:
-        yield 0, it
-    for k, d in enumerate(resp.defeaters, 1):
-        if d.response is not None and not d.response.defeaters:
-            for it in d.response.items:
-                yield k, it
 
 
 def _as_rule(s: A.Situation) -> A.Rule:

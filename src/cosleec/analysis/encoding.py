@@ -40,7 +40,7 @@ from __future__ import annotations
 import itertools
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import z3
@@ -498,7 +498,7 @@ class Encoding:
         """The prohibitions each slot's rules can raise (a clause's own items), for refusals."""
         for x in self.slots:
             for r in self.rules_by_event.get(x.event, ()):
-                for k, it in _clause_items(r.response):
+                for k, it in clause_items(r.response):
                     occ = it.occurrence
                     if not occ.negated:
                         continue
@@ -678,7 +678,7 @@ class _Refused:
         return z3.If(self.refused, by_refusal, y.t > self.at)
 
 
-def _clause_items(resp: A.Response) -> Iterator[tuple[int, A.ResponseItem]]:
+def clause_items(resp: A.Response) -> Iterator[tuple[int, A.ResponseItem]]:
     """The top-level items of each clause of a rule's response: (clause, item)."""
     for it in resp.items:
         yield 0, it
@@ -707,13 +707,3 @@ def _occurrences(resp: A.Response | None, *, everything: bool) -> Iterator[tuple
         yield from _occurrences(it.alternative, everything=everything)
     for d in resp.defeaters:
         yield from _occurrences(d.response, everything=everything)
-
-
-@dataclass
-class Outcome:
-    """The answer to one question: ``sat`` (a trace exists), ``unsat`` or ``unknown``."""
-
-    status: str
-    model: Z3 = None
-    core: tuple[str, ...] = ()
-    extra: dict[str, Any] = field(default_factory=dict)

@@ -15,7 +15,7 @@ from pathlib import Path
 from cosleec.analysis import clauses
 from cosleec.analysis.checks import Analysis, Settings
 from cosleec.analysis.findings import CHECKS, PROVED, FileReport, Finding
-from cosleec.lang import CheckResult, Severity, Specification
+from cosleec.lang import CheckResult, Severity, Specification, visit
 from cosleec.lang import analyse_file as check_file
 from cosleec.lang import ast as A
 
@@ -162,38 +162,10 @@ def _unproduced(kind: str, name: str, rule: A.Rule, path: str, span: A.Span) -> 
 
 
 def _measures_read(rule: A.Rule, measures: set[str]) -> list[tuple[str, A.Span]]:
-    out: list[tuple[str, A.Span]] = []
-
-    def expr(e: A.Expr | None) -> None:
-        if e is None:
-            return
-        if isinstance(e, A.Name):
-            if e.name in measures:
-                out.append((e.name, e.span))
-        elif isinstance(e, A.Not):
-            expr(e.operand)
-        elif isinstance(e, A.BinOp | A.Compare):
-            expr(e.left)
-            expr(e.right)
-
-    def resp(r: A.Response | None) -> None:
-        if r is None:
-            return
-        for it in r.items:
-            lim = it.occurrence.limit
-            if lim is not None:
-                expr(lim.hi.value)
-                if lim.lo is not None:
-                    expr(lim.lo.value)
-            resp(it.otherwise)
-            resp(it.alternative)
-        for d in r.defeaters:
-            expr(d.condition)
-            resp(d.response)
-
-    expr(rule.trigger.condition)
-    resp(rule.response)
-    return out
+    """The measures ``rule`` reads, each where it is read."""
+    return [
+        (n.name, n.span) for e in visit.rule_expressions(rule) for n in visit.names(e) if n.name in measures
+    ]
 
 
 __all__ = ["PROVED", "Coverage", "analyse_file", "analyse_spec"]

@@ -16,7 +16,7 @@ import z3
 
 from cosleec.analysis.encoding import Encoding
 from cosleec.analysis.findings import Witness
-from cosleec.lang import Specification
+from cosleec.lang import Specification, visit
 from cosleec.lang import ast as A
 from cosleec.semantics import Judgement, Options, Step, Value, judge
 
@@ -191,34 +191,7 @@ def timeline(spec: Specification, trace: Sequence[Step], j: Judgement, *, limit:
 
 def reads(rule: A.Rule) -> set[str]:
     """The names a rule's conditions and deadlines mention (measures among them)."""
-    out: set[str] = set()
-
-    def expr(e: A.Expr | None) -> None:
-        if isinstance(e, A.Name):
-            out.add(e.name)
-        elif isinstance(e, A.Not):
-            expr(e.operand)
-        elif isinstance(e, A.BinOp | A.Compare):
-            expr(e.left)
-            expr(e.right)
-
-    def resp(r: A.Response | None) -> None:
-        if r is None:
-            return
-        for it in r.items:
-            if it.occurrence.limit is not None:
-                expr(it.occurrence.limit.hi.value)
-                if it.occurrence.limit.lo is not None:
-                    expr(it.occurrence.limit.lo.value)
-            resp(it.otherwise)
-            resp(it.alternative)
-        for d in r.defeaters:
-            expr(d.condition)
-            resp(d.response)
-
-    expr(rule.trigger.condition)
-    resp(rule.response)
-    return out
+    return {n.name for e in visit.rule_expressions(rule) for n in visit.names(e)}
 
 
 def snapshot(enc: Encoding, model: Any, snap: dict[str, Any], names: set[str]) -> str:

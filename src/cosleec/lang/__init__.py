@@ -17,7 +17,7 @@ Other packages import from here only; the pipeline itself is in frontend.py.
 
 from __future__ import annotations
 
-from cosleec.lang import ast, priorities
+from cosleec.lang import ast, priorities, visit
 from cosleec.lang.ast import Dialect, Specification
 from cosleec.lang.checker import Options, SymbolTable, check
 from cosleec.lang.diagnostics import Diagnostic, DiagnosticSink, Severity, SleecError
@@ -71,4 +71,5 @@ __all__ = [
     "parse_priority",
     "priorities",
     "read_source",
+    "visit",
 ]

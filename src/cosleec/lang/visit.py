@@ -1,4 +1,5 @@
-"""Walks over the AST, for passes that need one kind of node at a time (declaration inference)."""
+"""Walks over the AST, for passes that need one kind of node at a time (declaration inference,
+the analysis's witnesses and coverage checks)."""
 
 from __future__ import annotations
 
@@ -117,3 +118,23 @@ def event_references(spec: A.Specification) -> Iterator[tuple[str, A.Span]]:
             yield rel.event, rel.span
         elif isinstance(rel, A.UntilRelation):
             yield rel.until_event, rel.span
+
+
+def names(e: A.Expr | None) -> Iterator[A.Name]:
+    """Every name an expression mentions (measures, constants, scale literals), in order."""
+    if isinstance(e, A.Name):
+        yield e
+    elif isinstance(e, A.Not):
+        yield from names(e.operand)
+    elif isinstance(e, A.BinOp | A.Compare):
+        yield from names(e.left)
+        yield from names(e.right)
+
+
+def rule_expressions(rule: A.Rule) -> Iterator[A.Expr]:
+    """What a rule reads: its trigger condition, its clauses' conditions, its deadlines."""
+    if rule.trigger.condition is not None:
+        yield rule.trigger.condition
+    yield from response_conditions(rule.response)
+    for d in durations(rule.response):
+        yield d.value
