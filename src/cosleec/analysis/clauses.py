@@ -135,9 +135,9 @@ def negative_deadlines(a: Analysis) -> None:
             else:  # an otherwise reads the values at its own start: any values
                 base = [enc.assumptions(x.snap), *enc.relation_lit]
             hi = enc.seconds(lim.hi, x.snap)
-            bad = hi < 0
+            bad = hi < 0  # the window ends before the step that raised it: closed at once
             if lim.lo is not None:
-                bad = z3.Or(bad, enc.seconds(lim.lo, x.snap) < 0, hi < enc.seconds(lim.lo, x.snap))
+                bad = z3.Or(bad, hi < enc.seconds(lim.lo, x.snap))  # ends before it starts
             if a.solve(enc, [*base, bad], f"deadline in {rule.name}") != z3.sat:
                 continue
             model = enc.solver.model()

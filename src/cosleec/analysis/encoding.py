@@ -50,6 +50,10 @@ from cosleec.lang import ast as A
 
 Z3 = Any  # z3's Python API is untyped
 
+MAX_SECONDS = 1e10
+"""The longest deadline the reference semantics reads (about 317 years); a longer one is
+unknown there, and the response that has it imposes nothing (``semantics.reference``)."""
+
 
 @dataclass(frozen=True)
 class Reading:
@@ -375,12 +379,33 @@ class Encoding:
         if resp is None:
             return z3.BoolVal(True, self.ctx)
         if not resp.defeaters:
-            return z3.And(*(self._item(it, start, after, snap, untimed) for it in resp.items), self.ctx)
+            items = z3.And(*(self._item(it, start, after, snap, untimed) for it in resp.items), self.ctx)
+            known = self._in_range(resp, snap)
+            return items if known is None else z3.Or(z3.Not(known), items)
         conds = self.chosen(resp.defeaters, snap)
         parts = [z3.Implies(conds[0], self._response(A.Response(resp.items), start, after, snap, untimed))]
         for d, cond in zip(resp.defeaters, conds[1:]):
             parts.append(z3.Implies(cond, self._response(d.response, start, after, snap, untimed)))
         return z3.And(*parts, self.ctx)
+
+    def _in_range(self, resp: A.Response, snap: dict[str, Z3]) -> Z3 | None:
+        """The deadlines of ``resp``'s items are at most :data:`MAX_SECONDS` long (None: they
+        always are). A longer one is unknown to the reference semantics, and a response that
+        has one imposes nothing."""
+        parts = []
+        for it in resp.items:
+            lim = it.occurrence.limit
+            for d in () if lim is None else (lim.hi, lim.lo):
+                if d is None:
+                    continue
+                v = self.seconds(d, snap)
+                simple = z3.simplify(v)
+                if (z3.is_rational_value(simple) or z3.is_int_value(simple)) and abs(
+                    _fraction(simple)
+                ) <= MAX_SECONDS:
+                    continue
+                parts.append(z3.And(v >= -MAX_SECONDS, v <= MAX_SECONDS))
+        return z3.And(*parts) if parts else None
 
     def window(
         self, occ: A.Occurrence, has_otherwise: bool, start: Z3, snap: dict[str, Z3], untimed: float | None
@@ -437,7 +462,11 @@ class Encoding:
         if it.otherwise is not None and hi is not None:
             at = z3.If(hi < lo, start, hi)
             fresh = {m: self._var(m, f"o{next(self._fresh)}") for m in self.measures}
-            refused, when, reads = self._refusal(occ.event, lo, hi, start, after, snap)
+            refused, when, reads = (
+                self._refusal(occ.event, lo, hi, start, after, snap)
+                if it.alternative is None  # an `else` may still meet it: never refused
+                else (None, None, [])
+            )
             if refused is not None:  # refused: its fallback starts then, not at the deadline
                 ok = z3.And(z3.Not(refused), ok)
                 at = z3.If(refused, when, at)
@@ -458,7 +487,7 @@ class Encoding:
                 if isinstance(rel, A.MeasureRelation):
                     self.solver.add(z3.Implies(lit, self._measure_relation(rel, fb.snap)))
             self.fallbacks.append(fb)
-            later = After(at=at) if refused is None else _Refused(at, refused, when, after)
+            later = _FallbackStart(at, hi < lo, after, refused, when)
             ok = z3.Or(ok, self._response(it.otherwise, at, later, fb.snap, untimed))
         return ok
 
@@ -476,6 +505,18 @@ class Encoding:
             remaining = z3.If(lo >= now, lo, now)
             covers = z3.And(b.lo <= remaining, *([hi <= b.hi] if b.hi is not None else []))
             in_force = z3.And(b.active, now <= hi, *([now <= b.hi] if b.hi is not None else []))
+            # a prohibition already broken before the obligation was raised is no longer in force
+            broken = [
+                z3.And(
+                    y.present,
+                    b.lo <= y.t,
+                    *([y.t <= b.hi] if b.hi is not None else []),
+                    After(slot=b.slot)(y),
+                    z3.Not(after(y)),
+                )
+                for y in self.by_event.get(event, ())
+            ]
+            in_force = z3.And(in_force, z3.Not(z3.And(z3.Not(b_later), z3.Or(*broken, self.ctx))))
 
             def before_refusal(y: Slot, b_later: Z3 = b_later, now: Z3 = now, b: _Ban = b) -> Z3:
                 return z3.And(after(y), z3.Or(y.t < now, z3.And(y.t == now, b_later, y.pos < b.slot.pos)))
@@ -665,17 +706,24 @@ class _Ban:
     hi: Z3 | None
 
 
-class _Refused:
-    """Which occurrences count for an ``otherwise`` that starts at ``at``: after the
-    refusal when the obligation was refused, else strictly after the deadline."""
+class _FallbackStart:
+    """Which occurrences count for an ``otherwise``: strictly after the deadline it follows;
+    after the step that raised the obligation when its window closed at once (a negative
+    deadline); after the refusal when a prohibition refused the obligation."""
 
-    def __init__(self, at: Z3, refused: Z3, when: Z3, creation: Callable[[Slot], Z3]) -> None:
-        self.at, self.refused, self.when, self.creation = at, refused, when, creation
+    def __init__(
+        self, at: Z3, closed_at_once: Z3, creation: Callable[[Slot], Z3], refused: Z3 | None, when: Z3
+    ) -> None:
+        self.at, self.closed_at_once, self.creation = at, closed_at_once, creation
+        self.refused, self.when = refused, when
 
     def __call__(self, y: Slot) -> Z3:
         """``y`` comes after the fallback's start."""
+        plain = z3.If(self.closed_at_once, self.creation(y), y.t > self.at)
+        if self.refused is None:
+            return plain
         by_refusal = z3.Or(y.t > self.when, z3.And(y.t == self.when, self.creation(y)))
-        return z3.If(self.refused, by_refusal, y.t > self.at)
+        return z3.If(self.refused, by_refusal, plain)
 
 
 def clause_items(resp: A.Response) -> Iterator[tuple[int, A.ResponseItem]]:
@@ -686,6 +734,13 @@ def clause_items(resp: A.Response) -> Iterator[tuple[int, A.ResponseItem]]:
         if d.response is not None and not d.response.defeaters:
             for it in d.response.items:
                 yield k, it
+
+
+def _fraction(v: Z3) -> float:
+    """A z3 number as a float."""
+    if z3.is_int_value(v):
+        return float(v.as_long())
+    return float(v.numerator_as_long()) / float(v.denominator_as_long())
 
 
 def _before(z: Slot, y: Slot) -> Z3:
