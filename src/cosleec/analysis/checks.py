@@ -42,7 +42,7 @@ from cosleec.analysis.encoding import After, Encoding, Reading, Slot, clause_ite
 from cosleec.analysis.findings import BOUNDED, PROVED, Finding
 from cosleec.analysis.witness import reads as _reads
 from cosleec.analysis.witness import show, smallest, snapshot, then, witness
-from cosleec.lang import HedgeSemantics, Severity, Specification, closure, pairs
+from cosleec.lang import CANCEL, HedgeSemantics, Severity, Specification, closure, pairs
 from cosleec.lang import ast as A
 from cosleec.semantics import Options
 
@@ -59,6 +59,7 @@ class Settings:
     bound: int = DEFAULT_BOUND
     timeout: float = 5.0
     priorities: frozenset[tuple[str, str]] = frozenset()
+    priority_semantics: str = CANCEL
 
     @property
     def reading(self) -> Reading:
@@ -68,7 +69,12 @@ class Settings:
     @property
     def options(self) -> Options:
         """The reference semantics' view (for judging witnesses)."""
-        return Options(semantics=self.semantics, untimed=self.untimed)
+        return Options(
+            semantics=self.semantics,
+            untimed=self.untimed,
+            priorities=self.priorities,
+            priority_semantics=self.priority_semantics,
+        )
 
 
 @dataclass
@@ -81,9 +87,13 @@ class Analysis:
     findings: list[Finding] = field(default_factory=list)
     unknown: list[str] = field(default_factory=list)
     _by_event: dict[tuple[str, int], Encoding] = field(default_factory=dict)
+    above: frozenset[tuple[str, str]] = frozenset()  # declared priorities, closed (set at start)
     situational_seconds: float = 0.0  # the part of runtime_conflicts spent on situations
     # one z3 context per file: terms built for another file cannot change this one's answers
     ctx: z3.Context = field(default_factory=z3.Context)
+
+    def __post_init__(self) -> None:
+        self.above = frozenset(closure([*self.settings.priorities, *pairs(self.spec)]))
 
     # ------------------------------------------------------------------ helpers
     def encoding(self, event: str, bound: int) -> tuple[Encoding, Slot]:
@@ -158,6 +168,17 @@ class Analysis:
         """``names`` (rules) in file order."""
         return tuple(r.name for r in self.spec.rules if r.name in names)
 
+    def left_to_priority(self, what: str, names: tuple[str, ...]) -> bool:
+        """Whether a rule of ``names`` is the lower rule of a declared priority: the runtime
+        may then cancel it, which the encoding does not model, so the finding is not shown as
+        proved but listed as left to the priority (in :attr:`unknown`)."""
+        lower = sorted({(h, low) for h, low in self.above if low in names})
+        if not lower:
+            return False
+        said = ", ".join(f"{h} > {low}" for h, low in lower)
+        self.unknown.append(f"{what}: left to the declared priority {said} (cancellations are not analysed)")
+        return True
+
     def core(self, enc: Encoding, goal: Any, cands: list[tuple[str, Any]], what: str) -> tuple[str, ...]:
         """The minimal cause of an unsatisfiable ``goal``; when the solver runs out of time
         while minimising, z3's own core (in file order), and :attr:`unknown` says so."""
@@ -226,6 +247,8 @@ class Analysis:
                 continue
             _, enc, goal, cands = asked
             core = self.core(enc, goal, cands, f"vacuous conflict of {rule.name}")
+            if self.left_to_priority(f"vacuous conflict of {rule.name}", (rule.name, *core)):
+                continue
             status, bound = self.status(enc)
             if all(n.startswith("relation ") for n in core):  # no rule needed: the condition never holds
                 self.findings.append(
@@ -286,6 +309,8 @@ class Analysis:
                 continue
             _, enc, goal, cands = asked
             core = self.core(enc, goal, cands, f"redundancy of {rule.name}")
+            if self.left_to_priority(f"redundancy of {rule.name}", (rule.name, *core)):
+                continue
             status, bound = self.status(enc)
             why = (
                 f"the other rules already imply it: {', '.join(core)}"
@@ -335,6 +360,8 @@ class Analysis:
                 )
             elif kind == "purpose" and answer == z3.unsat:
                 core = self.core(enc, goal, cands, f"purpose {s.name}")
+                if self.left_to_priority(f"purpose {s.name}", core):
+                    continue
                 self.findings.append(
                     Finding(
                         code="purpose-blocked",
@@ -399,7 +426,7 @@ class Analysis:
     def runtime_conflicts(self, situational: bool) -> None:
         """Clauses that can owe and forbid an event in overlapping windows (and, with
         ``situational``, the situations where that leaves a trigger unanswerable)."""
-        above = closure([*self.settings.priorities, *pairs(self.spec)])
+        above = self.above
         for ro, ko, io, rp, kp, ip in self.clashes():
             if (ro.name, rp.name) in above or (rp.name, ro.name) in above:
                 continue  # a declared priority settles it
@@ -592,6 +619,8 @@ class Analysis:
         fixed, last, situation_goal, cands, allowed = built
         later = ro if probes[-1] is xo else rp
         core = self.core(fixed, situation_goal, cands, f"situational conflict of {later.name}")
+        if self.left_to_priority(f"situational conflict of {later.name}", core):
+            return
         if any(f.code == "vacuous-conflict" and f.subject in core for f in self.findings):
             return
         # the rules of the cause that the later occurrence triggers: those it leaves unanswerable

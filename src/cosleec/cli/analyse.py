@@ -167,6 +167,7 @@ def run(args: argparse.Namespace) -> int:
         bound=args.bound,
         timeout=args.timeout,
         priorities=frozenset(given),
+        priority_semantics=args.priority_semantics,
     )
     reports = []
     for f in files:
@@ -295,7 +296,8 @@ def _text(reports: list[FileReport]) -> None:
                 for line in f.witness.timeline:
                     out.print(Text(f"      {line}"))
         for u in r.unknown:
-            out.print(Text.assemble(f"{r.path}: ", ("undecided", "yellow"), f": {u}"))
+            label = "note" if "left to the declared priority" in u else "undecided"
+            out.print(Text.assemble(f"{r.path}: ", (label, "yellow"), f": {u}"))
         n = len(r.findings)
         summary = "no findings" if n == 0 else f"{n} finding{'s' if n != 1 else ''}"
         out.print(Text(f"{r.path}: {summary} ({r.seconds.get('total', 0.0):.2f} s)"))

@@ -52,3 +52,17 @@ def test_no_conflict_where_a_trace_meets_every_rule(tmp_path: Path, name: str) -
     assert not final_breaches(spec, judge(spec, trace, Options())), "the trace is no counter-example"
     report = run(tmp_path, rules, checks="vacuous-conflict")
     assert subjects(report, "vacuous-conflict") == set()
+
+
+def test_a_conflict_a_declared_priority_settles_is_left_to_it(tmp_path: Path) -> None:
+    """The runtime cancels R2 while R1 is active (cancel semantics): A then B conforms, so no
+    conflict or blocked purpose may be shown as proved; the analysis says it left them."""
+    rules = "R1 when A then B within 10 seconds\nR2 when A then not B within 10 seconds"
+    purpose = "purpose_start p1 exists A purpose_end"
+    report = run(tmp_path, rules, purpose, priorities=frozenset({("R1", "R2")}), allow_unknown=True)
+    assert report.findings == []  # the runtime conflict is settled too
+    assert any("left to the declared priority R1 > R2" in u for u in report.unknown)
+    spec = load(tmp_path / "rules.sleec")
+    trace = [Step(0, "A"), Step(1, "B"), Step(100)]
+    j = judge(spec, trace, Options(priorities=frozenset({("R1", "R2")})))
+    assert j.conforms
