@@ -15,7 +15,7 @@ from pathlib import Path
 from cosleec.analysis import clauses
 from cosleec.analysis.checks import Analysis, Settings
 from cosleec.analysis.findings import CHECKS, PROVED, FileReport, Finding
-from cosleec.lang import CheckResult, Severity, Specification, visit
+from cosleec.lang import Severity, Specification, visit
 from cosleec.lang import analyse_file as check_file
 from cosleec.lang import ast as A
 
@@ -77,11 +77,12 @@ def analyse_file(
     checks: Iterable[str] = CHECKS,
     *,
     legos_compat: bool = False,
+    infer_defs: bool = False,
     coverage: Coverage | None = None,
 ) -> FileReport:
     """Check, then analyse, one rule file."""
     t0 = time.perf_counter()
-    result = _check(path, legos_compat)
+    result = check_file(path, legos_compat=legos_compat, infer_defs=infer_defs)
     report = FileReport(path=str(path), source=result.source, diagnostics=list(result.diagnostics))
     if not result.ok or result.spec is None or result.symbols is None:
         return report
@@ -90,10 +91,6 @@ def analyse_file(
     )
     report.seconds["total"] = time.perf_counter() - t0
     return report
-
-
-def _check(path: str | Path, legos_compat: bool) -> CheckResult:
-    return check_file(path, legos_compat=legos_compat)
 
 
 def _timed(fn: Callable[[], None], seconds: dict[str, float], key: str) -> None:

@@ -22,11 +22,19 @@ from cosleec.semantics import Judgement, Options, Step, Value, judge
 
 
 def smallest(enc: Encoding, assumptions: list[Any]) -> Any:
-    """A model with as few occurrences as one pass can leave out: each occurrence the last
-    model used (but the probes), latest first, is left out if the question stays satisfiable.
-    The solver must just have answered sat under ``assumptions``."""
+    """A model with as few occurrences as one pass can leave out, and without an ``otherwise``
+    when one exists: each occurrence the last model used (but the probes), latest first, is
+    left out if the question stays satisfiable. The solver must just have answered sat under
+    ``assumptions``."""
     model = enc.solver.model()
     out = list(assumptions)
+    if enc.fallbacks:  # a trace that needs no `otherwise`, if there is one: `conforms` then passes it too
+        trial = [*out, *(z3.Not(fb.started) for fb in enc.fallbacks)]
+        if enc.check(trial) == z3.sat:
+            out, model = trial, enc.solver.model()
+        else:
+            enc.check(out)  # back to the model asked for
+            model = enc.solver.model()
     probes = [s for s in enc.slots if s.depth == 0]
     for s in reversed(enc.slots):
         if s in probes or not z3.is_true(model.eval(s.present, model_completion=True)):

@@ -28,6 +28,8 @@ from cosleec.lang import analyse_file as check_file
 
 USAGE_ERROR = 2
 STYLE = {"error": "bold red", "warning": "yellow", "note": "cyan"}
+LEGOS_DEFECTS = frozenset({"scale-literal", "duplicate-rule", "duplicate-name"})
+"""Errors of files LEGOS accepts: ``--legos-compat`` reads them as LEGOS does."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -75,6 +77,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     )
     add_clause_options(p, unknown=False)
     add_priority_options(p)
+    p.add_argument(
+        "--infer-defs", action="store_true", help="infer declarations for files without a def block"
+    )
     p.add_argument(
         "--legos-compat",
         action="store_true",
@@ -170,22 +175,36 @@ def run(args: argparse.Namespace) -> int:
         priority_semantics=args.priority_semantics,
     )
     reports = []
-    for f in files:
-        coverage = _coverage(args, f)
-        reports.append(analyse_file(f, settings, checks, legos_compat=args.legos_compat, coverage=coverage))
-    if args.witnesses:
-        _write_witnesses(Path(args.witnesses), reports)
-    if args.sarif:
-        try:
-            Path(args.sarif).write_text(json.dumps(sarif(reports, checks), indent=2) + "\n", encoding="utf-8")
-        except OSError as e:
-            raise UserError(f"cannot write the SARIF file: {e.strerror or e}", where=args.sarif) from None
+    try:
+        for f in files:
+            coverage = _coverage(args, f)
+            reports.append(
+                analyse_file(
+                    f, settings, checks, legos_compat=args.legos_compat, infer_defs=args.infer_defs,
+                    coverage=coverage,
+                )
+            )  # fmt: skip
+        if args.witnesses:
+            _write_witnesses(Path(args.witnesses), reports)
+        if args.sarif:
+            try:
+                text = json.dumps(sarif(reports, checks), indent=2) + "\n"
+                Path(args.sarif).write_text(text, encoding="utf-8")
+            except OSError as e:
+                raise UserError(
+                    f"cannot write the SARIF file: {e.strerror or e}",
+                    where=args.sarif,
+                    hint="give a path in a directory that exists and that you can write",
+                ) from None
+    except UserError as e:  # an input error (a module, a mapping, an output path): exit 2
+        print(f"cosleec: {e.render()}", file=sys.stderr)
+        return USAGE_ERROR
     if args.json:
         print(json.dumps(_json(reports), indent=2))
     else:
         _text(reports)
     if any(r.failed for r in reports):
-        return 1
+        return USAGE_ERROR  # a rule file that cannot be analysed is an input error
     return 1 if any(r.findings for r in reports) else 0
 
 
@@ -227,16 +246,30 @@ def _coverage(args: argparse.Namespace, path: Path) -> Coverage | None:
                 f"cannot import the task module {args.tasks!r}: {e}",
                 hint="give a module on the Python path (PYTHONPATH) that defines install(manager)",
             ) from None
+        except (Exception, SystemExit) as e:  # the module's own code failed: say so, never a traceback
+            raise UserError(
+                f"the task module {args.tasks!r} failed while importing: {type(e).__name__}: {e}",
+                hint="fix the module (python -c 'import MODULE' shows the traceback)",
+            ) from None
         install = getattr(module, "install", None)
         if not callable(install):
             raise UserError(f"module {args.tasks!r} has no install(manager) function")
-        manager = Manager(RuleSet.from_spec(spec))
-        install(manager)
+        rules = RuleSet.from_spec(spec)
+        manager = Manager(rules)
+        try:
+            install(manager)
+        except (Exception, SystemExit) as e:
+            raise UserError(
+                f"install(manager) of {args.tasks!r} failed: {type(e).__name__}: {e}",
+                hint="fix install(); it should only bind tasks and capabilities",
+            ) from None
         unimplemented = tuple(manager.implementations.missing())
     if args.mapping:
         from cosleec.nodes import Mapping
+        from cosleec.runtime import RuleSet
 
-        m = Mapping.load(args.mapping)
+        rules = RuleSet.from_spec(spec)
+        m = Mapping.load(args.mapping, dict(rules.measures), frozenset(e.name for e in spec.events))
         measures = frozenset(e.name for e in m.entries if e.kind == "measure")
         events = frozenset(e.name for e in m.entries if e.kind == "event")
     return Coverage(unimplemented, measures, events)
@@ -252,7 +285,11 @@ def _write_witnesses(d: Path, reports: list[FileReport]) -> None:
                     name = re.sub(r"[^A-Za-z0-9_.-]+", "_", f"{stem}--{f.code}--{f.subject}") + ".jsonl"
                     (d / name).write_text(f.witness.jsonl(), encoding="utf-8")
     except OSError as e:
-        raise UserError(f"cannot write the witnesses: {e.strerror or e}", where=str(d)) from None
+        raise UserError(
+            f"cannot write the witnesses: {e.strerror or e}",
+            where=str(d),
+            hint="give a directory (it is created if missing), not a file",
+        ) from None
 
 
 def _json(reports: list[FileReport]) -> dict[str, object]:
@@ -274,12 +311,18 @@ def _json(reports: list[FileReport]) -> dict[str, object]:
 def _text(reports: list[FileReport]) -> None:
     out = console()
     for r in reports:
+        for d in r.diagnostics:  # the file's own errors and warnings, as `cosleec check` shows them
+            if d.is_error or str(d.severity) == "warning":
+                out.print(Text(d.render(r.source)))
         if r.failed:
-            for d in r.diagnostics:
-                if d.is_error:
-                    out.print(Text(d.render(r.source)))
-            out.print(Text.assemble(f"{r.path}: ", ("has errors, not analysed", "bold red"),
-                                    " (--legos-compat reads the LEGOS case studies as LEGOS does)"))  # fmt: skip
+            legos = any(d.code in LEGOS_DEFECTS for d in r.diagnostics if d.is_error)
+            out.print(
+                Text.assemble(
+                    f"{r.path}: ",
+                    ("has errors, not analysed", "bold red"),
+                    " (--legos-compat reads them as LEGOS does)" if legos else "",
+                )
+            )
             continue
         for f in r.findings:
             lines = f.diagnostic().render(r.source).split("\n")

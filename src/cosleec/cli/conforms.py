@@ -88,6 +88,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         f"(they stay pending; the default), immediate ({IMMEDIATE_S:g} s) or seconds",
     )
     p.add_argument("--json", action="store_true", help="print one JSON document instead of text")
+    p.add_argument(
+        "--legos-compat",
+        action="store_true",
+        help="read the rules as LEGOS does (cross-scale literals, duplicate names), as `analyse --legos-compat`",
+    )
     # None is "not given": an audit log's options fill only what the command line leaves out
     p.set_defaults(run=run, semantics=None, priority_semantics=None, priority_lead=None)
 
@@ -122,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
                 where="--priority-lead",
                 hint="give how long before the forcing deadline the lower rule is cancelled, e.g. 5",
             )
-        spec = load(args.rules)
+        spec = load(args.rules, legos_compat=args.legos_compat)
         recording = read_recording(args.trace)  # once: a pipe cannot be read twice
         if not recording.steps:  # checking nothing must not look like a pass
             raise UserError(

@@ -40,19 +40,19 @@ def test_exit_0_when_nothing_is_found_and_1_when_something_is(
     assert rc == 0
 
 
-def test_a_missing_or_broken_file_is_reported_with_exit_1(
+def test_a_missing_or_broken_file_is_an_input_error_exit_2(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     missing = tmp_path / "missing.sleec"
     rc, out, err = _run(capsys, str(missing))
-    assert rc == 1 and "cannot read file" in out + err and "not analysed" in out
+    assert rc == 2 and "cannot read file" in out + err and "not analysed" in out
     broken = tmp_path / "broken.sleec"
     broken.write_text("def_start event A def_end rule_start R1 when A then G rule_end\n")
     rc, out, _ = _run(capsys, str(broken), str(write(tmp_path, CLEAN)))
-    assert rc == 1 and "`G` is not declared" in out and "not analysed" in out
+    assert rc == 2 and "`G` is not declared" in out and "not analysed" in out
     rc, out, _ = _run(capsys, "--json", str(missing))
     (doc,) = json.loads(out)["files"]
-    assert rc == 1 and doc["ok"] is False and doc["findings"] == [] and doc["diagnostics"]
+    assert rc == 2 and doc["ok"] is False and doc["findings"] == [] and doc["diagnostics"]
 
 
 @pytest.mark.parametrize(
@@ -219,3 +219,31 @@ def test_an_interval_that_can_close_before_it_opens_says_so(
     path.write_text(rules)
     rc, out, _ = _run(capsys, "--check", "negative-deadline", str(path))
     assert rc == 1 and re.search(r"its window is \[\d+(\.\d+)?, 10\] seconds", out), out
+
+
+def test_input_errors_of_the_robot_side_exit_2_with_the_fix(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = write(tmp_path, CONFLICT)
+    (tmp_path / "boom_tasks.py").write_text("def install(manager):\n    raise RuntimeError('boom')\n")
+    (tmp_path / "broken_tasks.py").write_text("def install(manager) -> :\n")
+    (tmp_path / "exit_tasks.py").write_text("import sys\nsys.exit(3)\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    for module, said in [
+        ("boom_tasks", "install(manager) of 'boom_tasks' failed: RuntimeError: boom"),
+        ("broken_tasks", "failed while importing: SyntaxError"),
+        ("exit_tasks", "failed while importing: SystemExit"),
+        ("no_such_tasks", "cannot import the task module"),
+    ]:
+        rc, _, err = _run(capsys, "--check", "unimplemented-clause", "--tasks", module, str(path))
+        assert rc == 2 and said in err, err
+    mapping = tmp_path / "mapping.yaml"
+    mapping.write_text("measures:\n  nosuch: {topic: /x, type: std_msgs/Bool}\n")
+    rc, _, err = _run(capsys, "--check", "unproduced-input", "--mapping", str(mapping), str(path))
+    assert rc == 2 and "nosuch" in err
+    a_file = tmp_path / "a-file"
+    a_file.write_text("")
+    rc, _, err = _run(capsys, "--witnesses", str(a_file), str(path))
+    assert rc == 2 and "not a file" in err
+    rc, _, err = _run(capsys, "--sarif", str(tmp_path / "no" / "such" / "dir" / "x.sarif"), str(path))
+    assert rc == 2 and "cannot write the SARIF file" in err
