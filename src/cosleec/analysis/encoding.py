@@ -37,6 +37,7 @@ not part of the rules' meaning).
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
@@ -140,6 +141,7 @@ class Encoding:
         self.by_event: dict[str, list[Slot]] = {}
         self.fallbacks: list[Fallback] = []
         self.bans: dict[str, list[_Ban]] = {}
+        self._guard: Z3 = z3.BoolVal(True, self.ctx)  # when what is being encoded is in force
         self.rules_by_event: dict[str, list[A.Rule]] = {}
         for r in spec.rules:
             self.rules_by_event.setdefault(r.trigger.event, []).append(r)
@@ -356,17 +358,37 @@ class Encoding:
     def rule_holds(self, rule: A.Rule, x: Slot) -> Z3:
         """``rule`` is met at slot ``x``: if ``x`` is present and triggers it, its response holds."""
         fires = z3.And(x.present, self.truth(rule.trigger.condition, x.snap))
-        return z3.Implies(fires, self.holds(rule.response, x))
+        return z3.Implies(fires, self.holds(rule.response, x, guard=fires))
 
     def fires(self, rule: A.Rule, x: Slot) -> Z3:
         """``x`` is present and triggers ``rule``."""
         return z3.And(x.present, self.truth(rule.trigger.condition, x.snap))
 
-    def holds(self, response: A.Response | None, x: Slot, *, untimed: float | str | None = "reading") -> Z3:
-        """``response``, started by slot ``x``, is met (``untimed`` overrides the reading's)."""
+    def holds(
+        self,
+        response: A.Response | None,
+        x: Slot,
+        *,
+        untimed: float | str | None = "reading",
+        guard: Z3 | None = None,
+    ) -> Z3:
+        """``response``, started by slot ``x``, is met (``untimed`` overrides the reading's).
+        ``guard`` says when the response is in force (default: when ``x`` is present): an
+        ``otherwise`` counts as started only then (:attr:`Fallback.started`)."""
         u = self.reading.untimed if untimed == "reading" else untimed
         assert not isinstance(u, str)
+        self._guard = x.present if guard is None else guard
         return self._response(response, x.t, After(slot=x), x.snap, u)
+
+    @contextlib.contextmanager
+    def _within(self, condition: Z3) -> Iterator[None]:
+        """Encode under ``condition`` too (a clause chosen, a primary missed)."""
+        outer = self._guard
+        self._guard = z3.And(outer, condition)
+        try:
+            yield
+        finally:
+            self._guard = outer
 
     def _response(
         self,
@@ -383,9 +405,10 @@ class Encoding:
             known = self._in_range(resp, snap)
             return items if known is None else z3.Or(z3.Not(known), items)
         conds = self.chosen(resp.defeaters, snap)
-        parts = [z3.Implies(conds[0], self._response(A.Response(resp.items), start, after, snap, untimed))]
-        for d, cond in zip(resp.defeaters, conds[1:]):
-            parts.append(z3.Implies(cond, self._response(d.response, start, after, snap, untimed)))
+        parts = []
+        for sub, cond in zip([A.Response(resp.items), *(d.response for d in resp.defeaters)], conds):
+            with self._within(cond):
+                parts.append(z3.Implies(cond, self._response(sub, start, after, snap, untimed)))
         return z3.And(*parts, self.ctx)
 
     def _in_range(self, resp: A.Response, snap: dict[str, Z3]) -> Z3 | None:
@@ -452,9 +475,9 @@ class Encoding:
             firsts = []
             for y, by in breaks:
                 first = z3.And(by, *(z3.Not(z3.And(bz, _before(z, y))) for (z, bz) in breaks if z is not y))
-                firsts.append(
-                    z3.And(first, self._response(it.otherwise, y.t, After(slot=y), y.snap, untimed))
-                )
+                with self._within(first):
+                    fallback = self._response(it.otherwise, y.t, After(slot=y), y.snap, untimed)
+                firsts.append(z3.And(first, fallback))
             return z3.Or(ok, *firsts)
         ok = self.occurs(occ.event, lo, hi, after)
         if it.alternative is not None:
@@ -474,7 +497,7 @@ class Encoding:
                     self.solver.add(
                         z3.Implies(cond, z3.And(*(fresh[m] == values[m] for m in fresh), self.ctx))
                     )
-            fb = Fallback(at, z3.Not(ok), fresh)
+            fb = Fallback(at, z3.And(self._guard, z3.Not(ok)), fresh)
             self._domain(fb.snap)
             for other in self.fallbacks:
                 self.solver.add(
@@ -488,7 +511,9 @@ class Encoding:
                     self.solver.add(z3.Implies(lit, self._measure_relation(rel, fb.snap)))
             self.fallbacks.append(fb)
             later = _FallbackStart(at, hi < lo, after, refused, when)
-            ok = z3.Or(ok, self._response(it.otherwise, at, later, fb.snap, untimed))
+            with self._within(z3.Not(ok)):
+                fallback = self._response(it.otherwise, at, later, fb.snap, untimed)
+            ok = z3.Or(ok, fallback)
         return ok
 
     def _refusal(
