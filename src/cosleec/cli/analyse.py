@@ -12,11 +12,13 @@ from __future__ import annotations
 import argparse
 import difflib
 import importlib
+import importlib.util
 import json
 import math
 import re
 import sys
 from pathlib import Path
+from types import ModuleType
 
 from rich.text import Text
 
@@ -86,7 +88,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         help="read files as LEGOS does (cross-scale literals, duplicate names), with warnings",
     )
     p.add_argument(
-        "--tasks", metavar="MODULE", help="a module with install(manager): report unimplemented clauses"
+        "--tasks",
+        metavar="MODULE",
+        help="a module (dotted name, or a .py file) with install(manager): report unimplemented clauses",
     )
     p.add_argument(
         "--mapping", metavar="YAML", help="a Context Listener mapping: report inputs it never produces"
@@ -240,7 +244,7 @@ def _coverage(args: argparse.Namespace, path: Path) -> Coverage | None:
         from cosleec.runtime import Manager, RuleSet  # the runtime is needed only to bind the tasks
 
         try:
-            module = importlib.import_module(args.tasks)
+            module = _import(args.tasks)
         except ImportError as e:
             raise UserError(
                 f"cannot import the task module {args.tasks!r}: {e}",
@@ -273,6 +277,21 @@ def _coverage(args: argparse.Namespace, path: Path) -> Coverage | None:
         measures = frozenset(e.name for e in m.entries if e.kind == "measure")
         events = frozenset(e.name for e in m.entries if e.kind == "event")
     return Coverage(unimplemented, measures, events)
+
+
+def _import(name: str) -> ModuleType:
+    """A module by dotted name (on the Python path) or by file (``path/tasks.py``)."""
+    if not name.endswith(".py"):
+        return importlib.import_module(name)
+    path = Path(name)
+    if not path.is_file():
+        raise ImportError(f"no file {name}")
+    spec = importlib.util.spec_from_file_location(path.stem, path)
+    if spec is None or spec.loader is None:  # pragma: no cover - a .py file always has a loader
+        raise ImportError(f"cannot load {name}")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def _write_witnesses(d: Path, reports: list[FileReport]) -> None:

@@ -1,0 +1,16 @@
+"""A task module that implements the curtain rule only: ``cosleec analyse --tasks`` lists the rest.
+
+``install(manager)`` is the contract every task module keeps (the ROS task node calls it too).
+"""
+
+from __future__ import annotations
+
+from cosleec.demo.assistive_care.tasks import CurtainTask, Robot
+from cosleec.runtime import Manager
+
+
+def install(manager: Manager) -> Robot:
+    """Bind the curtain task of the assistive-care example, and nothing else."""
+    robot = Robot(manager)
+    manager.bind(CurtainTask(robot))
+    return robot
