@@ -247,3 +247,21 @@ def test_input_errors_of_the_robot_side_exit_2_with_the_fix(
     assert rc == 2 and "not a file" in err
     rc, _, err = _run(capsys, "--sarif", str(tmp_path / "no" / "such" / "dir" / "x.sarif"), str(path))
     assert rc == 2 and "cannot write the SARIF file" in err
+
+
+def test_tasks_as_a_file_and_events_the_robot_produces_itself(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = write(tmp_path, "R1 when A then B within 5 seconds\nR2 when B then C within 5 seconds")
+    tasks = tmp_path / "my_tasks.py"
+    tasks.write_text("def install(manager):\n    manager.capability('B')(lambda ob, d: None)\n")
+    mapping = tmp_path / "mapping.yaml"
+    mapping.write_text("events:\n  A: {topic: /a, type: std_msgs/Bool, equals: true}\n")
+    rc, out, _ = _run(
+        capsys, "--check", "unimplemented-clause,unproduced-input", "--tasks", str(tasks),
+        "--mapping", str(mapping), str(path),
+    )  # fmt: skip
+    assert rc == 1
+    assert "R2: no task and no capability for response event C" in out
+    assert "response event B" not in out  # bound by the module
+    assert "unproduced-input" not in out  # B is owed by R1: the robot's own action, not an input
