@@ -487,7 +487,13 @@ class Analysis:
             lo, hi = self._item_window(enc, ro, ko, io, xo)
             plo, phi = self._item_window(enc, rp, kp, ip, xp)
             probes = {xo.id, xp.id}
+            readable = [  # windows the reference can read (at most 1e10 s): the witness must be judged
+                r
+                for it, x in ((io, xo), (ip, xp))
+                if (r := enc._in_range(A.Response((it,)), x.snap)) is not None
+            ]
             base = [
+                *readable,
                 enc.fires(ro, xo),
                 enc.chosen_at(ro.response, ko, xo.snap),
                 enc.fires(rp, xp),

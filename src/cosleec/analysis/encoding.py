@@ -15,13 +15,17 @@ Why the answers can be *proved*: the constraints a rule puts on a trace are of t
 this window" (a prohibition) -- and removing occurrences never breaks a prohibition. So if
 any trace satisfies a question, so does the sub-trace made of the probe and, for every
 obligation that trace meets, one occurrence that meets it, recursively: a tree of demands,
-which is exactly what the unfolding builds. When the unfolding finishes within ``bound``
-(:attr:`Encoding.complete`), "unsatisfiable" is a proof about *all* traces; when it stops
-at the bound (a chain of obligations that feeds itself), "unsatisfiable" holds up to that
-bound only. "Satisfiable" is always a proof: the model is a trace, and
-:mod:`cosleec.analysis.witness` checks it against the reference semantics. The argument
-fails for ``until`` relations (removing the event that ends one extends it), so a question
-that involves one is never called complete.
+which is exactly what the unfolding builds. Two things besides obligations can be what a
+trace needs, so they are demands too: the occurrence that raises a prohibition which
+*refuses* an obligation with an ``otherwise`` (the fallback then starts at once, not at the
+deadline), and the event that ends an ``until`` relation. When the unfolding finishes
+within ``bound`` (:attr:`Encoding.complete`), "unsatisfiable" is a proof about *all* traces;
+when it stops at the bound (a chain of demands that feeds itself), "unsatisfiable" holds for
+the traces the unfolding can hold -- the probe and at most ``bound`` occurrences per event,
+each one a demand's -- and is said to hold up to that bound only. "Satisfiable" is always a
+proof: the model is a trace, and :mod:`cosleec.analysis.witness` checks it against the
+reference semantics. An ``until`` relation breaks the argument (removing the event that ends
+one extends it), so a question that involves one is never called complete.
 
 The meaning is the reference semantics' (:mod:`cosleec.semantics.reference`), with one
 reading of its own: a trace is *complete* -- time goes on past every deadline -- so an
@@ -148,6 +152,11 @@ class Encoding:
         self.rule_lit = {r.name: z3.Bool(f"rule!{i}", self.ctx) for i, r in enumerate(spec.rules)}
         self.relation_lit = [z3.Bool(f"relation!{i}", self.ctx) for i in range(len(spec.relations))]
         self.complete = not any(isinstance(r, A.UntilRelation) for r in spec.relations)
+        self._refusers: dict[str, set[str]] = {}  # event -> the triggers of rules that can forbid it
+        for r in spec.rules:
+            for _, it in clause_items(r.response):
+                if it.occurrence.negated:
+                    self._refusers.setdefault(it.occurrence.event, set()).add(r.trigger.event)
         self._extra: list[tuple[Slot, list[tuple[str, str]]]] = []
         self._ids = itertools.count()
         self._fresh = itertools.count()
@@ -244,6 +253,11 @@ class Encoding:
         for r in self.rules_by_event.get(s.event, ()):
             for e, why in _occurrences(r.response, everything=False):
                 yield e, f"{r.name}: {why}"
+            # an obligation with an otherwise can be refused, which moves its fallback: the
+            # occurrence that raises the refusing prohibition may be what a trace needs
+            for e in _fallible(r.response):
+                for trigger in sorted(self._refusers.get(e, ())):
+                    yield trigger, f"may refuse {e} of {r.name}"
         for rel in self.spec.relations:
             if isinstance(rel, A.EventRelation):
                 if rel.kind == "witness" and s.event == rel.first:
@@ -255,6 +269,8 @@ class Encoding:
                     yield rel.first, f"happenBefore {rel.first} {rel.second}"
             elif isinstance(rel, A.EventMeasureRelation) and rel.kind == "causation" and s.event != rel.event:
                 yield rel.event, f"causation {rel.event}"
+            elif isinstance(rel, A.UntilRelation) and s.event == rel.trigger.event:
+                yield rel.until_event, f"until {rel.until_event}"  # what may end it
 
     # ------------------------------------------------------------------ expressions
     def truth(self, e: A.Expr | None, snap: dict[str, Z3]) -> Z3:
@@ -507,8 +523,9 @@ class Encoding:
                     )
                 )
             for lit, rel in zip(self.relation_lit, self.spec.relations):
-                if isinstance(rel, A.MeasureRelation):
-                    self.solver.add(z3.Implies(lit, self._measure_relation(rel, fb.snap)))
+                on_fallback = self._relation_on(rel, fb)
+                if on_fallback is not None:
+                    self.solver.add(z3.Implies(lit, on_fallback))
             self.fallbacks.append(fb)
             later = _FallbackStart(at, hi < lo, after, refused, when)
             with self._within(z3.Not(ok)):
@@ -664,7 +681,7 @@ class Encoding:
             for a_ in starts:
                 on = z3.And(a_.present, self.truth(rel.trigger.condition, a_.snap))
                 for y in every:
-                    after_a = After(slot=a_)(y)
+                    after_a = z3.BoolVal(True, self.ctx) if y is a_ else After(slot=a_)(y)  # A's own too
                     stopped = z3.Or(
                         *(
                             z3.And(
@@ -692,12 +709,52 @@ class Encoding:
                 for y in every:
                     parts.append(
                         z3.Implies(
-                            z3.And(on, y.present, After(slot=a_)(y), y.t <= end),
+                            z3.And(
+                                on,
+                                y.present,
+                                z3.BoolVal(True, self.ctx) if y is a_ else After(slot=a_)(y),
+                                y.t <= end,
+                            ),
                             self.truth(rel.condition, y.snap),
                         )
                     )
             return z3.And(*parts, self.ctx)
         raise AssertionError(f"unknown relation {rel!r}")
+
+    def _relation_on(self, rel: A.Relation, fb: Fallback) -> Z3 | None:
+        """What ``rel`` says of the values an ``otherwise`` reads (a snapshot at ``fb.at``,
+        after every occurrence at that instant); None: nothing."""
+        if isinstance(rel, A.MeasureRelation):
+            return self._measure_relation(rel, fb.snap)
+        if isinstance(rel, A.EventMeasureRelation) and rel.kind == "causation":
+            happens = z3.Or(
+                *(z3.And(y.present, y.t == fb.at) for y in self.by_event.get(rel.event, ())), self.ctx
+            )
+            return z3.Implies(z3.And(fb.started, self.truth(rel.condition, fb.snap)), happens)
+        if isinstance(rel, A.ForRelation | A.UntilRelation):
+            parts = []
+            for a_ in self.by_event.get(rel.trigger.event, ()):
+                on = z3.And(a_.present, self.truth(rel.trigger.condition, a_.snap), fb.started, a_.t <= fb.at)
+                if isinstance(rel, A.ForRelation):
+                    inside = fb.at <= a_.t + self.seconds(rel.duration, a_.snap)
+                else:
+                    inside = z3.Not(
+                        z3.Or(
+                            *(
+                                z3.And(
+                                    b.present,
+                                    self.truth(rel.until_condition, b.snap),
+                                    After(slot=a_)(b),
+                                    b.t <= fb.at,
+                                )
+                                for b in self.by_event.get(rel.until_event, ())
+                            ),
+                            self.ctx,
+                        )
+                    )
+                parts.append(z3.Implies(z3.And(on, inside), self.truth(rel.condition, fb.snap)))
+            return z3.And(*parts, self.ctx)
+        return None
 
     def _measure_relation(self, rel: A.MeasureRelation, snap: dict[str, Z3]) -> Z3:
         p = self.truth(rel.first, snap)
@@ -766,6 +823,19 @@ def _fraction(v: Z3) -> float:
     if z3.is_int_value(v):
         return float(v.as_long())
     return float(v.numerator_as_long()) / float(v.denominator_as_long())
+
+
+def _fallible(resp: A.Response | None) -> Iterator[str]:
+    """The events of the obligations in ``resp`` that have an ``otherwise`` (and no ``else``):
+    a prohibition can refuse them, and their fallback then starts at once."""
+    if resp is None:
+        return
+    for it in resp.items:
+        if not it.occurrence.negated and it.otherwise is not None and it.alternative is None:
+            yield it.occurrence.event
+        yield from _fallible(it.otherwise)
+    for d in resp.defeaters:
+        yield from _fallible(d.response)
 
 
 def _before(z: Slot, y: Slot) -> Z3:

@@ -13,7 +13,7 @@ from cosleec.analysis.witness import final_breaches
 from cosleec.lang import load
 from cosleec.semantics import Options, Step, judge
 
-from .support import run, sleec, subjects
+from .support import analyse, run, sleec, subjects
 
 CASES = {
     # an obligation with an `else` is never refused: its alternative C meets it
@@ -66,3 +66,70 @@ def test_a_conflict_a_declared_priority_settles_is_left_to_it(tmp_path: Path) ->
     trace = [Step(0, "A"), Step(1, "B"), Step(100)]
     j = judge(spec, trace, Options(priorities=frozenset({("R1", "R2")})))
     assert j.conforms
+
+
+HEAD = "def_start event A event E event F event G event X measure safe : boolean def_end\n"
+REFUSABLE = (
+    "R1 when A then E within 10 seconds otherwise F within 2 seconds\n"
+    "R2 when X then not E within 100 seconds\n"
+    "R3 when A then not F within [5 seconds, 100 seconds]\n"
+    "R5 when E then G within 1 seconds\n"
+    "R6 when A then not G within 20 seconds"
+)
+# X, which no rule asks for, lets R2 refuse R1 at once: its fallback F is then owed in [0, 2]
+REFUSED_EARLY = [Step(0, "X"), Step(0, "A"), Step(1, "F"), Step(200)]
+
+
+def _spec(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "rules.sleec"
+    path.write_text(text)
+    return path
+
+
+def test_an_occurrence_no_rule_asks_for_can_refuse_early_and_meet_every_rule(tmp_path: Path) -> None:
+    """Found by a hostile tester: the unfolding must offer the trigger of a refusing prohibition."""
+    path = _spec(
+        tmp_path, HEAD + f"rule_start\n{REFUSABLE}\nrule_end\npurpose_start P1 exists A purpose_end\n"
+    )
+    spec = load(path)
+    assert not final_breaches(spec, judge(spec, REFUSED_EARLY, Options()))
+    report = analyse(path, ["vacuous-conflict", "purpose-blocked"])
+    assert report.findings == []
+
+
+def test_a_refusal_can_break_the_rule_the_others_seem_to_imply(tmp_path: Path) -> None:
+    rules = (
+        "R1 when A then E within 10 seconds otherwise F within 2 seconds\n"
+        "R2 when A then F within [11 seconds, 12 seconds]\n"
+        "R3 when X then not E within 100 seconds"
+    )
+    path = _spec(tmp_path, HEAD + f"rule_start\n{rules}\nrule_end\n")
+    spec = load(path)
+    trace = [Step(0, "X"), Step(0, "A"), Step(11, "F"), Step(200)]
+    breached = {v.rule for v in final_breaches(spec, judge(spec, trace, Options()))}
+    assert breached == {"R1"}  # the others are met, R1 is not: R1 is not redundant
+    assert "R1" not in subjects(analyse(path, "redundant"), "redundant")
+
+
+def test_a_for_relation_holds_for_the_values_an_otherwise_reads(tmp_path: Path) -> None:
+    """`safe` stays false for 100 s after A, so R1's fallback F is owed: the concern cannot arise."""
+    text = HEAD + (
+        "rule_start\n"
+        "R1 when A then E within 5 seconds otherwise {F within 1 seconds unless {safe}}\n"
+        "R5 when E then G within 1 seconds\n"
+        "R6 when A then not G within 20 seconds\n"
+        "rule_end\n"
+        "concern_start c1 when A then not F within 10 seconds concern_end\n"
+        "relation_start when A then (not {safe}) for 100 seconds relation_end\n"
+    )
+    assert subjects(analyse(_spec(tmp_path, text), "concern-raised"), "concern-raised") == set()
+
+
+def test_the_event_that_ends_an_until_is_offered(tmp_path: Path) -> None:
+    """A@0 (p false), C@1 ends the until, B@2 with p fires R1, C@3 meets it."""
+    text = (
+        "def_start event A event B event C measure p : boolean def_end\n"
+        "rule_start R1 when B and {p} then C within 5 seconds rule_end\n"
+        "relation_start happenBefore A B\n when A then (not {p}) until C relation_end\n"
+    )
+    assert analyse(_spec(tmp_path, text), "vacuous-conflict").findings == []
