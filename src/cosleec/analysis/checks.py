@@ -38,11 +38,11 @@ from typing import Any
 import z3
 
 from cosleec.analysis.cores import Undecided, minimal_core
-from cosleec.analysis.encoding import After, Encoding, Reading, Slot, clause_items
+from cosleec.analysis.encoding import After, Encoding, Reading, Slot, clause_items, fallible_events
 from cosleec.analysis.findings import BOUNDED, PROVED, Finding
 from cosleec.analysis.witness import reads as _reads
 from cosleec.analysis.witness import show, smallest, snapshot, then, witness
-from cosleec.lang import CANCEL, HedgeSemantics, Severity, Specification, closure, pairs
+from cosleec.lang import CANCEL, HedgeSemantics, Severity, Specification, closure, pairs, visit
 from cosleec.lang import ast as A
 from cosleec.semantics import Options
 
@@ -94,6 +94,23 @@ class Analysis:
 
     def __post_init__(self) -> None:
         self.above = frozenset(closure([*self.settings.priorities, *pairs(self.spec)]))
+        fallible = {e for r in self.spec.rules for e in fallible_events(r.response)}
+        top = {(r.name, id(it)) for r in self.spec.rules for _, it in clause_items(r.response)}
+        nested = sorted(
+            {
+                r.name
+                for r in self.spec.rules
+                for resp in visit.responses(r.response)
+                for it in resp.items
+                if it.occurrence.negated and it.occurrence.event in fallible and (r.name, id(it)) not in top
+            }
+        )
+        if nested:  # said once per file: the encoding's known limit (README, "What is not modelled")
+            self.unknown.append(
+                f"{', '.join(nested)}: a prohibition inside an otherwise or a braced clause can refuse an "
+                "obligation here, which the analysis does not model; a finding that involves "
+                f"{'it' if len(nested) == 1 else 'them'} may miss that"
+            )
 
     # ------------------------------------------------------------------ helpers
     def encoding(self, event: str, bound: int) -> tuple[Encoding, Slot]:

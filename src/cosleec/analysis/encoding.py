@@ -255,7 +255,7 @@ class Encoding:
                 yield e, f"{r.name}: {why}"
             # an obligation with an otherwise can be refused, which moves its fallback: the
             # occurrence that raises the refusing prohibition may be what a trace needs
-            for e in _fallible(r.response):
+            for e in fallible_events(r.response):
                 for trigger in sorted(self._refusers.get(e, ())):
                     yield trigger, f"may refuse {e} of {r.name}"
         for rel in self.spec.relations:
@@ -825,7 +825,7 @@ def _fraction(v: Z3) -> float:
     return float(v.numerator_as_long()) / float(v.denominator_as_long())
 
 
-def _fallible(resp: A.Response | None) -> Iterator[str]:
+def fallible_events(resp: A.Response | None) -> Iterator[str]:
     """The events of the obligations in ``resp`` that have an ``otherwise`` (and no ``else``):
     a prohibition can refuse them, and their fallback then starts at once."""
     if resp is None:
@@ -833,9 +833,9 @@ def _fallible(resp: A.Response | None) -> Iterator[str]:
     for it in resp.items:
         if not it.occurrence.negated and it.otherwise is not None and it.alternative is None:
             yield it.occurrence.event
-        yield from _fallible(it.otherwise)
+        yield from fallible_events(it.otherwise)
     for d in resp.defeaters:
-        yield from _fallible(d.response)
+        yield from fallible_events(d.response)
 
 
 def _before(z: Slot, y: Slot) -> Z3:
