@@ -33,10 +33,13 @@ untimed obligation (no deadline at run time) must still happen at some time, and
 eventually`` forbids E for ever. Windows are closed, an occurrence counts for an obligation
 only if it comes after the step that raised it (the trigger never fulfils its own
 response), an ``otherwise`` starts at the deadline it follows (after every occurrence at
-that instant) or at the first occurrence that breaks its prohibition, and reads the values
-of that moment. Numeric measures are reals, as at run time; scale measures are their
-literal's position. A measure always has a value (the runtime's policy for unknown values is
-not part of the rules' meaning).
+that instant), at the first occurrence that breaks its prohibition, or when a prohibition
+in force covers the obligation's whole remaining window (a refusal), and reads the values of
+that moment. Numeric measures are reals, as at run time; scale measures are their literal's
+position. A measure always has a value (the runtime's policy for unknown values is not part
+of the rules' meaning). One known limit: only a rule's own clause items refuse; a
+prohibition inside an ``otherwise`` or a braced clause does not, where the reference's does
+(:class:`cosleec.analysis.checks.Analysis` names such rules per file).
 """
 
 from __future__ import annotations
