@@ -89,7 +89,7 @@ class Analysis:
     _by_event: dict[tuple[str, int], Encoding] = field(default_factory=dict)
     above: frozenset[tuple[str, str]] = frozenset()  # declared priorities, closed (set at start)
     situational_seconds: float = 0.0  # the part of runtime_conflicts spent on situations
-    # one z3 context per file: terms built for another file cannot change this one's answers
+    # one z3 context per file and check: terms built elsewhere cannot change this one's answers
     ctx: z3.Context = field(default_factory=z3.Context)
 
     def __post_init__(self) -> None:
@@ -111,6 +111,12 @@ class Analysis:
                 "obligation here, which the analysis does not model; a finding that involves "
                 f"{'it' if len(nested) == 1 else 'them'} may miss that"
             )
+
+    def fresh_context(self) -> None:
+        """Start a check in a z3 context of its own: what other checks solved before it (or
+        whether they ran at all) cannot change its situations and witnesses."""
+        self.ctx = z3.Context()
+        self._by_event = {}
 
     # ------------------------------------------------------------------ helpers
     def encoding(self, event: str, bound: int) -> tuple[Encoding, Slot]:
@@ -143,8 +149,8 @@ class Analysis:
     def deepen(
         self, make: Callable[[int], tuple[Encoding, Any]], without: str | None, what: str
     ) -> tuple[Any, Encoding, Any, list[tuple[str, Any]]] | None:
-        """Ask ``make(bound)``'s goal with every rule (but ``without``) at bound 2, 3, 4, ...
-        up to the full bound: a trace found at any bound is a proof, and so is "none" once
+        """Ask ``make(bound)``'s goal with every rule (but ``without``) at bound 2, 4, then the
+        full bound: a trace found at any bound is a proof, and so is "none" once
         the unfolding completes; an inconclusive "none" is asked again one bound up. When a
         larger bound runs out of time, the answer is the last one the solver gave: "none"
         up to that smaller bound (said in :attr:`unknown`)."""
@@ -167,9 +173,9 @@ class Analysis:
         return last
 
     def bounds(self) -> list[int]:
-        """The bounds a question is asked at, in turn: 2, 3, 4, then the full bound."""
+        """The bounds a question is asked at, in turn: 2, 4, then the full bound."""
         full = self.settings.bound
-        return sorted({*range(min(2, full), min(4, full) + 1), full})
+        return sorted({min(2, full), min(4, full), full})
 
     def candidates(self, enc: Encoding, without: str | None = None) -> list[tuple[str, Any]]:
         """Rules (that some slot can trigger) and relations, as (name, literal), in file order."""
@@ -420,7 +426,7 @@ class Analysis:
         for slot in slots:
             assert cur is not None
             parts.append(enc.truth(cur.trigger.condition, slot.snap))
-            parts += [enc.holds(r, slot, untimed=0.0) for r in cur.responses]
+            parts += [enc.holds(r, slot, untimed=0.0, situation=True) for r in cur.responses]
             cur = cur.meanwhile
         enc.solver.add(z3.Implies(goal, z3.And(*parts, enc.ctx)))
         return enc, goal

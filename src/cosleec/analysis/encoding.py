@@ -149,6 +149,7 @@ class Encoding:
         self.fallbacks: list[Fallback] = []
         self.bans: dict[str, list[_Ban]] = {}
         self._guard: Z3 = z3.BoolVal(True, self.ctx)  # when what is being encoded is in force
+        self._situation = False  # encoding a concern's or purpose's response (nothing refuses it)
         self.rules_by_event: dict[str, list[A.Rule]] = {}
         for r in spec.rules:
             self.rules_by_event.setdefault(r.trigger.event, []).append(r)
@@ -390,14 +391,21 @@ class Encoding:
         *,
         untimed: float | str | None = "reading",
         guard: Z3 | None = None,
+        situation: bool = False,
     ) -> Z3:
         """``response``, started by slot ``x``, is met (``untimed`` overrides the reading's).
         ``guard`` says when the response is in force (default: when ``x`` is present): an
-        ``otherwise`` counts as started only then (:attr:`Fallback.started`)."""
+        ``otherwise`` counts as started only then (:attr:`Fallback.started`). A
+        ``situation`` (a concern's or purpose's response) describes what occurs, not what a
+        rule owes: no prohibition refuses it."""
         u = self.reading.untimed if untimed == "reading" else untimed
         assert not isinstance(u, str)
         self._guard = x.present if guard is None else guard
-        return self._response(response, x.t, After(slot=x), x.snap, u)
+        self._situation = situation
+        try:
+            return self._response(response, x.t, After(slot=x), x.snap, u)
+        finally:
+            self._situation = False
 
     @contextlib.contextmanager
     def _within(self, condition: Z3) -> Iterator[None]:
@@ -501,12 +509,18 @@ class Encoding:
         ok = self.occurs(occ.event, lo, hi, after)
         if it.alternative is not None:
             ok = z3.Or(ok, self._branch(it.alternative, start, after, snap, untimed))
+        if it.otherwise is None and it.alternative is None and hi is not None and not self._situation:
+            # refused at once by a prohibition that covers its whole window: a breach, even if
+            # the event then occurs (breaking that prohibition, whose own otherwise may be met)
+            refused, _, _ = self._refusal(occ.event, lo, hi, start, after, snap)
+            if refused is not None:
+                ok = z3.And(z3.Not(refused), ok)
         if it.otherwise is not None and hi is not None:
             at = z3.If(hi < lo, start, hi)
             fresh = {m: self._var(m, f"o{next(self._fresh)}") for m in self.measures}
             refused, when, reads = (
                 self._refusal(occ.event, lo, hi, start, after, snap)
-                if it.alternative is None  # an `else` may still meet it: never refused
+                if it.alternative is None and not self._situation  # an `else` may still meet it
                 else (None, None, [])
             )
             if refused is not None:  # refused: its fallback starts then, not at the deadline
@@ -589,8 +603,12 @@ class Encoding:
                     if not occ.negated:
                         continue
                     lo, hi = self.window(occ, it.otherwise is not None, x.t, x.snap, self.reading.untimed)
+                    known = self._in_range(A.Response((it,)), x.snap)  # an unreadable window forbids nothing
                     active = z3.And(
-                        self.rule_lit[r.name], self.fires(r, x), self.chosen_at(r.response, k, x.snap)
+                        self.rule_lit[r.name],
+                        self.fires(r, x),
+                        self.chosen_at(r.response, k, x.snap),
+                        *([known] if known is not None else []),
                     )
                     self.bans.setdefault(occ.event, []).append(_Ban(x, active, lo, hi))
 

@@ -19,6 +19,11 @@ from cosleec.lang import Severity, Specification, visit
 from cosleec.lang import analyse_file as check_file
 from cosleec.lang import ast as A
 
+WITNESSED = frozenset({"concern-raised", "unselectable-clause", "semantics-differ", "negative-deadline"})
+"""Checks whose findings show a trace or values: each runs in a z3 context of its own, so that
+what it shows does not depend on which other checks ran (those without witnesses share the
+per-event encodings, which is faster; their causes do not depend on the solver's state)."""
+
 
 @dataclass(frozen=True)
 class Coverage:
@@ -58,8 +63,11 @@ def analyse_spec(
     ]
     for code, step in steps:
         if code in wanted or (code == "vacuous-conflict" and "dead-rule" in wanted):
+            if code in WITNESSED:  # a check that shows traces or values starts afresh
+                a.fresh_context()
             _timed(step, times, code)
     if wanted & {"runtime-conflict", "situational-conflict"}:
+        a.fresh_context()
         _timed(lambda: a.runtime_conflicts("situational-conflict" in wanted), times, "runtime-conflict")
         times["runtime-conflict"] -= a.situational_seconds
         times["situational-conflict"] = times.get("situational-conflict", 0.0) + a.situational_seconds
@@ -67,6 +75,13 @@ def analyse_spec(
         _timed(lambda: a.findings.extend(_coverage(spec, coverage, wanted)), times, "coverage")
     order = {c: i for i, c in enumerate(CHECKS)}
     kept = [f for f in a.findings if f.code in wanted]  # a question can answer several checks
+    for f in [f for f in kept if f.witness is not None and not f.witness.confirmed]:
+        # the independent oracle disagrees with the encoding: never shown as proved
+        kept.remove(f)
+        a.unknown.append(
+            f"{f.code} {f.subject}: the analysis found a witness that the reference semantics does "
+            "not confirm, so it is not reported (please report this, with the rule file)"
+        )
     findings = sorted(kept, key=lambda f: (f.span.line, f.span.col, order.get(f.code, 99), f.subject))
     return findings, a.unknown
 
@@ -128,7 +143,7 @@ def _coverage(spec: Specification, cov: Coverage, wanted: set[str]) -> list[Find
         return out
     if cov.events is not None:
         # an event some response owes is the robot's own action, produced by its tasks
-        produced = {o.event for r in spec.rules for o in visit.occurrences(r.response)}
+        produced = {o.event for r in spec.rules for o in visit.occurrences(r.response) if not o.negated}
         seen: set[str] = set()
         for r in spec.rules:
             e = r.trigger.event

@@ -150,3 +150,38 @@ def test_a_prohibition_inside_an_otherwise_that_could_refuse_is_said_to_be_outsi
                 "R2 when A then D within 5 seconds otherwise { not C within 20 seconds }",
                 checks="vacuous-conflict")  # fmt: skip
     assert plain.unknown == []  # C is owed by no obligation with an otherwise: nothing to refuse
+
+
+def test_an_obligation_without_fallback_refused_at_once_is_broken_even_if_its_event_occurs(
+    tmp_path: Path,
+) -> None:
+    """RP forbids B for RY's whole window when X fires: RY is refused at once (a breach); B
+    breaking RP, made up for by C, does not undo it. Found by a hostile tester."""
+    rules = "RP when A then not B within 100 seconds otherwise C within 5 seconds\nRY when A then B within 5 seconds"
+    path = tmp_path / "rules.sleec"
+    path.write_text(
+        sleec(
+            rules,
+            "concern_start c1 when A then C within 10 seconds concern_end\npurpose_start p1 exists A purpose_end",
+        )
+    )
+    spec = load(path)
+    trace = [Step(0, "A"), Step(1, "B"), Step(2, "C"), Step(200)]
+    assert {v.rule for v in final_breaches(spec, judge(spec, trace, Options()))} == {"RY"}
+    report = analyse(path, ["vacuous-conflict", "purpose-blocked", "concern-raised"])
+    assert subjects(report, "vacuous-conflict") == {"RP", "RY"}
+    assert subjects(report, "purpose-blocked") == {"p1"}
+    assert subjects(report, "concern-raised") == set()
+
+
+def test_an_event_only_forbidden_is_still_an_input(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from cosleec.cli.main import main
+
+    path = tmp_path / "rules.sleec"
+    path.write_text(sleec("R4 when A then not B within 1 seconds\nRH when B then C within 1 seconds"))
+    mapping = tmp_path / "m.yaml"
+    mapping.write_text("events:\n  A: {topic: /a, type: std_msgs/Bool, equals: true}\n")
+    assert main(["analyse", "--check", "unproduced-input", "--mapping", str(mapping), str(path)]) == 1
+    assert "event `B` is read by RH but the mapping never produces it" in capsys.readouterr().out
