@@ -85,7 +85,7 @@ class Analysis:
     constants: dict[str, int]
     settings: Settings
     findings: list[Finding] = field(default_factory=list)
-    unknown: list[str] = field(default_factory=list)
+    unknown: list[str] = field(default_factory=list)  # what was not settled (FileReport.unknown)
     _by_event: dict[tuple[str, int], Encoding] = field(default_factory=dict)
     above: frozenset[tuple[str, str]] = frozenset()  # declared priorities, closed (set at start)
     situational_seconds: float = 0.0  # the part of runtime_conflicts spent on situations
