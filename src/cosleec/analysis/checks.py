@@ -503,7 +503,7 @@ class Analysis:
         for one in [True, False] if shared else [False]:
             if one and ro is rp and ko != kp:
                 continue  # two clauses of one rule never apply to one occurrence
-            enc = self._new()
+            enc = self._new(min(2, self.settings.bound))  # the two triggers, and what relations need
             xo = enc.probe(ro.trigger.event, "obligation")
             xp = xo if one else enc.probe(rp.trigger.event, "prohibition")
             enc.unfold()
@@ -576,8 +576,19 @@ class Analysis:
         pending = (
             z3.Not(enc.occurs(event, lo, xp.t, After(slot=xo))) if xo is not xp else z3.BoolVal(True, enc.ctx)
         )
-        orders = [z3.BoolVal(True, enc.ctx)] if xo is xp else [After(slot=xp)(xo), After(slot=xo)(xp)]
-        for order in orders:  # each trigger in turn as the one that cannot be answered
+        orders = (
+            [(z3.BoolVal(True, enc.ctx), ro)]
+            if xo is xp
+            else [(After(slot=xp)(xo), ro), (After(slot=xo)(xp), rp)]
+        )
+        for order, later in orders:  # each trigger in turn as the one that cannot be answered
+            if any(  # this pair already leaves this trigger unanswerable: one finding says it
+                f.code == "situational-conflict"
+                and later.name in f.extra["triggers"]
+                and {ro.name, rp.name} <= set(f.rules)
+                for f in self.findings
+            ):
+                continue
             if self.solve(enc, [*base, covered, pending, order], "situation") == z3.sat:
                 self._pinned(enc.solver.model(), ro, ko, io, xo, rp, kp, xp)
 

@@ -76,11 +76,21 @@ def test_the_order_of_the_files_does_not_change_their_findings_and_cores(tmp_pat
     assert _cores(cli_json(*files)) == _cores(cli_json(*reversed(files), hashseed="7"))
 
 
-def test_the_order_of_the_files_does_not_change_their_situations_and_witnesses(tmp_path: Path) -> None:
+def test_the_order_of_the_files_changes_no_finding_only_which_witness_shows_it(tmp_path: Path) -> None:
+    """Findings, causes, messages and places do not depend on the order of the files. Which
+    trace a witness shows may (z3's models depend on its process-wide state), but every one is
+    confirmed by the reference semantics."""
+
+    def comparable(doc: dict[str, Any]) -> dict[str, Any]:
+        out = {}
+        for d in doc["files"]:
+            kept = [{k: v for k, v in f.items() if k not in ("witness", "situation")} for f in d["findings"]]
+            assert all(f["witness"] is None or f["witness"]["confirmed"] for f in d["findings"])
+            out[d["path"]] = kept
+        return out
+
     files = _files(tmp_path)
-    forward = {d["path"]: d for d in cli_json(*files)["files"]}
-    backward = {d["path"]: d for d in cli_json(*reversed(files))["files"]}
-    assert forward == backward
+    assert comparable(cli_json(*files)) == comparable(cli_json(*reversed(files)))
 
 
 def test_the_same_file_twice_in_one_process(tmp_path: Path) -> None:
