@@ -38,7 +38,7 @@ from typing import Any
 import z3
 
 from cosleec.analysis.cores import Undecided, minimal_core
-from cosleec.analysis.encoding import After, Encoding, Reading, Slot, clause_items, fallible_events
+from cosleec.analysis.encoding import After, Encoding, Reading, Slot, as_float, clause_items, fallible_events
 from cosleec.analysis.findings import BOUNDED, PROVED, Finding
 from cosleec.analysis.witness import reads as _reads
 from cosleec.analysis.witness import show, smallest, snapshot, then, witness
@@ -638,7 +638,7 @@ class Analysis:
         """The candidate situation of ``model``: the history before the later trigger pinned."""
         event = io.occurrence.event
         probes = list(dict.fromkeys([xo, xp]))
-        probes.sort(key=lambda x: (_value(model, x.t), _value(model, x.pos)))
+        probes.sort(key=lambda x: (as_float(model.eval(x.t, True)), as_float(model.eval(x.pos, True))))
         built: tuple[Encoding, Slot, Any, list[tuple[str, Any]], Any] | None = None
         for b in self.bounds():
             attempt = self._history(model, probes, event, xo, xp, b)
@@ -701,13 +701,6 @@ class Analysis:
                 extra={"triggers": triggers},
             )
         )
-
-
-def _value(model: Any, var: Any) -> float:
-    v = model.eval(var, model_completion=True)
-    if z3.is_int_value(v):
-        return float(v.as_long())
-    return float(v.numerator_as_long()) / float(v.denominator_as_long())
 
 
 def _overlap(j: Any, event: str, owing: str, banning: str) -> bool:

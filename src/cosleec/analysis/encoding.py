@@ -451,7 +451,7 @@ class Encoding:
                 v = self.seconds(d, snap)
                 simple = z3.simplify(v)
                 if (z3.is_rational_value(simple) or z3.is_int_value(simple)) and abs(
-                    _fraction(simple)
+                    as_float(simple)
                 ) <= MAX_SECONDS:
                     continue
                 parts.append(z3.And(v >= -MAX_SECONDS, v <= MAX_SECONDS))
@@ -839,11 +839,16 @@ def clause_items(resp: A.Response) -> Iterator[tuple[int, A.ResponseItem]]:
                 yield k, it
 
 
-def _fraction(v: Z3) -> float:
-    """A z3 number as a float."""
+def as_float(v: Z3) -> float:
+    """A z3 numeral (integer, rational, or an algebraic number rounded) as a float: the one
+    reading of a model's numbers, for witnesses, situations and range checks."""
     if z3.is_int_value(v):
         return float(v.as_long())
-    return float(v.numerator_as_long()) / float(v.denominator_as_long())
+    if z3.is_rational_value(v):
+        return float(v.numerator_as_long()) / float(v.denominator_as_long())
+    if z3.is_algebraic_value(v):
+        return float(v.approx(12).as_decimal(12).rstrip("?"))
+    raise ValueError(f"not a number: {v}")
 
 
 def fallible_events(resp: A.Response | None) -> Iterator[str]:

@@ -14,7 +14,7 @@ from typing import Any
 
 import z3
 
-from cosleec.analysis.encoding import Encoding
+from cosleec.analysis.encoding import Encoding, as_float
 from cosleec.analysis.findings import Witness
 from cosleec.lang import Specification, visit
 from cosleec.lang import ast as A
@@ -96,14 +96,9 @@ def _values(enc: Encoding, model: Any, snap: dict[str, Any]) -> dict[str, Value 
 
 
 def _number(v: Any) -> float:
-    if z3.is_int_value(v):
-        return float(v.as_long())
-    if z3.is_rational_value(v):
-        f = float(v.numerator_as_long()) / float(v.denominator_as_long())
-        return int(f) if f == int(f) else f  # type: ignore[return-value]
-    if z3.is_algebraic_value(v):
-        return float(v.approx(12).as_decimal(12).rstrip("?"))
-    raise ValueError(f"not a number: {v}")
+    """A model's number for a trace: a whole one written without its ``.0``."""
+    f = as_float(v)
+    return int(f) if z3.is_rational_value(v) and f == int(f) else f  # type: ignore[return-value]
 
 
 def _horizon(spec: Specification) -> float:
