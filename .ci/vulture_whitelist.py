@@ -83,3 +83,15 @@ _.chain_first  #
 measure_rel  #
 event_measure_rel  #
 REFUSE  # UnknownEvents.REFUSE: chosen by value (unknown_events="refuse")
+# fields of ROS messages, set for whoever reads them (cosleec_interfaces, diagnostic_msgs)
+_.frame_id  #
+_.window_start  #
+_.previous  #
+_.executor_alive  #
+_.hardware_id  #
+# rclpy's LifecycleNode calls these on each transition (ros2._lifecycle_node)
+_.on_configure  #
+_.on_activate  #
+_.on_deactivate  #
+_.on_cleanup  #
+_.on_shutdown  #

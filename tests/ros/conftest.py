@@ -71,3 +71,12 @@ def transport(backend: str, graph: dict[str, str]) -> Iterator[Any]:
 @pytest.fixture
 def namespace() -> str:
     return f"/cosleec_t{os.getpid()}_{next(_ns)}"
+
+
+@pytest.fixture
+def json_wire(transport: Any) -> Iterator[str]:
+    """This test speaks the JSON wire (JSON text in std_msgs/String): malformed payloads can
+    only be sent there. Its nodes must be started with ``--wire json`` (``System(wire=...)``)."""
+    transport.wire = "json"
+    yield "json"
+    transport.wire = "typed"

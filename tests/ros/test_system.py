@@ -74,9 +74,9 @@ def test_ros_demo_command_checks_the_outcome_against_the_embedded_run(
 
 
 def test_bad_messages_are_rejected_counted_and_the_nodes_keep_running(
-    backend: str, graph: dict[str, str], transport: Any, namespace: str
+    backend: str, graph: dict[str, str], transport: Any, namespace: str, json_wire: str
 ) -> None:
-    with System(backend, namespace, env=graph) as system:
+    with System(backend, namespace, env=graph, wire=json_wire) as system:
         driver = Driver(transport, namespace)
         driver.ready()
         bad = [
@@ -218,12 +218,13 @@ LATE = """
 import json, threading
 from cosleec.ros.run import transport
 t = transport("{backend}", "cosleec_late_joiner")
+from cosleec.nodes import record
 got = threading.Event(); box = []
 def on(payload):
-    box.append(payload); got.set()
+    box.append(record(payload)); got.set()
 t.subscribe("{topic}", on)
 assert got.wait(20), "no latched layers"
-print(box[-1])
+print(json.dumps(box[-1]))
 t.close()
 """
 

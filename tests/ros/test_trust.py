@@ -17,6 +17,7 @@ from typing import Any
 import pytest
 
 from cosleec.demo.runner import rules_path
+from cosleec.nodes import record
 from cosleec.ros.demo import System
 from cosleec.ros.driver import Driver
 from cosleec.ros.launch import node_command, start, stop
@@ -37,9 +38,9 @@ class Watch:
             transport.subscribe(t, self._sink(t))
 
     def _sink(self, topic: str) -> Callable[[str], None]:
-        def sink(payload: str) -> None:
+        def sink(payload: Any) -> None:
             with self._cv:
-                self.got[topic].append(json.loads(payload))
+                self.got[topic].append(record(payload))
                 self._cv.notify_all()
 
         return sink
@@ -70,9 +71,9 @@ def wait_subscribed(transport: Any, topic: str, timeout: float = 20.0) -> None:
 
 
 def test_malformed_payloads_never_deafen_the_nodes(
-    backend: str, graph: dict[str, str], transport: Any, namespace: str
+    backend: str, graph: dict[str, str], transport: Any, namespace: str, json_wire: str
 ) -> None:
-    with System(backend, namespace, env=graph) as system:
+    with System(backend, namespace, env=graph, wire=json_wire) as system:
         driver = Driver(transport, namespace)
         driver.ready()
         driver.advance(5)

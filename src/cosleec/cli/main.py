@@ -51,7 +51,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        given = list(sys.argv[1:] if argv is None else argv)
+        rest, ros_args = ros.split_ros_args(given) if given[:1] in (["ros1"], ["ros2"]) else (given, [])
+        args = parser.parse_args(rest)
+        args.ros_args = ros_args
         rc: int = args.run(args)
         return rc
     except SystemExit as e:

@@ -1,4 +1,11 @@
-"""``cosleec ros2 ...`` and ``cosleec ros1 ...``: the CO-SLEEC nodes on real middleware."""
+"""``cosleec ros2 ...`` and ``cosleec ros1 ...``: the CO-SLEEC nodes on real middleware.
+
+Every node option is also a ROS parameter of the same name (``--status-each`` is
+``status_each``): ``cosleec ros2 manager --ros-args -p rules:=home.sleec -p
+semantics:=nested`` or ``--params-file params.yaml`` on ROS 2, ``_semantics:=nested`` (a
+private parameter) on ROS 1. A parameter given wins over the option. Simulated time is
+the standard ``use_sim_time`` (``--sim-time`` sets it), read from ``/clock``.
+"""
 
 from __future__ import annotations
 
@@ -10,14 +17,80 @@ from typing import Any
 
 from cosleec import ros
 from cosleec.cli.common import add_clause_options, add_priority_options
-from cosleec.nodes import LayersNode, ListenerNode, ManagerNode, Mapping, TaskNode
+from cosleec.errors import UserError
+from cosleec.nodes import (
+    GuardNode,
+    LayersNode,
+    ListenerNode,
+    ManagerNode,
+    Mapping,
+    TaskNode,
+    load_routes,
+    route,
+)
 from cosleec.runtime import RuleSet, Unknowns
+
+#: the options of each node kind that are also ROS parameters (argparse dests)
+PARAMETERS = {
+    "manager": (
+        "rules",
+        "semantics",
+        "unknown",
+        "audit",
+        "journal",
+        "priority",
+        "priority_semantics",
+        "priority_lead",
+        "record",
+        "status_each",
+        "autostart",
+        "namespace",
+    ),
+    "layers": ("rules", "semantics", "unknown", "namespace"),
+    "listener": ("mapping", "rules", "namespace"),
+    "task": (
+        "rules",
+        "module",
+        "path",
+        "name",
+        "only",
+        "status_each",
+        "when_manager_down",
+        "request_timeout",
+        "namespace",
+    ),
+    "guard": ("mapping", "rules", "manager", "timeout", "namespace"),
+}
+
+
+def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
+    """``argv`` without its ROS arguments, and those arguments.
+
+    ROS 2: everything from ``--ros-args`` up to a lone ``--`` (or the end). ROS 1:
+    ``name:=value`` remappings and ``_param:=value`` private parameters, anywhere.
+    """
+    rest: list[str] = []
+    ros_args: list[str] = []
+    i = 0
+    while i < len(argv):
+        a = argv[i]
+        if a == "--ros-args":
+            j = argv.index("--", i + 1) if "--" in argv[i + 1 :] else len(argv)
+            ros_args += argv[i:j]
+            i = j + 1
+            continue
+        if ":=" in a and not a.startswith("-"):
+            ros_args.append(a)
+        else:
+            rest.append(a)
+        i += 1
+    return rest, ros_args
 
 
 def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: ignore[type-arg]
     """Register ``cosleec <backend>`` (``ros2`` or ``ros1``) and its sub-commands.
 
-    One per node kind (manager, layers, listener, task), plus ``launch`` and ``demo``.
+    One per node kind (manager, layers, listener, task, guard), plus ``launch`` and ``demo``.
     """
     p = sub.add_parser(
         backend, help=f"run CO-SLEEC nodes on {'ROS 2 (rclpy)' if backend == 'ros2' else 'ROS 1 (rospy)'}"
@@ -26,13 +99,20 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     nodes.required = True
 
     def common(q: argparse.ArgumentParser) -> None:
-        q.add_argument("--namespace", default="/cosleec")
+        q.add_argument("--namespace", default="/cosleec", help="the topics' namespace (default /cosleec)")
+        q.add_argument(
+            "--wire",
+            choices=("typed", "json"),
+            default="typed",
+            help="typed: cosleec_interfaces messages (default); json: JSON text in std_msgs/String, "
+            "for tools without the types (every node of a system must use the same)",
+        )
         q.set_defaults(run=run, backend=backend)
 
     m = nodes.add_parser("manager", help="rules, context, decisions, obligations")
-    m.add_argument("rules")
+    m.add_argument("rules", nargs="?", help="the rule file (or the `rules` parameter)")
     add_clause_options(m)
-    m.add_argument("--sim-time", action="store_true", help="take time from the clock topic")
+    m.add_argument("--sim-time", action="store_true", help="take time from /clock (use_sim_time)")
     m.add_argument("--audit", metavar="FILE", help="append-only JSON Lines audit trail")
     m.add_argument(
         "--journal",
@@ -44,19 +124,33 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     m.add_argument(
         "--status-each", action="store_true", help="publish status after every message (harnesses)"
     )
+    m.add_argument(
+        "--no-autostart",
+        dest="autostart",
+        action="store_false",
+        help="ROS 2: stay unconfigured until a lifecycle manager configures and activates the node "
+        "(default: configure and activate at once)",
+    )
     common(m)
     la = nodes.add_parser("layers", help="the COP Layer Manager: publishes active layers (latched)")
-    la.add_argument("rules")
+    la.add_argument("rules", nargs="?", help="the rule file (or the `rules` parameter)")
     add_clause_options(la)  # as the manager's, or the two choose different layers
     common(la)
     li = nodes.add_parser("listener", help="the Context Listener: robot topics -> measures and events")
-    li.add_argument("mapping")
+    li.add_argument("mapping", nargs="?", help="the mapping file (or the `mapping` parameter)")
     li.add_argument("--rules", help="check the mapping against these rules")
     common(li)
     t = nodes.add_parser("task", help="a task node: layered implementations of rules")
-    t.add_argument("rules")
-    t.add_argument("--module", required=True, help="a module with install(node) binding tasks/capabilities")
-    t.add_argument("--name", default="task")
+    t.add_argument("rules", nargs="?", help="the rule file (or the `rules` parameter)")
+    t.add_argument(
+        "--module",
+        help="a module (or a .py file) with install(node) binding tasks/capabilities; "
+        "found in the current directory and on --path",
+    )
+    t.add_argument(
+        "--path", action="append", default=[], metavar="DIR", help="also look for --module here (repeatable)"
+    )
+    t.add_argument("--name", default="task", help="the task node's name (default task)")
     t.add_argument("--only", help="comma-separated rule names this node serves")
     t.add_argument(
         "--status-each", action="store_true", help="publish status after every obligation (harnesses)"
@@ -76,6 +170,33 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
         help="how long a task's request waits for the Manager's answer (default 2)",
     )
     common(t)
+    g = nodes.add_parser(
+        "guard",
+        help="forward a topic's messages (any type) only while the event they stand for is permitted",
+    )
+    g.add_argument("mapping", nargs="?", help="a mapping file with a `guards` section")
+    g.add_argument("--rules", help="check the guarded events against these rules")
+    g.add_argument("--from", dest="source", metavar="TOPIC", help="guard one topic without a mapping file...")
+    g.add_argument("--to", dest="target", metavar="TOPIC", help="...forwarding to this topic...")
+    g.add_argument(
+        "--type",
+        dest="msg_type",
+        metavar="TYPE",
+        help="...messages of this type (geometry_msgs/msg/Twist)...",
+    )
+    g.add_argument("--event", metavar="EVENT", help="...only while this event is permitted")
+    g.add_argument(
+        "--manager",
+        help="the Manager node's name, whose ~/request service is asked (default: from --namespace)",
+    )
+    g.add_argument(
+        "--timeout",
+        type=float,
+        default=0.5,
+        metavar="SECONDS",
+        help="how long a message waits for the Manager's answer before it is dropped (default 0.5)",
+    )
+    common(g)
     lp = nodes.add_parser("launch", help="start the nodes of a launch file; stop them on SIGINT/SIGTERM")
     lp.add_argument("file")
     lp.set_defaults(run=run, backend=backend)
@@ -99,69 +220,191 @@ def node_name(namespace: str, kind: str) -> str:
     return name if name[0].isalpha() else f"n{name}"
 
 
+def options(t: Any, args: argparse.Namespace, node: str) -> argparse.Namespace:
+    """``args`` with the node's ROS parameters applied (a parameter given wins over the option)."""
+    params = getattr(t, "parameters", None)
+    if params is None:
+        return args
+    names = PARAMETERS[node]
+    values = params({n: getattr(args, n, None) for n in names})
+    return argparse.Namespace(**{**vars(args), **values})
+
+
+def _required(value: Any, what: str, node: str) -> Any:
+    if not value:
+        raise UserError(
+            f"the {node} node needs {what}",
+            hint=f"give it as the first argument, or as the `{what.split()[-1]}` parameter",
+        )
+    return value
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the chosen node until SIGINT/SIGTERM, or launch a file, or play the demo.
 
-    Rules and mapping are loaded and checked before the middleware starts, so a mistake
-    in them is reported at once, with exit 1.
+    Given on the command line, rules and mapping are loaded and checked before the
+    middleware starts, so a mistake in them is reported at once, with exit 1; given as
+    parameters, as soon as the node has read its parameters.
     """
     backend, node = args.backend, args.node
     if node == "launch":
         return ros.launch(args.file)
     if node == "demo":
-        return ros.run_demo(backend, args.namespace, args.json)
+        return ros.run_demo(backend, args.namespace, args.json, wire=args.wire)
+    ros_args = list(getattr(args, "ros_args", []) or [])
 
-    # rules and mapping are read before the middleware starts: a mistake is reported at once
-    path = args.rules if node != "listener" else args.rules or None
-    rules = RuleSet.from_file(path) if path else None
-    mapping = (
-        Mapping.load(args.mapping, dict(rules.measures) if rules else None, rules.events if rules else None)
-        if node == "listener"
-        else None
-    )
-    namespace = mapping.namespace if mapping is not None and mapping.namespace else args.namespace
-    name = node_name(namespace, node if node != "task" else args.name)
+    # files given as arguments are read before the middleware starts: a mistake is reported at once
+    if (node in ("layers", "task") and args.rules) or (node == "manager" and args.rules and args.autostart):
+        RuleSet.from_file(args.rules)  # (a managed Manager reads its rules when configured)
+    if node == "listener" and args.mapping:
+        early = RuleSet.from_file(args.rules) if args.rules else None
+        Mapping.load(args.mapping, dict(early.measures) if early else None, early.events if early else None)
+    if node == "guard" and args.mapping:
+        load_routes(args.mapping)
+    name = node_name(args.namespace, node if node != "task" else args.name)
+    lifecycle = backend == "ros2" and node == "manager"
 
     def make(t: Any) -> Any:
+        o = options(t, args, node)
         if node == "manager":
-            assert rules is not None
-            return ManagerNode(
-                t,
-                rules,
-                namespace=args.namespace,
-                semantics=args.semantics,
-                sim_time=args.sim_time,
-                audit=args.audit,
-                record=args.record,
-                status_each=args.status_each,
-                unknown=args.unknown,
-                journal=args.journal,
-                priorities=args.priority,
-                priority_semantics=args.priority_semantics,
-                priority_lead=args.priority_lead,
-            )
+            path = _required(o.rules, "a rule file: rules", node)
+            sim = bool(o.sim_time) or bool(getattr(t, "use_sim_time", lambda: False)())
+
+            def build(active: bool) -> ManagerNode:
+                return ManagerNode(
+                    t,
+                    RuleSet.from_file(path),  # a lifecycle node reads it when configured
+                    namespace=o.namespace,
+                    semantics=o.semantics,
+                    sim_time=sim,
+                    audit=o.audit,
+                    record=o.record,
+                    status_each=o.status_each,
+                    unknown=o.unknown,
+                    journal=o.journal,
+                    priorities=o.priority,
+                    priority_semantics=o.priority_semantics,
+                    priority_lead=o.priority_lead,
+                    rules_path=o.rules,
+                    active=active,
+                )
+
+            if not lifecycle:
+                return build(True)
+            return ManagedManager(t, build, path, autostart=o.autostart)
+        rules = (
+            RuleSet.from_file(_required(o.rules, "a rule file: rules", node))
+            if node in ("layers", "task") or o.rules
+            else None
+        )
         if node == "layers":
             assert rules is not None
             return LayersNode(
-                t, rules, namespace=args.namespace, semantics=args.semantics, unknowns=Unknowns(args.unknown)
+                t, rules, namespace=o.namespace, semantics=o.semantics, unknowns=Unknowns(o.unknown)
             )
         if node == "listener":
-            assert mapping is not None
-            return ListenerNode(t, mapping, namespace=args.namespace)
+            mapping = Mapping.load(
+                _required(o.mapping, "a mapping file: mapping", node),
+                dict(rules.measures) if rules else None,
+                rules.events if rules else None,
+            )
+            return ListenerNode(t, mapping, namespace=o.namespace)
+        if node == "guard":
+            events = rules.events if rules else None
+            if args.source or args.target or args.msg_type or args.event:
+                spec = {"to": args.target, "type": args.msg_type, "event": args.event}
+                routes = [route(str(args.source or ""), spec, "--from/--to/--type/--event", events)]
+            else:
+                routes = load_routes(_required(o.mapping, "a mapping file: mapping", node), events)
+            return GuardNode(
+                t,
+                routes,
+                manager=o.manager or "/" + node_name(o.namespace, "manager"),
+                namespace=o.namespace,
+                timeout=o.timeout,
+            )
         assert rules is not None
         tn = TaskNode(
             t,
             rules,
-            namespace=args.namespace,
-            name=args.name,
-            status_each=args.status_each,
-            when_manager_down=args.when_manager_down,
-            request_timeout=args.request_timeout,
+            namespace=o.namespace,
+            name=o.name,
+            status_each=o.status_each,
+            when_manager_down=o.when_manager_down,
+            request_timeout=o.request_timeout,
         )
-        ros.load_module(args.module).install(tn)
-        only = args.only.split(",") if args.only else None
+        ros.load_module(_required(o.module, "a task module: --module", node), o.path).install(tn)
+        only = o.only.split(",") if o.only else None
         return tn.start(only)
 
     if backend == "ros2" and not os.environ.get("ROS_DOMAIN_ID"):
         print("cosleec: note: ROS_DOMAIN_ID is not set (domain 0)", file=sys.stderr)
-    return ros.serve(backend, node, make, name)
+    return ros.serve(backend, node, make, name, wire=args.wire, ros_args=ros_args, lifecycle=lifecycle)
+
+
+class ManagedManager:
+    """The Manager node as a ROS 2 lifecycle node: configure, activate, deactivate, clean up.
+
+    configure reads and checks the rule file (a broken file fails the transition and
+    leaves the node unconfigured) and builds the Manager, inactive; a second configure
+    (after cleanup) reloads the file instead; activate starts enforcing; deactivate and
+    cleanup stop it: every request is refused. With ``autostart`` (the default) it
+    configures and activates itself at once, as a plain node would start.
+    """
+
+    def __init__(self, t: Any, build: Any, rules_path: str, *, autostart: bool = True) -> None:
+        self.t = t
+        self.build = build
+        self.rules_path = rules_path
+        self.node: ManagerNode | None = None
+        t.managed(
+            configure=self.configure,
+            activate=self.activate,
+            deactivate=self.deactivate,
+            cleanup=self.deactivate,
+            shutdown=self.shutdown,
+        )
+        if autostart and not (t.transition("configure") and t.transition("activate")):
+            raise UserError("the Manager could not configure and activate itself (see the log above)")
+
+    def configure(self) -> bool:
+        """Load and check the rules; build the Manager (inactive) or reload it."""
+        if self.node is None:
+            self.node = self.build(False)
+            return True
+        answer = self.node.reload(self.rules_path)
+        if not answer["success"]:
+            print(f"cosleec: configure: {answer['message']}", file=sys.stderr)
+        return bool(answer["success"])
+
+    def activate(self) -> bool:
+        """Start enforcing."""
+        assert self.node is not None
+        self.node.activate()
+        return True
+
+    def deactivate(self) -> bool:
+        """Stop enforcing: requests refused, events rejected."""
+        if self.node is not None:
+            self.node.deactivate()
+        return True
+
+    def shutdown(self) -> bool:
+        """Stop enforcing before the node goes."""
+        return self.deactivate()
+
+    def status(self, **extra: Any) -> None:
+        """The heartbeat: the Manager's status once configured (nothing before)."""
+        if self.node is not None:
+            self.node.status(**extra)
+
+    def reload(self, path: str | None = None) -> dict[str, Any]:
+        """SIGHUP: as :meth:`ManagerNode.reload`, once configured."""
+        if self.node is None:
+            return {"success": False, "message": "not configured yet: nothing to reload"}
+        return self.node.reload(path)
+
+    def close(self) -> None:
+        """Close the Manager, if it was ever configured."""
+        if self.node is not None:
+            self.node.close()

@@ -1,5 +1,6 @@
-"""The paper's nodes, independent of the middleware: Manager, Context Listener, Layer Manager
-and the task-node base, written against the :class:`Transport` protocol (which lives here).
+"""The paper's nodes, independent of the middleware: Manager, Context Listener, Layer Manager,
+the task-node base and the guard, written against the :class:`Transport` protocol (which
+lives here).
 
 ``cosleec.ros`` runs them on ROS 2 or ROS 1; :class:`LocalBus` runs them in one process.
 Each node is built from a :class:`~cosleec.runtime.RuleSet`
@@ -7,9 +8,11 @@ Each node is built from a :class:`~cosleec.runtime.RuleSet`
 """
 
 from cosleec.nodes.base import LogLimiter, MessageError, Node
+from cosleec.nodes.guard_node import GuardError, GuardNode, Route, load_routes, route
 from cosleec.nodes.layers_node import LayersNode
 from cosleec.nodes.listener import ListenerNode, Mapping, MappingError
 from cosleec.nodes.manager_node import ManagerNode
+from cosleec.nodes.qos import Qos, QosError
 from cosleec.nodes.recording import McapRecorder, read_recording
 from cosleec.nodes.task_node import ManagerUnavailable, TaskNode
 from cosleec.nodes.transport import (
@@ -20,12 +23,15 @@ from cosleec.nodes.transport import (
     LocalTransport,
     Transport,
     dumps,
+    record,
     topic,
 )
 
 __all__ = [
     "DEFAULT_NAMESPACE",
     "LATCHED",
+    "GuardError",
+    "GuardNode",
     "Handler",
     "LayersNode",
     "ListenerNode",
@@ -39,9 +45,15 @@ __all__ = [
     "McapRecorder",
     "MessageError",
     "Node",
+    "Qos",
+    "QosError",
+    "Route",
     "TaskNode",
     "Transport",
     "dumps",
+    "load_routes",
     "read_recording",
+    "record",
+    "route",
     "topic",
 ]

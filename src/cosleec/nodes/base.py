@@ -8,7 +8,6 @@ a field of the wrong type, a 10 MB string -- the node rejects it and hears the n
 
 from __future__ import annotations
 
-import json
 import logging
 import threading
 import time
@@ -18,7 +17,7 @@ from collections.abc import Callable, Hashable
 from typing import Any
 
 from cosleec.errors import UserError, clip
-from cosleec.nodes.transport import DEFAULT_NAMESPACE, LATCHED, Transport, dumps, topic
+from cosleec.nodes.transport import DEFAULT_NAMESPACE, LATCHED, Transport, dumps, record, topic
 
 log = logging.getLogger("cosleec.nodes")
 
@@ -168,7 +167,7 @@ class Node:
         full = self.topic(name)
         with self._publish_lock:
             n = self._published[full] = self._published.get(full, 0) + 1
-            self.transport.publish(full, dumps({**message, "_from": self._sender, "_n": n}))
+            self.transport.publish(full, {**message, "_from": self._sender, "_n": n})
         self._count("published")
 
     def _heard_from(self, where: str, message: dict[str, Any]) -> None:
@@ -199,10 +198,10 @@ class Node:
         """
         full = self.topic(name)
 
-        def receive(payload: str) -> None:
+        def receive(payload: Any) -> None:
             self._count("received")
             try:
-                message = json.loads(payload)
+                message = record(payload)
                 if not isinstance(message, dict):
                     raise MessageError("expected a JSON object")
                 self._heard_from(full, message)
@@ -297,6 +296,9 @@ class Node:
             errors = getattr(self.transport, "errors", None)
             if isinstance(errors, int):
                 health["transport_errors"] = errors
+            incompatible = getattr(self.transport, "incompatible", None)
+            if isinstance(incompatible, int):  # peers whose QoS can never match ours (ROS 2)
+                health["qos_incompatible"] = incompatible
             lost = getattr(self.transport, "lost", None)
             if isinstance(lost, int):
                 health["transport_lost"] = lost  # what the middleware itself says it dropped

@@ -3,18 +3,32 @@
 A declarative YAML mapping says, per measure or event, which topic and message type to
 read, which field (a dotted path), and how to turn it into a value: taken as it is, a
 comparison (``above``, ``below``, ``at_least``, ``at_most``, ``equals``, ``not_equals``)
-giving a boolean, or ``bands`` giving a scale literal. Events fire on the rising edge of
-their condition, so a condition that stays true does not dispatch twice. Nothing in a
-mapping is ever evaluated as code::
+giving a boolean, or ``bands`` giving a scale literal. Nothing in a mapping is ever
+evaluated as code; ``docs/mapping.md`` describes every key::
 
+    namespace: /cosleec
     measures:
       roomDark:       {topic: /light/lux, type: std_msgs/Float64, below: 10}
       userDistressed: {topic: /emotion/distress, type: std_msgs/Float64,
                        bands: [[0.3, low], [0.7, medium], [high]]}
       heartRate:      {topic: /vitals, type: std_msgs/String, json: true, field: hr}
+      batteryLevel:   {topic: /battery, type: sensor_msgs/msg/BatteryState, field: percentage}
     events:
       CurtainOpenRequest: {topic: /voice/command, type: std_msgs/String, equals: open curtains}
-      UserFallen:         {topic: /fall_detector, type: std_msgs/Bool, equals: true}
+      UserFallen:         {topic: /fall_detector, type: std_msgs/Bool, equals: true, qos: reliable}
+      CleanRequest:       {topic: /voice/command, type: std_msgs/String, equals: clean, fire: each}
+
+``fire: edge`` (the default) fires an event when its condition becomes true, not again
+while it stays true; ``fire: each`` fires on every message for which it holds.
+
+``qos`` (a profile ``sensor_data``, ``reliable``, ``latched``, or a table
+``{reliability, durability, depth}``; :mod:`cosleec.nodes.qos`) says how a topic is
+subscribed. Left out, a measure reads ``sensor_data`` (best effort: it hears best-effort
+sensor drivers and reliable publishers alike, and a lost sample is replaced by the next)
+and an event reads ``reliable`` (a command must not be lost), except from a
+``sensor_msgs`` type, which sensor drivers publish best effort. The entries on one topic
+share one subscription, so one QoS: a stated one, else best effort if any entry's default
+is, else reliable (:meth:`Mapping.qos_of`).
 
 All measures read from one incoming message are sent as one atomic context update.
 
@@ -23,13 +37,20 @@ and a 400-digit integer are rejected), a measure taken as it is must be of its m
 kind (no ``"fast"`` for a numeric measure), and without the rules to say the kind it must
 at least be a boolean, a number or a short string. A rejected value is counted and
 reported on ``rejected``; the rest of the message still counts.
+
+A mistake in a mapping is a :class:`MappingError` that names the file, the line and
+column, and the entry: ``mapping.yaml:7:3: events.Clean: ...``.
 """
 
 from __future__ import annotations
 
+import contextlib
+import difflib
 import json
+import logging
 import math
 import sys
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -38,7 +59,10 @@ import yaml
 
 from cosleec.errors import UserError, show
 from cosleec.nodes.base import MessageError, Node
+from cosleec.nodes.qos import Qos, QosError
 from cosleec.runtime import MeasureSpec
+
+log = logging.getLogger("cosleec.nodes")
 
 COMPARISONS = {
     "above": lambda x, t: x > t,
@@ -48,13 +72,97 @@ COMPARISONS = {
     "equals": lambda x, t: x == t,
     "not_equals": lambda x, t: x != t,
 }
-KEYS = {"topic", "type", "field", "json", "bands", *COMPARISONS}
+KEYS = {"topic", "type", "field", "json", "bands", "qos", "fire", *COMPARISONS}
+#: ``guards`` belongs to the guard (:mod:`cosleec.nodes.guard_node`): one file maps a robot
+SECTIONS = ("namespace", "measures", "events", "guards")
+#: how an event fires: when its condition becomes true (edge), or on every message it holds for
+FIRE = ("edge", "each")
 #: the longest string a measure taken as it is may carry (scale literals are short words)
 MAX_TEXT = 1000
 
 
 class MappingError(UserError, ValueError):
-    """A mapping file is wrong; the message names the file and the entry."""
+    """A mapping file is wrong; the message names the file (line and column) and the entry."""
+
+
+def _suggest(word: object, choices: Iterable[str]) -> str:
+    """`` (did you mean 'fire'?)`` when ``word`` is a likely misspelling of one of ``choices``, else ``""``."""
+    close = difflib.get_close_matches(str(word), sorted(choices), n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _unknown(given: Iterable[object], allowed: Iterable[str]) -> str:
+    """``['fier'] (did you mean 'fire'?); allowed: [...]``: what an unknown-key error lists."""
+    names = sorted(str(k) for k in given)  # str: keys may be numbers, booleans, None
+    hints = "".join(_suggest(k, allowed) for k in names)
+    return f"{names}{hints}; allowed: {sorted(allowed)}"
+
+
+class _Marked(dict[Any, Any]):
+    """A YAML mapping that remembers where each of its keys was written (``marks``)."""
+
+    marks: dict[Any, yaml.Mark]
+
+
+class _Duplicate(Exception):
+    """A key given twice in one YAML mapping (safe_load would keep the last without a word)."""
+
+    def __init__(self, key: Any, mark: yaml.Mark) -> None:
+        super().__init__(key)
+        self.key, self.mark = key, mark
+
+
+class _Loader(yaml.SafeLoader):
+    """The safe loader, with mappings that keep their keys' positions and refuse a key given twice.
+
+    The positions let a mapping error say ``mapping.yaml:7:3``; a repeated entry or key
+    would otherwise silently replace the first, and that entry would never be read.
+    """
+
+
+def _construct_map(loader: _Loader, node: yaml.MappingNode) -> Iterator[_Marked]:
+    """:class:`_Loader`'s constructor of every YAML mapping: a :class:`_Marked` dict, or _Duplicate."""
+    data = _Marked()
+    data.marks = {}
+    yield data  # first, as SafeConstructor does: an anchor may refer to the mapping itself
+    seen: set[Any] = set()
+    for key_node, _ in node.value:  # before merge keys (<<) are flattened in: an override is fine
+        if isinstance(key_node, yaml.ScalarNode) and key_node.tag != "tag:yaml.org,2002:merge":
+            key = loader.construct_object(key_node)
+            if key in seen:
+                raise _Duplicate(key, key_node.start_mark)
+            seen.add(key)
+    data.update(loader.construct_mapping(node))
+    for key_node, _ in node.value:  # flattened now: a key of the mapping itself comes after a merged one
+        with contextlib.suppress(TypeError):  # an unhashable key: construct_mapping refused it already
+            data.marks[loader.construct_object(key_node)] = key_node.start_mark
+
+
+_Loader.add_constructor("tag:yaml.org,2002:map", _construct_map)
+
+
+def _at(source: str, where: Any, key: Any, otherwise: str | None = None) -> str:
+    """``source:line:col`` of ``key`` in the loaded YAML mapping ``where``; ``otherwise`` (or
+    ``source``) when the position is unknown (a mapping not read by :class:`_Loader`)."""
+    mark = where.marks.get(key) if isinstance(where, _Marked) else None
+    if mark is None:
+        return otherwise or source
+    return f"{source}:{mark.line + 1}:{mark.column + 1}"
+
+
+def default_qos(kind: str, type_name: str) -> Qos:
+    """The QoS an entry reads with when the mapping gives none, and why.
+
+    A measure is a state that its publisher sends again and again: best effort
+    (``sensor_data``) hears best-effort sensor drivers and reliable publishers alike, and a
+    lost sample is replaced by the next. An event is often a one-off command that must not
+    be lost: ``reliable``. But a ``sensor_msgs`` type comes from a sensor driver, which
+    publishes best effort, and a reliable subscription would never hear it:
+    ``sensor_data`` for those events too.
+    """
+    if kind == "measure" or type_name.split("/", 1)[0] == "sensor_msgs":
+        return Qos.SENSOR_DATA
+    return Qos.RELIABLE
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -72,6 +180,22 @@ class Entry:
     #: the measure's kind (boolean, numeric, scale) and scale literals, when the rules were given
     measure_kind: str | None = None
     literals: tuple[str, ...] = ()
+    #: the QoS the mapping states for this entry; None: :func:`default_qos`
+    qos: Qos | None = None
+    #: an event's firing: "edge" (when its condition becomes true) or "each" (every message it holds for)
+    fire: str = "edge"
+    #: where the entry is written (``mapping.yaml:7:3``), for messages
+    where: str = ""
+
+    @property
+    def label(self) -> str:
+        """``events.Clean``: how messages name the entry."""
+        return f"{self.kind}s.{self.name}"
+
+    @property
+    def default_qos(self) -> Qos:
+        """The QoS this entry reads with when the mapping states none (:func:`default_qos`)."""
+        return default_qos(self.kind, self.type)
 
     def value(self, message: dict[str, Any]) -> Any:
         """The measure value (or event condition) for one message; MessageError if it has none.
@@ -177,50 +301,134 @@ class Mapping:
         measures: dict[str, MeasureSpec] | None = None,
         events: frozenset[str] | None = None,
     ) -> Mapping:
-        """Check mapping ``text`` as :meth:`load` does; ``source`` names it in messages."""
+        """Check mapping ``text`` as :meth:`load` does; ``source`` names it in messages.
+
+        Everything is checked here, before any middleware starts: the entries, and that the
+        entries sharing a topic agree on its type and QoS (:meth:`topics`, :meth:`qos_of`).
+        """
         try:
-            doc = yaml.safe_load(text) or {}
+            doc = yaml.load(text, Loader=_Loader) or {}
+        except _Duplicate as e:
+            where = f"{source}:{e.mark.line + 1}:{e.mark.column + 1}"
+            raise MappingError(
+                f"{where}: {show(e.key)} is given twice (the second would replace the first)"
+            ) from None
+        except yaml.MarkedYAMLError as e:
+            mark = e.problem_mark or e.context_mark
+            where = f"{source}:{mark.line + 1}:{mark.column + 1}" if mark is not None else source
+            what = "; ".join(str(x) for x in (e.context, e.problem) if x)
+            raise MappingError(f"{where}: not valid YAML: {what}") from None
         except yaml.YAMLError as e:
             raise MappingError(f"{source}: not valid YAML: {e}") from None
         if not isinstance(doc, dict):
             raise MappingError(f"{source}: expected a mapping with `measures` and/or `events`")
-        unknown = set(doc) - {"measures", "events", "namespace"}
+        unknown = set(doc) - set(SECTIONS)
         if unknown:
-            raise MappingError(f"{source}: unknown section(s) {sorted(unknown)}")
-        m = cls(namespace=doc.get("namespace"), source=source)
+            first = min(unknown, key=lambda k: str(k))
+            raise MappingError(f"{_at(source, doc, first)}: unknown section(s) {_unknown(unknown, SECTIONS)}")
+        namespace = doc.get("namespace")
+        if namespace is not None and (not isinstance(namespace, str) or not namespace):
+            raise MappingError(
+                f"{_at(source, doc, 'namespace')}: `namespace` must be a topic prefix such as /cosleec, "
+                f"not {show(namespace)}"
+            )
+        m = cls(namespace=namespace, source=source)
         for kind in ("measures", "events"):
             section = doc.get(kind) or {}
             if not isinstance(section, dict):
-                raise MappingError(f"{source}: `{kind}` must map names to entries")
+                raise MappingError(f"{_at(source, doc, kind)}: `{kind}` must map names to entries")
             for name, spec in section.items():
-                m.entries.append(_entry(source, kind[:-1], str(name), spec, measures, events))
+                at = _at(source, section, name)
+                m.entries.append(_entry(source, at, kind[:-1], str(name), spec, measures, events))
+        for t in m.topics():  # a conflict on a topic is found now, not when the node subscribes
+            m.qos_of(t)
         return m
 
     def topics(self) -> dict[str, str]:
         """topic -> message type; MappingError if one topic is given two types."""
         out: dict[str, str] = {}
+        first: dict[str, Entry] = {}
         for e in self.entries:
             if out.setdefault(e.topic, e.type) != e.type:
+                f = first[e.topic]
                 raise MappingError(
-                    f"{self.source}: topic {e.topic} is given two types: {out[e.topic]} and {e.type}"
+                    f"{e.where or self.source}: {e.label}: topic {e.topic} is given two types: "
+                    f"{out[e.topic]} (by {f.label}) and {e.type}"
                 )
+            first.setdefault(e.topic, e)
         return out
+
+    def qos_of(self, topic: str) -> Qos:
+        """The QoS of the one subscription that serves every entry on ``topic``.
+
+        A QoS stated by an entry is the topic's (entries that state different ones are a
+        MappingError naming both). Else best effort (``sensor_data``) if any entry on the
+        topic reads best effort by default -- a measure, or a ``sensor_msgs`` type -- and
+        ``reliable`` only if all are events that default to it. Not "the stronger wins":
+        a reliable subscription never hears a best-effort publisher, so it would make the
+        measure deaf to the sensor it was meant for, while best effort hears any publisher
+        and on a topic that carries a state (a measure) the next sample replaces a lost
+        one. State ``qos: reliable`` on one entry to have a reliable subscription anyway.
+        MappingError if no entry reads ``topic``.
+        """
+        entries = [e for e in self.entries if e.topic == topic]
+        if not entries:
+            raise MappingError(f"{self.source}: no entry reads topic {topic}")
+        stated = [e for e in entries if e.qos is not None]
+        if stated:
+            a = stated[0]
+            assert a.qos is not None
+            for b in stated[1:]:
+                if b.qos != a.qos:
+                    assert b.qos is not None
+                    raise MappingError(
+                        f"{b.where or self.source}: {b.label}: qos {b.qos.describe()} differs from "
+                        f"{a.label}'s {a.qos.describe()} ({a.where or self.source}); the entries on "
+                        f"topic {topic} share one subscription: give them the same qos, or give it on one"
+                    )
+            return a.qos
+        if any(e.default_qos == Qos.SENSOR_DATA for e in entries):
+            return Qos.SENSOR_DATA
+        return Qos.RELIABLE
+
+
+def _qos(at: str, kind: str, type_name: str, raw: Any) -> Qos:
+    """The QoS an entry states (``raw``); a table's missing keys are the entry's default's.
+
+    ``at`` (``mapping.yaml:9:5: events.Clean``) starts the MappingError, which wraps a QosError.
+    """
+    if isinstance(raw, dict) and not all(isinstance(k, str) for k in raw):
+        raise MappingError(
+            f"{at}: qos keys are reliability, durability and depth, not {sorted(map(str, raw))}"
+        )
+    try:
+        return Qos.parse(raw, default_qos(kind, type_name))
+    except QosError as e:
+        near = _suggest(raw, Qos.PROFILES) if isinstance(raw, str) else ""
+        raise MappingError(f"{at}: qos: {e}{near}") from None
 
 
 def _entry(
     source: str,
+    at: str,
     kind: str,
     name: str,
     spec: Any,
     measures: dict[str, MeasureSpec] | None,
     events: frozenset[str] | None,
 ) -> Entry:
-    where = f"{source}: {kind}s.{name}"
+    """One checked entry ``name`` of section ``kind``s, written at ``at`` (``mapping.yaml:7:3``)."""
+    where = f"{at}: {kind}s.{name}"
+
+    def here(key: Any) -> str:  # where a key of the entry is written, and the entry
+        return f"{_at(source, spec, key, at)}: {kind}s.{name}"
+
     if not isinstance(spec, dict):
         raise MappingError(f"{where}: expected an entry with at least `topic` and `type`")
     extra = set(spec) - KEYS
     if extra:
-        raise MappingError(f"{where}: unknown key(s) {sorted(extra)}; allowed: {sorted(KEYS)}")
+        first = min(extra, key=lambda k: str(k))
+        raise MappingError(f"{here(first)}: unknown key(s) {_unknown(extra, KEYS)}")
     for key in ("topic", "type"):
         if not isinstance(spec.get(key), str) or not spec[key]:
             raise MappingError(f"{where}: `{key}` is required and must be a string")
@@ -249,6 +457,20 @@ def _entry(
         if out[-1][0] != math.inf:
             out.append((math.inf, out[-1][1]))
         bands = tuple(out)
+    fire = spec.get("fire", "edge")
+    if "fire" in spec:
+        fire_at = here("fire")
+        if kind != "event":
+            raise MappingError(
+                f"{fire_at}: `fire` is for events; a measure's value is sent with every message"
+            )
+        if fire not in FIRE:
+            raise MappingError(
+                f"{fire_at}: `fire` is edge (when the condition becomes true; the default) or each "
+                f"(every message for which it holds), not {show(fire)}{_suggest(fire, FIRE)}"
+            )
+    if "json" in spec and not isinstance(spec["json"], bool):
+        raise MappingError(f"{where}: `json` must be true or false, not {spec['json']!r}")
     # a plain message's value is its `data`; a JSON payload is read from its root
     default_field = "" if spec.get("json") else "data"
     field_path = tuple(p for p in str(spec.get("field", default_field)).split(".") if p)
@@ -261,19 +483,22 @@ def _entry(
         json=bool(spec.get("json")),
         comparison=comparison,
         bands=bands,
+        qos=_qos(here("qos"), kind, spec["type"], spec["qos"]) if "qos" in spec else None,
+        fire=str(fire),
+        where=at,
     )
     if kind == "measure" and measures is not None and name in measures:
         spec_of = measures[name]
         e = replace(e, measure_kind=spec_of.kind, literals=tuple(spec_of.literals))
     if kind == "event":
         if events is not None and name not in events:
-            raise MappingError(f"{where}: the rules declare no event {name!r}")
+            raise MappingError(f"{where}: the rules declare no event {name!r}{_suggest(name, events)}")
         if comparison is None:
             raise MappingError(f"{where}: an event needs a condition (e.g. `equals: true`)")
     elif measures is not None:
         ms = measures.get(name)
         if ms is None:
-            raise MappingError(f"{where}: the rules declare no measure {name!r}")
+            raise MappingError(f"{where}: the rules declare no measure {name!r}{_suggest(name, measures)}")
         if ms.kind == "scale":
             if bands is not None:
                 bad = [lit for _, lit in bands if lit not in ms.literals]
@@ -292,9 +517,11 @@ class ListenerNode(Node):
     """Subscribes to the mapped robot topics; publishes ``context`` updates and ``events``.
 
     Run one per robot, next to the Manager node. The mapping's ``namespace``, when set,
-    wins over ``namespace``. A message a mapping entry cannot read is rejected for that
-    entry; the other entries of the message still count. Whatever a message holds, the
-    node rejects it and goes on: no error leaves a typed topic's callback.
+    wins over ``namespace``. Each topic is subscribed once, with the QoS of
+    :meth:`Mapping.qos_of`, for all the entries that read it. A message a mapping entry
+    cannot read is rejected for that entry; the other entries of the message still count.
+    Whatever a message holds, the node rejects it and goes on: no error leaves a typed
+    topic's callback.
     """
 
     name = "listener"
@@ -302,6 +529,7 @@ class ListenerNode(Node):
     def __init__(self, transport: Any, mapping: Mapping, *, namespace: str = "/cosleec") -> None:
         super().__init__(transport, mapping.namespace or namespace)
         self.mapping = mapping
+        #: per event: whether its condition held on the last message that could be read
         self.edges: dict[str, bool] = {}
         for t in ("context", "events"):
             self.advertise(t)
@@ -310,8 +538,10 @@ class ListenerNode(Node):
             by_topic.setdefault(e.topic, []).append(e)
         for t, type_name in mapping.topics().items():
             entries = by_topic[t]
+            qos = mapping.qos_of(t)
+            log.info("listener: reading %s (%s) with qos %s", t, type_name, qos.describe())
             transport.subscribe_typed(
-                t, type_name, lambda msg, entries=entries, t=t: self._message(t, entries, msg)
+                t, type_name, lambda msg, entries=entries, t=t: self._message(t, entries, msg), qos
             )
 
     def _message(self, where: str, entries: list[Entry], message: dict[str, Any]) -> None:
@@ -335,7 +565,7 @@ class ListenerNode(Node):
             else:
                 before = self.edges.get(e.name, False)
                 self.edges[e.name] = bool(v)
-                if v and not before:
+                if v and (e.fire == "each" or not before):
                     fired.append(e.name)
         if values:
             self.publish("context", {"values": values})

@@ -2,20 +2,32 @@
 
 It consumes ``context``, ``events``, ``request`` (and ``clock`` in simulated time) and
 publishes ``decisions``, ``obligations`` (for the task nodes), ``violations``,
-``request_reply`` and ``status``. Each decision carries the layer chosen under the context
-as of that trigger, so task nodes dispatch exactly that variant: no stale dispatch across
-processes, whatever the timing of the layer topic.
+``conflicts``, ``refusals``, ``request_reply`` and ``status``. Each decision carries the
+layer chosen under the context as of that trigger, so task nodes dispatch exactly that
+variant: no stale dispatch across processes, whatever the timing of the layer topic.
+
+Where the transport offers services it also answers ``~/request`` (may E happen now, and
+why not), ``~/decide`` (apply values, let an event occur, return the decisions) and
+``~/reload`` (new rules without a restart, :meth:`ManagerNode.reload`).
+
+**Active and inactive.** A Manager node enforces only while active (the default). While
+inactive -- a lifecycle node before ``activate`` or after ``deactivate`` -- it refuses
+every request (fail closed: "the Manager is inactive") and rejects every event and
+Decide call, counted and reported on ``rejected``; it keeps taking context updates and
+the clock, so that its view of the world is current when it is activated again.
 """
 
 from __future__ import annotations
 
+import difflib
 import math
 import sys
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
-from cosleec.errors import show
+from cosleec.errors import UserError, show
 from cosleec.nodes.base import MessageError, Node, context_values
 from cosleec.nodes.recording import McapRecorder
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
@@ -25,6 +37,7 @@ from cosleec.runtime import (
     HedgeSemantics,
     Manager,
     MonotonicClock,
+    Permission,
     RuleSet,
     RuntimeEvent,
     VirtualClock,
@@ -46,7 +59,9 @@ class ManagerNode(Node):
     otherwise the monotonic clock and a timer thread do. ``audit`` and ``record`` name a
     JSON Lines audit trail and an MCAP recording; ``manager_kw`` goes to :class:`Manager`
     (``journal=PATH`` keeps the state across a crash; in simulated time the clock then goes
-    on from the journal's last time).
+    on from the journal's last time). ``load`` reads a rule file for :meth:`reload` (the
+    CLI gives ``RuleSet.from_file`` and the file it started with as ``rules_path``);
+    ``active=False`` starts it inactive (a lifecycle node before ``activate``).
     """
 
     name = "manager"
@@ -62,9 +77,15 @@ class ManagerNode(Node):
         audit: str | None = None,
         record: str | None = None,
         status_each: bool = False,
+        rules_path: str | None = None,
+        load: Callable[[str], RuleSet] | None = None,
+        active: bool = True,
         **manager_kw: Any,
     ) -> None:
         super().__init__(transport, namespace)
+        self.rules_path = rules_path
+        self._load = load or RuleSet.from_file
+        self.active = active
         self._republish: list[dict[str, Any]] = []  # decisions held until the task nodes can hear them
         self._matched: tuple[int, float] | None = None  # obligations' subscriber count, and since when
         # while starting (and, if decisions are held then, until the task nodes' subscriptions
@@ -82,7 +103,7 @@ class ManagerNode(Node):
         # de-duplicate by, and a decision published again after a restart is not run twice
         self.session = self.manager.lineage
         self.recorder = McapRecorder(record) if record else None
-        for t in ("decisions", "obligations", "violations", "request_reply"):
+        for t in ("decisions", "obligations", "violations", "conflicts", "refusals", "request_reply"):
             self.advertise(t)
         self.manager.subscribe(self._runtime_event)
         # decided before a crash, perhaps never published: published again once a task node listens
@@ -98,7 +119,101 @@ class ManagerNode(Node):
         self.on("request", self._request)
         if sim_time:
             self.on("clock", self._clock)
+        serve = getattr(transport, "serve", None)
+        if serve is not None:  # the typed interface: ask, decide and reload as services
+            serve("~/request", "request", self._serve_request)
+            serve("~/decide", "decide", self._serve_decide)
+            serve("~/reload", "reload", self._serve_reload)
         self.status()
+
+    # ------------------------------------------------------------------ lifecycle
+    def activate(self) -> None:
+        """Start enforcing: triggers are decided and requests answered from now on."""
+        self.active = True
+        self.status()
+
+    def deactivate(self) -> None:
+        """Stop enforcing: every request is refused and every event rejected until :meth:`activate`."""
+        self.active = False
+        self.status()
+
+    def _inactive(self) -> str:
+        return "the Manager is inactive (lifecycle): it refuses every request until it is activated"
+
+    def reload(self, path: str | None = None) -> dict[str, Any]:
+        """Read the rules at ``path`` (default: the file it runs) and swap them in between two decisions.
+
+        The new rules are checked first: on any error the old rules stay and the answer
+        says why (``success`` false, ``message`` the diagnostics). Otherwise obligations of
+        rules that still exist are kept and those of removed rules withdrawn
+        (:meth:`cosleec.runtime.Manager.reload`); the audit log records both hashes.
+        """
+        target = path or self.rules_path
+        before = self.manager.rules_hash
+        if not target:
+            return {
+                "success": False,
+                "message": "no rule file to reload: give one",
+                "previous_hash": before,
+                "current_hash": before,
+            }
+        try:
+            rules = self._load(target)
+            done = self.manager.reload(rules)
+        except UserError as e:
+            self._count("reloads_rejected")
+            return {
+                "success": False,
+                "message": e.render() if hasattr(e, "render") else str(e),
+                "previous_hash": before,
+                "current_hash": before,
+            }
+        self.rules_path = target
+        self._count("reloads")
+        self.status()
+        return {
+            "success": True,
+            "message": f"reloaded {target}: +{len(done.added)} -{len(done.removed)} ~{len(done.changed)} rules, "
+            f"{len(done.withdrawn)} obligation(s) withdrawn",
+            "previous_hash": done.previous_hash,
+            "current_hash": done.current_hash,
+        }
+
+    # ------------------------------------------------------------------ services
+    def _permission(self, event: str, source: str = "") -> Permission:
+        if not self.active:
+            return Permission(event=event, permitted=False, rules=(), reason=self._inactive())
+        return self.manager.permission(event, source=source)
+
+    def _serve_request(self, req: dict[str, Any]) -> dict[str, Any]:
+        name = req.get("event")
+        if not isinstance(name, str) or not name or len(name) > MAX_NAME:
+            return {"permitted": False, "rules": [], "reason": f"not an event name: {show(name)}"}
+        try:
+            p = self._permission(name, str(req.get("source", ""))[:MAX_NAME])
+        except ContextError as e:  # an event no rule declares (unknown_events="raise"): refused, and why
+            hint = f" ({e.hint})" if e.hint else ""
+            return {"permitted": False, "rules": [], "reason": f"{e}{hint}"}
+        return {"permitted": p.permitted, "rules": list(p.rules), "reason": p.reason}
+
+    def _serve_decide(self, req: dict[str, Any]) -> dict[str, Any]:
+        if not self.active:
+            return {"accepted": False, "error": self._inactive(), "decisions": []}
+        values, name = req.get("values") or {}, req.get("event") or ""
+        if name and name not in self.manager.ruleset.events:  # before any value is taken: all or nothing
+            close = difflib.get_close_matches(str(name), sorted(self.manager.ruleset.events), n=1)
+            hint = f" (did you mean {close[0]}?)" if close else ""
+            return {"accepted": False, "error": f"unknown event {show(name)}{hint}", "decisions": []}
+        try:
+            if values:
+                self._context({"values": values})
+            decisions = self.manager.event(name) if name else []
+        except (MessageError, ContextError) as e:
+            return {"accepted": False, "error": str(e), "decisions": []}
+        return {"accepted": True, "error": "", "decisions": [d.to_json() for d in decisions]}
+
+    def _serve_reload(self, req: dict[str, Any]) -> dict[str, Any]:
+        return self.reload(str(req.get("rules") or "") or None)
 
     def status(self, **extra: Any) -> None:
         """Publish the counters with the context version, runtime statistics, active layers and time.
@@ -111,6 +226,8 @@ class ManagerNode(Node):
             super().status(
                 context_version=m.context.version,
                 stats=dict(m.stats),
+                lifecycle="active" if self.active else "inactive",
+                rules_hash=m.rules_hash,
                 active=m.active_layers(),
                 time=self.clock.now(),
                 **extra,
@@ -129,6 +246,8 @@ class ManagerNode(Node):
         self._feed(self.manager.update, values)
 
     def _event(self, msg: dict[str, Any]) -> None:
+        if not self.active:
+            raise MessageError(self._inactive())
         name = msg.get("event")
         if not isinstance(name, str):
             raise MessageError("event message needs a string `event`")
@@ -149,12 +268,16 @@ class ManagerNode(Node):
             raise MessageError("request message needs an `id` (string or integer) and a string `event`")
         if len(name) > MAX_NAME or len(str(rid)) > MAX_NAME:  # the reply echoes both
             raise MessageError(f"request `id` or `event` longer than {MAX_NAME} characters")
+        source = msg.get("source")
         try:
-            allowed = self.manager.request(name)
+            p = self._permission(name, source if isinstance(source, str) else "")
         except ContextError as e:  # an event no rule declares: refused, and the task learns why
             self.publish("request_reply", {"id": rid, "event": name, "allowed": False, "reason": str(e)})
             raise MessageError(str(e)) from e
-        self.publish("request_reply", {"id": rid, "event": name, "allowed": allowed})
+        reply: dict[str, Any] = {"id": rid, "event": name, "allowed": p.permitted}
+        if not p.permitted:
+            reply.update(rules=list(p.rules), reason=p.reason)
+        self.publish("request_reply", reply)
 
     def _clock(self, msg: dict[str, Any]) -> None:
         """Simulated time: ``t`` must be a finite number, and time never goes back.
@@ -195,6 +318,10 @@ class ManagerNode(Node):
             self._hand_on(d["decision"])
         elif ev.kind == "obligation" and (d["status"] == "violated" or d["late"]):
             self.publish("violations", d)
+        elif ev.kind == "conflict":
+            self.publish("conflicts", d)
+        elif ev.kind == "refused":
+            self.publish("refusals", d)
         if self.recorder is not None:
             self.recorder.write(ev.kind, ev.time, d)
 

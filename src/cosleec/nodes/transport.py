@@ -2,8 +2,11 @@
 
 The node logic (``cosleec.nodes``) is written against :class:`Transport` only; ROS 2 and
 ROS 1 adapters live in ``cosleec.ros`` and are the only code that imports rclpy or rospy.
-Payloads are JSON objects carried as text (``std_msgs/String`` on ROS), so every tool can
-show them and a malformed message can be rejected, logged and counted by the receiver.
+Nodes publish records (dicts). The transport chooses the wire: on ROS, typed
+``cosleec_interfaces`` messages by default (:mod:`cosleec.ros.interfaces`), or JSON text in
+``std_msgs/String`` for tools without the types; in one process, JSON text. A handler
+receives the record as a dict, or as JSON text that the node parses itself -- so a
+malformed message is rejected, logged and counted by the receiver either way.
 
 Topics, under a namespace (default ``/cosleec``):
 
@@ -13,11 +16,13 @@ topic                 dir    payload
 ``context``          in     ``{"values": {measure: value, ...}}`` (atomic update)
 ``events``           in     ``{"event": name}`` (a trigger, or a response that happened)
 ``request``          in     ``{"id": str, "event": name}`` (may a task do it now?)
-``request_reply``    out    ``{"id": str, "event": name, "allowed": bool}``
-``clock``            in     ``{"t": seconds}`` (simulated time, with ``--sim-time``)
+``request_reply``    out    ``{"id", "event", "allowed": bool, "rules", "reason"}``
+``clock``            in     ``{"t": seconds}`` (simulated time; ``/clock`` on ROS)
 ``decisions``        out    a decision record (rule, clause, layer, values, explanation)
 ``obligations``      out    a decision that chose a clause, for the task nodes (same record)
 ``violations``       out    an obligation that was violated (or a late event)
+``conflicts``        out    rules that oblige and forbid one event, and the resolution
+``refusals``         out    an action refused while a prohibition holds, with the rules
 ``layers``           out    ``{"active": [...], "switches": [...]}`` -- latched
 ``status``           out    a node's counters: every 0.5 s, and on change (``Node.status_each``)
 ``rejected``         out    ``{"node", "topic", "reason", "payload"}`` for every bad message
@@ -33,12 +38,15 @@ import threading
 from collections.abc import Callable
 from typing import Any, Protocol
 
+from cosleec.nodes.qos import Qos
+
 log = logging.getLogger("cosleec.nodes")
 
 DEFAULT_NAMESPACE = "/cosleec"
 LATCHED = frozenset({"layers"})
 
-Handler = Callable[[str], None]
+#: a topic handler gets the record as a dict (typed wire) or as JSON text (the node parses it)
+Handler = Callable[[Any], None]
 
 
 def topic(namespace: str, name: str) -> str:
@@ -47,21 +55,24 @@ def topic(namespace: str, name: str) -> str:
 
 
 class Transport(Protocol):
-    """What a node needs from a middleware: publish and subscribe JSON text on topics, and
-    subscribe to the robot's own typed topics (delivered as a dict of the message fields)."""
+    """What a node needs from a middleware: publish and subscribe records on cosleec topics,
+    and subscribe to the robot's own typed topics (delivered as a dict of the message fields)."""
 
-    def publish(self, topic: str, payload: str) -> None:
-        """Send ``payload``, JSON text, on ``topic``."""
+    def publish(self, topic: str, message: dict[str, Any] | str) -> None:
+        """Send ``message`` (a record, or JSON text of one) on ``topic``."""
         ...
 
     def subscribe(self, topic: str, handler: Handler) -> None:
-        """Call ``handler(payload)`` for every message on ``topic``, on a thread of the transport."""
+        """Call ``handler(record or JSON text)`` for every message on ``topic``, on a thread of the transport."""
         ...
 
-    def subscribe_typed(self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None]) -> None:
+    def subscribe_typed(
+        self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None], qos: Qos | None = None
+    ) -> None:
         """Call ``handler(fields)`` for every ``type_name`` message (``std_msgs/Float64``) on ``topic``.
 
-        For the robot's own topics, which the Context Listener reads.
+        For the robot's own topics, which the Context Listener reads; ``qos`` as the
+        mapping says (:class:`~cosleec.nodes.qos.Qos`; None: reliable).
         """
         ...
 
@@ -72,6 +83,16 @@ class Transport(Protocol):
     def close(self) -> None:
         """Release the middleware; the transport is not used afterwards."""
         ...
+
+
+def record(payload: Any) -> Any:
+    """What a handler got, as the record it carries: JSON text is parsed, a decoder (typed
+    wire) is called, a dict is itself. Raises what parsing raises (the caller rejects it)."""
+    if callable(payload):
+        return payload()
+    if isinstance(payload, str | bytes):
+        return json.loads(payload)
+    return payload
 
 
 def dumps(message: dict[str, Any]) -> str:
@@ -155,16 +176,18 @@ class LocalTransport:
     def __init__(self, bus: LocalBus) -> None:
         self.bus = bus
 
-    def publish(self, topic: str, payload: str) -> None:
-        """Queue ``payload`` for delivery on the bus thread; returns at once."""
-        self.bus._publish(topic, payload)
+    def publish(self, topic: str, message: dict[str, Any] | str) -> None:
+        """Queue ``message`` (as JSON text) for delivery on the bus thread; returns at once."""
+        self.bus._publish(topic, message if isinstance(message, str) else dumps(message))
 
     def subscribe(self, topic: str, handler: Handler) -> None:
         """Deliver ``topic`` to ``handler``; a latched topic's last message arrives at once."""
         self.bus._subscribe(topic, handler)
 
-    def subscribe_typed(self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None]) -> None:
-        """On the local bus a typed message is published as the JSON of its fields."""
+    def subscribe_typed(
+        self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None], qos: Qos | None = None
+    ) -> None:
+        """On the local bus a typed message is published as the JSON of its fields; ``qos`` is moot."""
         self.bus._subscribe(topic, lambda payload: handler(json.loads(payload)))
 
     def advertise(self, topic: str, latched: bool = False) -> None:

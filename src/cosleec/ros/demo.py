@@ -43,11 +43,13 @@ class System:
         rules: str | None = None,
         nodes: list[list[str]] | None = None,
         audit: str | None = None,
+        wire: str = "typed",
     ) -> None:
         if audit is not None and nodes is not None:
             raise ValueError("audit= is for the default nodes: give your Manager --audit yourself")
         self.backend = backend
         self.audit = audit
+        self.wire = wire
         self.namespace = namespace
         self.procs: list[Any] = []
         self.master: Any = None
@@ -81,7 +83,8 @@ class System:
         if self.own_master:
             self.master = rosenv.start_master(self.env)
         for n in self.nodes:
-            self.procs.append(start(node_command(self.backend, n, self.namespace), env=self.env))
+            args = n if self.wire == "typed" or "--wire" in n else [*n, "--wire", self.wire]
+            self.procs.append(start(node_command(self.backend, args, self.namespace), env=self.env))
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -105,14 +108,14 @@ class System:
         return read_audit(self.audit)
 
 
-def transport(backend: str, name: str) -> Any:
+def transport(backend: str, name: str, wire: str = "typed") -> Any:
     """A transport for this process's driver: :func:`cosleec.ros.run.transport`."""
     from cosleec.ros.run import transport as make
 
-    return make(backend, name)
+    return make(backend, name, wire=wire)
 
 
-def main(backend: str, namespace: str = "/cosleec", as_json: bool = False) -> int:
+def main(backend: str, namespace: str = "/cosleec", as_json: bool = False, wire: str = "typed") -> int:
     """Play the scripted day across processes on ``backend`` and show each decision and violation.
 
     ``as_json`` prints one JSON object per line instead. Then it checks the outcome, not
@@ -127,8 +130,8 @@ def main(backend: str, namespace: str = "/cosleec", as_json: bool = False) -> in
 
     console = Console(highlight=False)
     with tempfile.TemporaryDirectory(prefix="cosleec-demo-") as tmp:
-        with System(backend, namespace, audit=os.path.join(tmp, "audit.jsonl")) as system:
-            t = transport(backend, "cosleec_demo_driver")
+        with System(backend, namespace, audit=os.path.join(tmp, "audit.jsonl"), wire=wire) as system:
+            t = transport(backend, "cosleec_demo_driver", wire)
             try:
                 driver = Driver(t, namespace)
                 driver.ready()

@@ -35,13 +35,20 @@ def message_class(type_name: str) -> Any:
 
 
 def to_dict(msg: Any) -> Any:
-    """A message as nested dicts (fields of both ROS 2 and ROS 1 messages)."""
+    """A message as nested dicts, arrays of messages as lists of dicts (ROS 2 and ROS 1 messages)."""
     fields = getattr(msg, "get_fields_and_field_types", None)
     names = list(fields()) if fields is not None else list(getattr(msg, "__slots__", ()))
     if not names:
         return msg
-    out = {}
+    out: dict[str, Any] = {}
     for n in names:
         v = getattr(msg, n.lstrip("_"), None) if fields is not None else getattr(msg, n)
-        out[n.lstrip("_")] = to_dict(v) if hasattr(v, "__slots__") and not isinstance(v, str | bytes) else v
+        if isinstance(v, list | tuple) and v and _is_message(v[0]):  # an array of messages
+            out[n.lstrip("_")] = [to_dict(x) for x in v]
+        else:
+            out[n.lstrip("_")] = to_dict(v) if _is_message(v) else v
     return out
+
+
+def _is_message(v: Any) -> bool:
+    return hasattr(v, "__slots__") and not isinstance(v, str | bytes)

@@ -1,20 +1,37 @@
-"""ROS 1 transport (rospy, TCPROS): JSON in std_msgs/String, latched topics latched.
+"""ROS 1 transport (rospy, TCPROS): typed ``cosleec_interfaces`` topics and services, private
+parameters, ``/clock`` and ``/diagnostics``.
 
 Imported only when a ROS 1 transport is created, so the rest of cosleec runs without
 rospy. Network safety: run with ROS_HOSTNAME=localhost and a master on 127.0.0.1
 (:func:`cosleec.ros.env.ros1_env` sets both); unlike the ROS 2 transport, this one does
-not check.
+not check. ROS 1 has no QoS (TCP is always reliable: a mapping's ``depth`` is the queue
+size) and no lifecycle nodes.
 """
 
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
-from cosleec.nodes import Handler
+from cosleec.errors import UserError
+from cosleec.nodes import Handler, Qos, dumps
+from cosleec.ros.diagnostics import Diagnostics
 from cosleec.ros.guard import CallbackGuard
+from cosleec.ros.interfaces import (
+    CLOCK_TOPIC,
+    CLOCK_TYPE,
+    Codec,
+    Once,
+    ServiceCodec,
+    failure,
+    interfaces,
+    kind_of,
+    record_of,
+)
 from cosleec.ros.messages import message_class, to_dict
+from cosleec.ros.parameters import check_overrides, coerce
 
 
 class Ros1Transport:
@@ -25,22 +42,44 @@ class Ros1Transport:
     SIGINT/SIGTERM. rospy calls handlers on its own threads, so they may run concurrently.
     A handler that raises is counted in ``errors`` and logged rate-limited
     (:class:`~cosleec.ros.guard.CallbackGuard`), not left to rospy's unbounded log.
+    ``wire`` and ``ros_args`` (``_name:=value`` private parameters) as on ROS 2.
     """
 
-    def __init__(self, node_name: str) -> None:
+    def __init__(self, node_name: str, *, wire: str = "typed", ros_args: list[str] | None = None) -> None:
         import rospy
         from std_msgs.msg import String
 
+        if wire not in ("typed", "json"):
+            raise UserError(f"wire {wire!r} is not one of typed, json")
+        self.wire = wire
         self._rospy = rospy
         self._String = String
+        self._codec: Codec | None = None
+        self.services: ServiceCodec | None = None
+        if wire == "typed":
+            self._services_codec()  # fail at once, with the fix, when the interfaces are missing
         # signals are ours: the node's main loop stops cleanly on SIGINT/SIGTERM
-        rospy.init_node(node_name, anonymous=False, disable_signals=True)
+        rospy.init_node(node_name, anonymous=False, disable_signals=True, argv=["cosleec", *(ros_args or [])])
+        self.node_name = rospy.get_name()
         self._pubs: dict[str, Any] = {}
         self._subs: list[Any] = []
+        self._services: list[Any] = []
+        self._clients: dict[str, Any] = {}
         self._latched: set[str] = set()
         self._lock = threading.Lock()
         self._guard = CallbackGuard()
+        self.diagnostics = Diagnostics(node_name, self._publish_diagnostics)
 
+    # ------------------------------------------------------------------ time
+    def _stamp(self, t: float) -> Any:
+        sec, nsec = divmod(round(t * 1e9), 1_000_000_000)
+        return self._rospy.Time(sec, nsec)
+
+    @staticmethod
+    def _seconds(stamp: Any) -> float:
+        return float(stamp.secs) + float(stamp.nsecs) * 1e-9
+
+    # ------------------------------------------------------------------ health
     @property
     def errors(self) -> int:
         """Callbacks that raised (and were caught): node status reports it as ``transport_errors``."""
@@ -49,6 +88,15 @@ class Ros1Transport:
     def alive(self) -> bool:
         """False once rospy has shut down (stopped, or evicted by a node of the same name)."""
         return not self._rospy.is_shutdown()
+
+    # ------------------------------------------------------------------ cosleec topics
+    def _wire_of(self, topic: str) -> tuple[str, Any, str | None]:
+        kind = kind_of(topic) if self.wire == "typed" else None
+        if kind == "clock":
+            return CLOCK_TOPIC, message_class(CLOCK_TYPE), "clock"
+        if kind is not None:
+            return topic, self.codec.message_type(kind), kind
+        return topic, self._String, None
 
     def advertise(self, topic: str, latched: bool = False) -> None:
         """Create the publisher of ``topic``, latched when ``latched``; the first call decides.
@@ -59,45 +107,102 @@ class Ros1Transport:
             if latched:
                 self._latched.add(topic)
             if topic not in self._pubs:
+                name, cls, _ = self._wire_of(topic)
                 self._pubs[topic] = self._rospy.Publisher(
-                    topic, self._String, queue_size=1000, latch=topic in self._latched, tcp_nodelay=True
+                    name, cls, queue_size=1000, latch=topic in self._latched, tcp_nodelay=True
                 )
 
-    def publish(self, topic: str, payload: str) -> None:
-        """Publish JSON text on ``topic``, advertising it (not latched) on first use."""
+    def publish(self, topic: str, message: dict[str, Any] | str) -> None:
+        """Publish a record on ``topic`` in this wire's form, advertising it (not latched) on first use.
+
+        A ``status`` record also goes to ``/diagnostics``.
+        """
         if topic not in self._pubs:
             self.advertise(topic)
-        self._pubs[topic].publish(self._String(data=payload))
+        _, cls, kind = self._wire_of(topic)
+        if kind == "clock":
+            self._pubs[topic].publish(cls(clock=self._stamp(float(record_of(message)["t"]))))
+            return
+        if kind is None:
+            self._pubs[topic].publish(
+                self._String(data=message if isinstance(message, str) else dumps(message))
+            )
+        else:
+            self._pubs[topic].publish(self.codec.encode(kind, record_of(message)))
+        if kind == "status" or (kind is None and topic.endswith("/status")):
+            self.diagnostics.report(record_of(message))
 
     def subscribe(self, topic: str, handler: Handler) -> None:
-        """Call ``handler`` with the JSON text of every message on ``topic``.
+        """Call ``handler`` with every message on ``topic``: JSON text, or (typed wire) a function
+        that decodes the record, so the receiving node rejects what cannot be read.
 
         Latching is the publisher's business in ROS 1: a late subscriber gets a latched
         topic's last message without asking.
         """
+        name, cls, kind = self._wire_of(topic)
+        if kind == "clock":
+            seconds = self._seconds
+
+            def deliver(m: Any) -> None:
+                handler({"t": seconds(m.clock)})
+
+        elif kind is None:
+
+            def deliver(m: Any) -> None:
+                handler(m.data)
+
+        else:
+            codec = self.codec
+
+            def deliver(m: Any) -> None:
+                handler(lambda: codec.decode(kind, m))
+
         self._subs.append(
             self._rospy.Subscriber(
-                topic,
-                self._String,
-                self._guard.wrap(topic, lambda m: handler(m.data)),
-                queue_size=1000,
-                tcp_nodelay=True,
+                name, cls, self._guard.wrap(name, deliver), queue_size=1000, tcp_nodelay=True
             )
         )
 
-    def subscribe_typed(self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None]) -> None:
+    # ------------------------------------------------------------------ the robot's topics
+    def subscribe_typed(
+        self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None], qos: Qos | None = None
+    ) -> None:
         """Call ``handler`` with every ``type_name`` message on ``topic``, as nested dicts.
 
-        ValueError or ImportError for a message type that cannot be loaded.
+        ROS 1 is always reliable: only ``qos.depth`` is used, as the queue size.
         """
         cls = message_class(type_name)
         self._subs.append(
             self._rospy.Subscriber(
-                topic, cls, self._guard.wrap(topic, lambda m: handler(to_dict(m))), queue_size=1000
+                topic,
+                cls,
+                self._guard.wrap(topic, lambda m: handler(to_dict(m))),
+                queue_size=qos.depth if qos is not None else 1000,
             )
         )
 
-    def publish_typed(self, topic: str, type_name: str, fields: dict[str, Any]) -> None:
+    def subscribe_raw(
+        self, topic: str, type_name: str, handler: Callable[[Any], None], qos: Qos | None = None
+    ) -> None:
+        """Call ``handler`` with every ``type_name`` message on ``topic``, as the message object (the guard)."""
+        cls = message_class(type_name)
+        self._subs.append(
+            self._rospy.Subscriber(
+                topic, cls, self._guard.wrap(topic, handler), queue_size=qos.depth if qos is not None else 100
+            )
+        )
+
+    def publish_raw(self, topic: str, type_name: str, data: Any, qos: Qos | None = None) -> None:
+        """Publish a message object as it came from :meth:`subscribe_raw`."""
+        key = f"{topic}#{type_name}"
+        pub = self._pubs.get(key)
+        if pub is None:
+            pub = self._pubs[key] = self._rospy.Publisher(topic, message_class(type_name), queue_size=100)
+        pub.publish(data)
+
+    def publish_typed(
+        self, topic: str, type_name: str, fields: dict[str, Any], qos: Qos | None = None
+    ) -> None:
         """Publish a typed message (simulators, tests): ``std_msgs/Bool``, ``{"data": True}``."""
         key = f"{topic}#{type_name}"
         pub = self._pubs.get(key)
@@ -118,14 +223,119 @@ class Ros1Transport:
         pub = self._pubs.get(topic)
         return pub.get_num_connections() if pub is not None else 0
 
+    # ------------------------------------------------------------------ services
+    def _resolve(self, name: str) -> str:
+        return f"{self.node_name}/{name[2:]}" if name.startswith("~/") else name
+
+    def _services_codec(self) -> ServiceCodec:
+        if self.services is None:  # services are typed whatever the wire of the topics
+            msg, srv = interfaces()
+            self._codec = Codec(msg, self._stamp, self._seconds, time.time)
+            self.services = ServiceCodec(srv, self._codec)
+        return self.services
+
+    @property
+    def codec(self) -> Codec:
+        """The typed wire's codec (loaded on first use: the JSON wire does without)."""
+        self._services_codec()
+        assert self._codec is not None
+        return self._codec
+
+    def serve(self, name: str, kind: str, handler: Callable[[dict[str, Any]], dict[str, Any]]) -> None:
+        """Offer service ``name`` (``~/request`` is under this node's name) of ``kind``; as on ROS 2."""
+        services = self._services_codec()
+        cls = services.service_type(kind)
+
+        def call(req: Any) -> Any:
+            try:
+                answer = handler(services.read_request(kind, req))
+            except Exception as e:
+                self._guard.failed(name, e)
+                answer = failure(kind, e)
+            return services.fill_response(kind, cls._response_class(), answer)
+
+        self._services.append(self._rospy.Service(self._resolve(name), cls, call))
+
+    def ask(
+        self,
+        name: str,
+        kind: str,
+        fields: dict[str, Any],
+        answer: Callable[[dict[str, Any] | None], None],
+        timeout: float,
+    ) -> None:
+        """Call service ``name`` on a worker thread; ``answer`` gets the reply, or None, exactly once."""
+        services = self._services_codec()
+        once = Once(answer)
+        timer = threading.Timer(timeout, lambda: once(None))
+        timer.daemon = True
+        timer.start()
+
+        def work() -> None:
+            try:
+                proxy = self._clients.get(name)
+                if proxy is None:
+                    proxy = self._clients[name] = self._rospy.ServiceProxy(
+                        self._resolve(name), services.service_type(kind), persistent=False
+                    )
+                resp = proxy(services.make_request(kind, fields))
+                once(services.read_response(kind, resp))
+            except Exception:
+                once(None)
+            finally:
+                timer.cancel()
+
+        threading.Thread(target=work, name="cosleec-ask", daemon=True).start()
+
+    def parameters(self, defaults: dict[str, Any]) -> dict[str, Any]:
+        """The node's private parameters (``_semantics:=nested``, ``rosparam set /node/semantics``).
+
+        An option not given keeps ``defaults``' value; ParameterError for a wrong type or a
+        private parameter no option has.
+        """
+        out = {
+            name: coerce(
+                name, self._rospy.get_param(f"~{name}", default if default is not None else ""), default
+            )
+            for name, default in defaults.items()
+        }
+        prefix = f"{self.node_name}/"
+        given = {p[len(prefix) :] for p in self._rospy.get_param_names() if p.startswith(prefix)}
+        check_overrides({g for g in given if "/" not in g}, set(defaults) | {"use_sim_time"})
+        return out
+
+    def use_sim_time(self) -> bool:
+        """ROS 1's global ``/use_sim_time`` (or this node's private ``~use_sim_time``)."""
+        return bool(self._rospy.get_param("~use_sim_time", self._rospy.get_param("/use_sim_time", False)))
+
+    # ------------------------------------------------------------------ diagnostics
+    def _publish_diagnostics(self, fields: dict[str, Any]) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+        key = "/diagnostics#"
+        pub = self._pubs.get(key)
+        if pub is None:
+            pub = self._pubs[key] = self._rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=10)
+        arr = DiagnosticArray()
+        arr.header.stamp = self._stamp(time.time())
+        st = DiagnosticStatus(
+            level=fields["level"], name=fields["name"], message=fields["message"], hardware_id=""
+        )
+        st.values = [KeyValue(key=k, value=v) for k, v in fields["values"]]
+        arr.status = [st]
+        pub.publish(arr)
+
+    # ------------------------------------------------------------------ end
     def ok(self) -> bool:
         """False once rospy has shut down: :func:`cosleec.ros.serve` then stops the node."""
         return self.alive()
 
     def close(self) -> None:
-        """Unregister every subscriber and publisher, then shut rospy down for this process."""
+        """Unregister every subscriber, publisher and service, then shut rospy down for this process."""
         for s in self._subs:
             s.unregister()
         for p in self._pubs.values():
             p.unregister()
+        for v in self._services:
+            v.shutdown()
         self._rospy.signal_shutdown("cosleec node stopped")

@@ -1,4 +1,5 @@
-"""ROS 2 transport (rclpy, Fast DDS): JSON in std_msgs/String, latched topics transient-local.
+"""ROS 2 transport (rclpy, Fast DDS): typed ``cosleec_interfaces`` topics and services,
+parameters, ``/clock``, ``/diagnostics`` and, for the Manager, a lifecycle node.
 
 Imported only when a ROS 2 transport is created, so the rest of cosleec runs without
 rclpy. Network safety is checked here, fail closed: the transport refuses to start unless
@@ -16,13 +17,28 @@ import contextlib
 import logging
 import os
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
 from cosleec.errors import UserError
-from cosleec.nodes import Handler
+from cosleec.nodes import Handler, Qos, dumps
+from cosleec.ros.diagnostics import Diagnostics
 from cosleec.ros.guard import CallbackGuard
+from cosleec.ros.interfaces import (
+    CLOCK_TOPIC,
+    CLOCK_TYPE,
+    Codec,
+    InterfacesMissingError,
+    Once,
+    ServiceCodec,
+    failure,
+    interfaces,
+    kind_of,
+    record_of,
+)
 from cosleec.ros.messages import message_class, to_dict
+from cosleec.ros.parameters import ParameterError, check_overrides, coerce
 
 log = logging.getLogger("cosleec.ros")
 
@@ -56,36 +72,85 @@ class Ros2Transport:
     runs every handler of this transport, one at a time, on the spin thread; a handler
     that raises is counted in ``errors`` and the executor goes on. ``spin_error`` holds
     what ended the spin thread, if something did.
+
+    ``wire`` is ``"typed"`` (``cosleec_interfaces`` messages, the default) or ``"json"``
+    (JSON text in ``std_msgs/String``, for tools without the types). ``ros_args`` are the
+    node's ``--ros-args`` (``-p name:=value``, ``--params-file``, remappings).
+    ``lifecycle`` makes it a managed (lifecycle) node: see :meth:`managed`.
     """
 
-    def __init__(self, node_name: str) -> None:
+    def __init__(
+        self,
+        node_name: str,
+        *,
+        wire: str = "typed",
+        ros_args: list[str] | None = None,
+        lifecycle: bool = False,
+    ) -> None:
         check_network()
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         from std_msgs.msg import String
 
+        if wire not in ("typed", "json"):
+            raise UserError(f"wire {wire!r} is not one of typed, json")
+        self.wire = wire
         self._rclpy = rclpy
         self._String = String
+        self._codec: Codec | None = None
+        self.services: ServiceCodec | None = None
+        if wire == "typed":
+            self._services_codec()  # fail at once, with the fix, when the interfaces are missing
         if not rclpy.ok():
             from rclpy.signals import SignalHandlerOptions
 
             # the node's own loop owns SIGINT/SIGTERM: a signal during start-up must not
             # invalidate the context under our feet
             rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-        self.node = rclpy.create_node(node_name)
+        args = ["--ros-args", *ros_args] if ros_args and ros_args[0] != "--ros-args" else (ros_args or [])
+        self._hooks: dict[str, Callable[[], bool]] = {}
+        try:
+            if lifecycle:
+                self.node = _lifecycle_node(node_name, args, self._hooks)
+            else:
+                self.node = rclpy.create_node(node_name, cli_args=args or None)
+        except Exception as e:  # rcl refuses malformed or unknown --ros-args: the user's to fix
+            if not type(e).__module__.startswith("rclpy"):
+                raise
+            raise UserError(
+                f"ROS 2 cannot use these ROS arguments {args}: {type(e).__name__}: {e}",
+                hint="ROS arguments come last: `... --ros-args -p name:=value [--params-file FILE]`",
+            ) from None
+        self.lifecycle = lifecycle
         self._pubs: dict[str, Any] = {}
         self._subs: list[Any] = []
+        self._services: list[Any] = []
+        self._clients: dict[str, Any] = {}
         self._latched: set[str] = set()
         self._lock = threading.Lock()
         self._guard = CallbackGuard()
         self._lost = 0
+        self.incompatible = 0  # QoS-incompatible publishers or subscribers that appeared
         self._closing = False
         self.spin_error: BaseException | None = None
+        self.diagnostics = Diagnostics(node_name, self._publish_diagnostics)
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
         self._thread = threading.Thread(target=self._spin, name=f"{node_name}-spin", daemon=True)
         self._thread.start()
 
+    # ------------------------------------------------------------------ time
+    def _stamp(self, t: float) -> Any:
+        from builtin_interfaces.msg import Time
+
+        sec, nanosec = divmod(round(t * 1e9), 1_000_000_000)
+        return Time(sec=sec, nanosec=nanosec)
+
+    @staticmethod
+    def _seconds(stamp: Any) -> float:
+        return float(stamp.sec) + float(stamp.nanosec) * 1e-9
+
+    # ------------------------------------------------------------------ health
     def _spin(self) -> None:
         try:
             self.executor.spin()
@@ -101,15 +166,37 @@ class Ros2Transport:
         """Messages DDS reports lost on this transport's subscriptions (the middleware's own count)."""
         return self._lost
 
-    def _events(self) -> Any:
-        """QoS event callbacks of a subscription: count what the middleware says it lost."""
+    def _sub_events(self, topic: str) -> Any:
+        """QoS event callbacks of a subscription: count what DDS lost, warn of incompatible publishers."""
         from rclpy.event_handler import SubscriptionEventCallbacks
 
         def lost(status: Any) -> None:
             with self._lock:
                 self._lost += int(status.total_count_change)
 
-        return SubscriptionEventCallbacks(message_lost=lost)
+        return SubscriptionEventCallbacks(
+            message_lost=lost, incompatible_qos=lambda s: self._incompatible(topic, "publisher", s)
+        )
+
+    def _pub_events(self, topic: str) -> Any:
+        from rclpy.event_handler import PublisherEventCallbacks
+
+        return PublisherEventCallbacks(incompatible_qos=lambda s: self._incompatible(topic, "subscriber", s))
+
+    def _incompatible(self, topic: str, who: str, status: Any) -> None:
+        """A peer whose QoS cannot match ours appeared: it will never be heard (or never hear us)."""
+        from rclpy.qos import qos_policy_name_from_kind
+
+        with self._lock:
+            self.incompatible += int(getattr(status, "total_count_change", 1)) or 1
+        policy = qos_policy_name_from_kind(status.last_policy_kind)
+        log.warning(
+            "%s: a %s with incompatible QoS appeared (policy %s): it is not connected; "
+            "set `qos:` for this topic in the mapping (e.g. sensor_data for a best-effort driver)",
+            topic,
+            who,
+            policy,
+        )
 
     @property
     def errors(self) -> int:
@@ -123,22 +210,35 @@ class Ros2Transport:
         """
         return self._thread.is_alive()
 
-    def _qos(self, latched: bool) -> Any:
+    # ------------------------------------------------------------------ QoS
+    @staticmethod
+    def profile(qos: Qos) -> Any:
+        """The rclpy ``QoSProfile`` of a :class:`~cosleec.nodes.qos.Qos` (keep-last history)."""
         from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-        if latched:
-            return QoSProfile(
-                depth=1,
-                history=HistoryPolicy.KEEP_LAST,
-                reliability=ReliabilityPolicy.RELIABLE,
-                durability=DurabilityPolicy.TRANSIENT_LOCAL,
-            )
         return QoSProfile(
-            depth=1000,
+            depth=qos.depth,
             history=HistoryPolicy.KEEP_LAST,
-            reliability=ReliabilityPolicy.RELIABLE,
-            durability=DurabilityPolicy.VOLATILE,
+            reliability=ReliabilityPolicy.RELIABLE
+            if qos.reliability == "reliable"
+            else ReliabilityPolicy.BEST_EFFORT,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL
+            if qos.durability == "transient_local"
+            else DurabilityPolicy.VOLATILE,
         )
+
+    def _qos(self, latched: bool) -> Any:
+        return self.profile(Qos.LATCHED if latched else Qos("reliable", "volatile", 1000))
+
+    # ------------------------------------------------------------------ cosleec topics
+    def _wire_of(self, topic: str) -> tuple[str, Any, Any]:
+        """(topic on the wire, message class, kind) of a cosleec topic on this wire."""
+        kind = kind_of(topic) if self.wire == "typed" else None
+        if kind == "clock":
+            return CLOCK_TOPIC, message_class(CLOCK_TYPE), "clock"
+        if kind is not None:
+            return topic, self.codec.message_type(kind), kind
+        return topic, self._String, None
 
     def advertise(self, topic: str, latched: bool = False) -> None:
         """Create the publisher of ``topic``, reliable; transient-local with depth 1 when ``latched``.
@@ -149,60 +249,130 @@ class Ros2Transport:
             if latched:
                 self._latched.add(topic)
             if topic not in self._pubs:
+                name, cls, _ = self._wire_of(topic)
                 self._pubs[topic] = self.node.create_publisher(
-                    self._String, topic, self._qos(topic in self._latched)
+                    cls, name, self._qos(topic in self._latched), event_callbacks=self._pub_events(name)
                 )
 
-    def publish(self, topic: str, payload: str) -> None:
-        """Publish JSON text on ``topic``, advertising it (not latched) on first use."""
+    def publish(self, topic: str, message: dict[str, Any] | str) -> None:
+        """Publish a record on ``topic`` in this wire's form, advertising it (not latched) on first use.
+
+        JSON text is accepted too (parsed first on the typed wire; ValueError if it is not a
+        JSON object there). A ``status`` record also goes to ``/diagnostics``.
+        """
         if topic not in self._pubs:
             self.advertise(topic)
-        self._pubs[topic].publish(self._String(data=payload))
+        _, cls, kind = self._wire_of(topic)
+        if kind == "clock":
+            record = record_of(message)
+            self._pubs[topic].publish(cls(clock=self._stamp(float(record["t"]))))
+            return
+        if kind is None:
+            self._pubs[topic].publish(
+                self._String(data=message if isinstance(message, str) else dumps(message))
+            )
+        else:
+            self._pubs[topic].publish(self.codec.encode(kind, record_of(message)))
+        if kind == "status" or (kind is None and topic.endswith("/status")):
+            self.diagnostics.report(record_of(message))
 
     def subscribe(self, topic: str, handler: Handler, latched: bool | None = None) -> None:
-        """Call ``handler`` with the JSON text of every message on ``topic``.
+        """Call ``handler`` with every message on ``topic``: JSON text, or (typed wire) a function
+        that decodes the record, so the receiving node rejects what cannot be read.
 
         ``latched`` asks for transient-local QoS, to receive a latched publisher's last
         message; None decides by the name (a topic ending in ``layers``).
         """
         is_latched = topic.rsplit("/", 1)[-1] == "layers" if latched is None else latched
+        name, cls, kind = self._wire_of(topic)
+        if kind == "clock":
+            seconds = self._seconds
+
+            def deliver(m: Any) -> None:
+                handler({"t": seconds(m.clock)})
+
+        elif kind is None:
+
+            def deliver(m: Any) -> None:
+                handler(m.data)
+
+        else:
+            codec = self.codec
+
+            def deliver(m: Any) -> None:
+                handler(lambda: codec.decode(kind, m))
+
         sub = self.node.create_subscription(
-            self._String,
-            topic,
-            self._guard.wrap(topic, lambda m: handler(m.data)),
+            cls,
+            name,
+            self._guard.wrap(name, deliver),
             self._qos(is_latched),
-            event_callbacks=self._events(),
+            event_callbacks=self._sub_events(name),
         )
         self._subs.append(sub)
 
-    def subscribe_typed(self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None]) -> None:
+    # ------------------------------------------------------------------ the robot's topics
+    def subscribe_typed(
+        self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None], qos: Qos | None = None
+    ) -> None:
         """Call ``handler`` with every ``type_name`` message on ``topic``, as nested dicts.
 
-        ValueError or ImportError for a message type that cannot be loaded.
+        ``qos`` as the mapping says (reliable, depth 1000 when None). MessageTypeError for a
+        type that cannot be loaded; a warning when an incompatible publisher appears.
         """
         cls = message_class(type_name)
         sub = self.node.create_subscription(
             cls,
             topic,
             self._guard.wrap(topic, lambda m: handler(to_dict(m))),
-            self._qos(False),
-            event_callbacks=self._events(),
+            self.profile(qos) if qos is not None else self._qos(False),
+            event_callbacks=self._sub_events(topic),
         )
         self._subs.append(sub)
 
-    def publish_typed(self, topic: str, type_name: str, fields: dict[str, Any]) -> None:
+    def subscribe_raw(
+        self, topic: str, type_name: str, handler: Callable[[Any], None], qos: Qos | None = None
+    ) -> None:
+        """Call ``handler`` with every ``type_name`` message on ``topic``, serialized, undecoded (the guard)."""
+        cls = message_class(type_name)
+        sub = self.node.create_subscription(
+            cls,
+            topic,
+            self._guard.wrap(topic, handler),
+            self.profile(qos) if qos is not None else self._qos(False),
+            event_callbacks=self._sub_events(topic),
+            raw=True,
+        )
+        self._subs.append(sub)
+
+    def publish_raw(self, topic: str, type_name: str, data: Any, qos: Qos | None = None) -> None:
+        """Publish a serialized ``type_name`` message as it came from :meth:`subscribe_raw`."""
+        key = f"{topic}#{type_name}#raw"
+        pub = self._pubs.get(key)
+        if pub is None:
+            pub = self._pubs[key] = self.node.create_publisher(
+                message_class(type_name),
+                topic,
+                self.profile(qos) if qos is not None else self._qos(False),
+                event_callbacks=self._pub_events(topic),
+            )
+        pub.publish(data)
+
+    def publish_typed(
+        self, topic: str, type_name: str, fields: dict[str, Any], qos: Qos | None = None
+    ) -> None:
         """Publish a typed message (simulators, tests): ``std_msgs/Bool``, ``{"data": True}``."""
         key = f"{topic}#{type_name}"
         pub = self._pubs.get(key)
         if pub is None:
             pub = self._pubs[key] = self.node.create_publisher(
-                message_class(type_name), topic, self._qos(False)
+                message_class(type_name), topic, self.profile(qos) if qos is not None else self._qos(False)
             )
         pub.publish(message_class(type_name)(**fields))
 
     def typed_subscribers(self, topic: str, type_name: str) -> int:
         """Subscribers of this transport's typed publisher on ``topic`` (0 before :meth:`publish_typed`)."""
-        pub = self._pubs.get(f"{topic}#{type_name}")
+        pub = self._pubs.get(f"{topic}#{type_name}") or self._pubs.get(f"{topic}#{type_name}#raw")
         return pub.get_subscription_count() if pub is not None else 0
 
     def subscribers(self, topic: str) -> int:
@@ -213,6 +383,148 @@ class Ros2Transport:
         pub = self._pubs.get(topic)
         return pub.get_subscription_count() if pub is not None else 0
 
+    # ------------------------------------------------------------------ services
+    def serve(self, name: str, kind: str, handler: Callable[[dict[str, Any]], dict[str, Any]]) -> None:
+        """Offer service ``name`` (``~/request``) of ``kind`` (request, decide, reload).
+
+        ``handler`` takes the request as a dict and returns the answer as a dict. An
+        exception in it answers with the service's failure form (not permitted, not
+        accepted, not reloaded) and is counted: a caller is never left without an answer.
+        """
+        services = self._services_codec()
+        cls = services.service_type(kind)
+
+        def call(req: Any, resp: Any) -> Any:
+            try:
+                answer = handler(services.read_request(kind, req))
+            except Exception as e:
+                self._guard.failed(name, e)
+                answer = failure(kind, e)
+            return services.fill_response(kind, resp, answer)
+
+        self._services.append(self.node.create_service(cls, name, call))
+
+    def ask(
+        self,
+        name: str,
+        kind: str,
+        fields: dict[str, Any],
+        answer: Callable[[dict[str, Any] | None], None],
+        timeout: float,
+    ) -> None:
+        """Call service ``name`` without blocking; ``answer`` gets the reply, or None -- exactly once.
+
+        None when the service is not there, fails, or does not answer within ``timeout``
+        seconds: the caller decides what that means (the guard blocks).
+        """
+        services = self._services_codec()
+        client = self._clients.get(name)
+        if client is None:
+            client = self._clients[name] = self.node.create_client(services.service_type(kind), name)
+        once = Once(answer)
+        if not client.service_is_ready():
+            once(None)
+            return
+        future = client.call_async(services.make_request(kind, fields))
+        timer = threading.Timer(timeout, lambda: once(None))
+        timer.daemon = True
+        timer.start()
+
+        def done(f: Any) -> None:
+            timer.cancel()
+            try:
+                once(services.read_response(kind, f.result()))
+            except Exception:
+                once(None)
+
+        future.add_done_callback(done)
+
+    def _services_codec(self) -> ServiceCodec:
+        if self.services is None:  # services are typed whatever the wire of the topics
+            msg, srv = interfaces()
+            self._codec = Codec(msg, self._stamp, self._seconds, time.time)
+            self.services = ServiceCodec(srv, self._codec)
+        return self.services
+
+    @property
+    def codec(self) -> Codec:
+        """The typed wire's codec (loaded on first use: the JSON wire does without)."""
+        self._services_codec()
+        assert self._codec is not None
+        return self._codec
+
+    # ------------------------------------------------------------------ parameters
+    def parameters(self, defaults: dict[str, Any]) -> dict[str, Any]:
+        """Declare one ROS parameter per option, with its default; return their values.
+
+        Values come from ``--ros-args -p name:=value`` or ``--params-file``; an option not
+        given keeps ``defaults``' value. :class:`ParameterError` for a value of the wrong
+        type or a parameter no option has (with did-you-mean).
+        """
+        from rclpy.exceptions import ParameterUninitializedException
+        from rclpy.parameter import Parameter
+
+        types = {
+            bool: Parameter.Type.BOOL,
+            int: Parameter.Type.INTEGER,
+            float: Parameter.Type.DOUBLE,
+            str: Parameter.Type.STRING,
+            list: Parameter.Type.STRING_ARRAY,
+        }
+        out: dict[str, Any] = {}
+        for name, default in defaults.items():
+            kind = types[type(default)] if default is not None else Parameter.Type.STRING
+            try:
+                self.node.declare_parameter(name, kind)
+            except Exception as e:  # an override of the wrong type
+                raise ParameterError(
+                    f"parameter {name!r}: {e}",
+                    hint=f"give it as {_type_name(default)} (the option's default is {default!r})",
+                ) from None
+            try:
+                value = self.node.get_parameter(name).value
+            except ParameterUninitializedException:
+                value = default
+            out[name] = coerce(name, value, default)
+        given = set(getattr(self.node, "_parameter_overrides", {}))  # what -p / --params-file set
+        check_overrides(given, set(defaults) | {"use_sim_time", "qos_overrides"})
+        return out
+
+    def use_sim_time(self) -> bool:
+        """The standard ``use_sim_time`` parameter (rclpy declares it on every node)."""
+        return bool(self.node.get_parameter("use_sim_time").value)
+
+    # ------------------------------------------------------------------ lifecycle
+    def managed(self, **hooks: Callable[[], bool]) -> None:
+        """Set the lifecycle hooks (``configure``, ``activate``, ``deactivate``, ``cleanup``,
+        ``shutdown``): each returns True for success; an exception counts as failure."""
+        self._hooks.update(hooks)
+
+    def transition(self, name: str) -> bool:
+        """Drive this lifecycle node through transition ``name`` itself (autostart); True if it succeeded."""
+        from rclpy.lifecycle import TransitionCallbackReturn
+
+        result = getattr(self.node, f"trigger_{name}")()
+        return bool(result == TransitionCallbackReturn.SUCCESS)
+
+    # ------------------------------------------------------------------ diagnostics
+    def _publish_diagnostics(self, array_fields: dict[str, Any]) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+        key = "/diagnostics#"
+        pub = self._pubs.get(key)
+        if pub is None:
+            pub = self._pubs[key] = self.node.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        arr = DiagnosticArray()
+        arr.header.stamp = self._stamp(time.time())
+        st = DiagnosticStatus()
+        st.level = bytes([array_fields["level"]])
+        st.name, st.message, st.hardware_id = array_fields["name"], array_fields["message"], ""
+        st.values = [KeyValue(key=k, value=v) for k, v in array_fields["values"]]
+        arr.status = [st]
+        pub.publish(arr)
+
+    # ------------------------------------------------------------------ end
     def ok(self) -> bool:
         """False once rclpy has shut down or the spin thread has ended: :func:`cosleec.ros.serve` then stops the node."""
         return bool(self._rclpy.ok()) and self.alive()
@@ -231,3 +543,46 @@ class Ros2Transport:
         if self._rclpy.ok():
             with contextlib.suppress(Exception):
                 self._rclpy.shutdown()
+
+
+def _type_name(default: Any) -> str:
+    return {bool: "a boolean", int: "an integer", float: "a number", list: "a list of strings"}.get(
+        type(default), "a string"
+    )
+
+
+def _lifecycle_node(name: str, args: list[str], hooks: dict[str, Callable[[], bool]]) -> Any:
+    """A ``LifecycleNode`` whose transitions call ``hooks`` (filled in later by :meth:`Ros2Transport.managed`)."""
+    from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
+
+    def hook(which: str) -> Any:
+        fn = hooks.get(which)
+        if fn is None:
+            return TransitionCallbackReturn.SUCCESS
+        try:
+            ok = fn()
+        except Exception as e:
+            log.error("lifecycle %s failed: %s: %s", which, type(e).__name__, e)
+            return TransitionCallbackReturn.FAILURE
+        return TransitionCallbackReturn.SUCCESS if ok else TransitionCallbackReturn.FAILURE
+
+    class Managed(LifecycleNode):  # type: ignore[misc]
+        def on_configure(self, state: Any) -> Any:
+            return hook("configure")
+
+        def on_activate(self, state: Any) -> Any:
+            return hook("activate")
+
+        def on_deactivate(self, state: Any) -> Any:
+            return hook("deactivate")
+
+        def on_cleanup(self, state: Any) -> Any:
+            return hook("cleanup")
+
+        def on_shutdown(self, state: Any) -> Any:
+            return hook("shutdown")
+
+    return Managed(name, cli_args=args or None)
+
+
+__all__ = ["InterfacesMissingError", "ParameterError", "Ros2Transport", "UnsafeNetworkError", "check_network"]

@@ -18,11 +18,11 @@ from cosleec.runtime.audit import AuditLog, read_audit
 from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
 from cosleec.runtime.context import Context
 from cosleec.runtime.decision import Decision
-from cosleec.runtime.errors import BindingError, ConfigurationError, ContextError
+from cosleec.runtime.errors import BindingError, ConfigurationError, ContextError, ReloadError
 from cosleec.runtime.implementations import Capability, Implementations, Ran
 from cosleec.runtime.journal import Journal, JournalError
 from cosleec.runtime.layers import LayerManager, LayerState, LayerSwitch
-from cosleec.runtime.manager import Manager, RuntimeEvent, UnknownEvents
+from cosleec.runtime.manager import Manager, Permission, Reloaded, RuntimeEvent, UnknownEvents
 from cosleec.runtime.model import MAX_WINDOW_S, CompiledRule, DeadlineError, Obligation
 from cosleec.runtime.obligations import Tracked
 from cosleec.runtime.ruleset import RuleSet
@@ -52,7 +52,10 @@ __all__ = [
     "MeasureSpec",
     "MonotonicClock",
     "Obligation",
+    "Permission",
     "Ran",
+    "ReloadError",
+    "Reloaded",
     "Reporter",
     "RuleSet",
     "RuntimeEvent",

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 from cosleec.errors import ConfigurationError, UserError
 
-__all__ = ["BindingError", "ConfigurationError", "ContextError"]  # ConfigurationError: from cosleec.errors
+# ConfigurationError: from cosleec.errors
+__all__ = ["BindingError", "ConfigurationError", "ContextError", "ReloadError"]
 
 
 class ContextError(UserError, ValueError):
@@ -30,3 +31,12 @@ class BindingError(UserError):
             "incomplete implementation:\n  - " + "\n  - ".join(missing),
             hint="implement each listed clause in its task (@hedge(i)) or register a capability for the event",
         )
+
+
+class ReloadError(UserError):
+    """A rule set the running Manager cannot take (:meth:`~cosleec.runtime.Manager.reload`).
+
+    Raised before anything changes: the Manager goes on with its old rules, context,
+    obligations and bindings, and records nothing. The message names what stands in the
+    way; ``hint`` says how to make the reload possible.
+    """

@@ -27,16 +27,23 @@ What happens when the runtime does not know (each a documented policy, fail clos
 - *an event no declaration names*: :meth:`Manager.event` and :meth:`Manager.request` raise
   ContextError (``unknown_events="raise"``, the default) or refuse it and record why
   (``"refuse"``: ``event`` does nothing, ``request`` answers False).
-- *a failed journal*: the Manager stops deciding (JournalError), and ``request`` refuses.
+- *a failed journal*: the Manager stops deciding (JournalError), and ``request`` refuses
+  (:meth:`Manager.permission` says why, as it does for every refusal).
 
 When rules demand E and forbid it at once (a *conflict*), the Manager records a
 ``conflict`` and resolves it by the declared priorities, or else lets the prohibition win;
 an action that is forbidden for now is held until it is allowed, so ``request(E)`` and what
 the Manager dispatches never disagree (:mod:`cosleec.runtime.priorities`).
+
+The rules themselves can change while the Manager runs (:meth:`Manager.reload`): the swap
+is one step, so every trigger is decided wholly by the old rules or wholly by the new;
+what the new rules still have stays in force, what they do not is withdrawn, each with its
+record, and the journal keeps the result as any other step.
 """
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
 import datetime
 import difflib
@@ -57,13 +64,23 @@ from typing import Any, TypeVar
 
 from cosleec.cop import Snapshot
 from cosleec.errors import CosleecError, clip, show
-from cosleec.lang import CANCEL, CONFLICT_AWARE, HedgeSemantics, Specification, Unknowns, candidates, choose
+from cosleec.lang import (
+    CANCEL,
+    CONFLICT_AWARE,
+    HedgeSemantics,
+    Printer,
+    Specification,
+    Unknowns,
+    candidates,
+    choose,
+)
+from cosleec.lang import ast as A
 from cosleec.lang import pairs as priority_pairs
 from cosleec.runtime.audit import AuditLog
 from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
 from cosleec.runtime.context import Context
 from cosleec.runtime.decision import Decision
-from cosleec.runtime.errors import ConfigurationError, ContextError
+from cosleec.runtime.errors import BindingError, ConfigurationError, ContextError, ReloadError
 from cosleec.runtime.implementations import Capability, Implementations, Ran
 from cosleec.runtime.journal import Change, Journal, JournalError, Saved
 from cosleec.runtime.layers import LayerManager, LayerSwitch, evaluate
@@ -105,17 +122,55 @@ def _option(kind: type[E], value: object, name: str) -> E:
 class RuntimeEvent:
     """What observers (terminal display, ROS publishers, the audit log, tests) are told, in order.
 
-    ``kind`` is one of event, context, layers, semantics, decision, obligation, refused,
-    rejected, conflict, cancelled, held, dispatch, withheld, task-done, task-failed,
-    task-interrupted, restored, dropped, uncommitted, audit-mismatch. ``seq`` numbers the
-    records of one Manager (continued across restarts with a journal, or from the audit
-    log it appends to); 0 when nothing records.
+    ``kind`` is one of options, event, context, layers, semantics, decision, obligation,
+    refused, rejected, conflict, cancelled, held, dispatch, withheld, task-done, task-failed,
+    task-interrupted, restored, reloaded, dropped, uncommitted, audit-mismatch. ``seq``
+    numbers the records of one Manager (continued across restarts with a journal, or from
+    the audit log it appends to); 0 when nothing records.
     """
 
     kind: str
     time: float
     data: dict[str, Any] = field(default_factory=dict)
     seq: int = 0
+
+
+@dataclass(frozen=True)
+class Permission:
+    """The answer of :meth:`Manager.permission`: may ``event`` happen now, and if not, why not.
+
+    ``rules`` names the rules whose prohibitions forbid it now (empty when it is permitted,
+    and when it is refused for another reason: an undeclared event, a Manager that has
+    stopped); ``reason`` says it in one sentence a person can read (an operator's screen,
+    an ``ExplainWhy``). True as a condition exactly when permitted, so that
+    ``if manager.permission(e):`` means what it says.
+    """
+
+    event: str
+    permitted: bool
+    rules: tuple[str, ...]
+    reason: str
+
+    def __bool__(self) -> bool:
+        return self.permitted
+
+
+@dataclass(frozen=True)
+class Reloaded:
+    """What :meth:`Manager.reload` changed (its ``reloaded`` record says the same).
+
+    The hashes are :attr:`RuleSet.digest` (sha256 of the canonical text) before and after;
+    ``added``/``removed``/``changed`` are rule names (changed: in both, with a different
+    canonical text); ``withdrawn`` the ids of the obligations and prohibitions that ended
+    because what they came from is gone.
+    """
+
+    previous_hash: str
+    current_hash: str
+    added: tuple[str, ...]
+    removed: tuple[str, ...]
+    changed: tuple[str, ...]
+    withdrawn: tuple[int, ...]
 
 
 class _Step:
@@ -174,7 +229,9 @@ class _Job:
 
     ``composition`` is the rule's COP composition at the trigger (None: an ``otherwise``
     fallback); ``items`` what the decision put in force; ``record`` its decision record,
-    annotated within the step when the dispatch differs from the decision.
+    annotated within the step when the dispatch differs from the decision;
+    ``implementations`` those bound when it was decided (a reload since binds the new
+    rules' own: a decision runs as it was decided, under the rule it was decided by).
     """
 
     rule: CompiledRule
@@ -182,6 +239,7 @@ class _Job:
     composition: Snapshot | None
     items: list[Tracked]
     record: dict[str, Any] | None = None
+    implementations: Implementations | None = None
 
 
 @dataclass
@@ -200,7 +258,8 @@ class Manager:
     one). Build it from a :class:`RuleSet` or with :meth:`from_file` / :meth:`from_text`;
     bind tasks (:meth:`bind`) or capabilities (:meth:`capability`), :meth:`start` it, then
     feed it measures (:meth:`update`) and events (:meth:`event`), and ask before acting
-    (:meth:`request`).
+    (:meth:`request`; :meth:`permission` also says why not). :meth:`reload` puts new rules
+    in force while it runs.
 
     Options: ``semantics`` (``"last-wins"`` or ``"nested"``, :class:`HedgeSemantics`);
     ``clock`` -- a :class:`Clock` (monotonic by default; a VirtualClock for tests);
@@ -249,6 +308,7 @@ class Manager:
         self.spec = rules.spec
         self.clock: Clock = clock or MonotonicClock()
         self.context = Context(rules.measures, max_age)
+        self._max_age = dict(max_age or {})  # kept whole: a reload applies it to the measures declared then
         self.layer_manager = LayerManager(
             rules, _option(HedgeSemantics, semantics, "semantics"), _option(Unknowns, unknown, "unknown")
         )
@@ -261,19 +321,14 @@ class Manager:
         if isinstance(max_depth, bool) or not isinstance(max_depth, int) or max_depth < 1:
             raise ConfigurationError(f"max_depth must be a whole number of at least 1, not {max_depth!r}")
         self.max_depth = max_depth
-        given = () if priorities is None else [priorities] if isinstance(priorities, str) else priorities
-        try:
-            given = list(given)
-        except TypeError:
-            raise ConfigurationError(
-                f"priorities must be a list of 'H > L' strings or (H, L) pairs, not {show(priorities)}"
-            ) from None
+        given = _given(priorities)
         self.priorities = Priorities.build(
             (r.name for r in rules.rules),
             [*priority_pairs(rules.spec), *given],
             priority_semantics,
             priority_lead,
         )
+        self._given = given  # the caller's priorities (not the file's): a reload keeps them
         self.tracker.by_instance = bool(self.priorities.above)  # priorities act on activations
         self.tracker.keep_started = self.priorities.semantics == CONFLICT_AWARE and bool(
             self.priorities.above
@@ -312,6 +367,8 @@ class Manager:
         self._stop = threading.Event()
         self._broken: JournalError | None = None
         self._closed = False
+        self._check = False  # start() checked the bindings: a reload checks the new rules' too
+        self._allowed: dict[str, Permission] = {}  # permission's answer for an event nothing forbids
         # decisions a journal held that were decided but perhaps never published (dispatch=False):
         # the Manager node publishes them again after a restart (task nodes run each id once)
         self.undelivered: list[dict[str, Any]] = []
@@ -393,18 +450,10 @@ class Manager:
         passes; without it, call :meth:`tick` yourself (as tests with a VirtualClock do).
         Returns ``self``.
         """
-        self.possible_conflicts = possible_conflicts(self.ruleset, self.priorities)
-        if self.possible_conflicts:
-            shown = "; ".join(c.describe() for c in self.possible_conflicts[:5])
-            more = len(self.possible_conflicts) - 5
-            log.warning(
-                "the rules can conflict (%s%s): the prohibition will win unless a priority is declared "
-                "(a priority_start block, or Manager(priorities=[...]))",
-                shown,
-                f"; and {more} more" if more > 0 else "",
-            )
+        self._warn_conflicts()
         if check and self.dispatch_locally:
             self.implementations.check()
+            self._check = True
         if self._recording:  # what the run's verdicts depend on: `cosleec conforms` reads it back
             with self._step() as step:
                 self._emit(
@@ -437,6 +486,20 @@ class Manager:
             self._timer = threading.Thread(target=self._run_timer, name="cosleec-deadlines", daemon=True)
             self._timer.start()
         return self
+
+    def _warn_conflicts(self, known: Iterable[PossibleConflict] = ()) -> None:
+        """Find the pairs of items that can conflict (:attr:`possible_conflicts`); warn when there
+        are any, other than those ``known`` (warned of before a reload)."""
+        self.possible_conflicts = possible_conflicts(self.ruleset, self.priorities)
+        if set(self.possible_conflicts) - set(known):
+            shown = "; ".join(c.describe() for c in self.possible_conflicts[:5])
+            more = len(self.possible_conflicts) - 5
+            log.warning(
+                "the rules can conflict (%s%s): the prohibition will win unless a priority is declared "
+                "(a priority_start block, or Manager(priorities=[...]))",
+                shown,
+                f"; and {more} more" if more > 0 else "",
+            )
 
     def close(self) -> None:
         """Stop the timer thread (waiting up to 5 s), then close the journal and the audit log.
@@ -552,7 +615,7 @@ class Manager:
         decisions: list[Decision] = []
         self._catch_up()
         with self._step() as step:
-            if not self._known(name, "event", step):
+            if self._unknown(name, "event", step) is not None:
                 return []
             now = self.clock.now()
             self.stats["events"] += 1
@@ -572,7 +635,7 @@ class Manager:
                 composition = self.layer_manager.composition_of(rule) if d.clause is not None else None
                 decisions.append(d)
                 rec = self._record(d, step, queue=composition is not None)
-                job = _Job(rule, d, composition, [], rec)
+                job = _Job(rule, d, composition, [], rec, self.implementations)
                 followups += self._begin(job, d.obligations, now, seq, 0, d.id, step)
                 if composition is not None:
                     jobs.append(job)
@@ -585,34 +648,100 @@ class Manager:
         """May ``name`` happen now? False (and the attempt recorded) while a prohibition holds.
 
         Also False when the Manager cannot keep its state (a failed journal), and for an
-        event no declaration names under ``unknown_events="refuse"``.
+        event no declaration names under ``unknown_events="refuse"``. :meth:`permission`
+        answers the same, and says why.
         """
+        return self.permission(name).permitted
+
+    def permission(self, name: str, *, source: str = "") -> Permission:
+        """May ``name`` happen now, and if not, why not: ask before acting, and tell a person.
+
+        The answer of :meth:`request`, with the same effects: a refusal is counted
+        (``stats["refused"]``) and recorded (a ``refused`` record naming the prohibitions, the
+        reason and ``source``, who asked: a task, a guarded topic), and each forbidding
+        prohibition counts it. Not permitted, with the reason:
+
+        - while a prohibition forbids it now (its window, ends included): ``rules`` names
+          the rules whose prohibitions do, and the reason each one's window end and the
+          decision that imposed it;
+        - when the Manager can no longer keep its state (its journal or audit log failed,
+          now or before) or is closed: nothing is recorded, there is nowhere to;
+        - for an event no declaration names, under ``unknown_events="refuse"`` (recorded as
+          ``rejected``); under ``"raise"`` it raises ContextError, as :meth:`event` does.
+        """
+        if not isinstance(source, str):
+            raise TypeError(f"source names who asks, as a string, not {type(source).__name__}")
         if self._broken is not None or self._closed:
-            return False
-        self._catch_up()
-        with self._step() as step:
-            if not self._known(name, "request", step):
-                return False
-            now = self.clock.now()
-            followups = self._ready(self._advance(now, step), now, step)
-            forbidding = self.tracker.forbidding(name, now)
-            for t in forbidding:
-                t.refused += 1
-                if self.journal is not None:  # the count is the prohibition's state: it survives a restart
-                    step.change.obligations[t.id] = t.to_json()
-            if forbidding:
-                self.stats["refused"] += 1
-                self._emit(
-                    step,
-                    "refused",
-                    {
+            return self._stopped(name)
+        try:
+            self._catch_up()
+            with self._step() as step:
+                unknown = self._unknown(name, "request", step)
+                if unknown is not None:
+                    return Permission(name, False, (), unknown)
+                now = self.clock.now()
+                followups = self._ready(self._advance(now, step), now, step)
+                forbidding = self.tracker.forbidding(name, now)
+                answer = self._allowed.get(name) if not forbidding else None
+                if answer is None:
+                    answer = self._forbidden_by(name, forbidding)
+                for t in forbidding:
+                    t.refused += 1
+                    if self.journal is not None:  # the count is the prohibition's state: it is kept
+                        step.change.obligations[t.id] = t.to_json()
+                if forbidding:
+                    self.stats["refused"] += 1
+                    data: dict[str, Any] = {
                         "event": name,
                         "by": [t.rule for t in forbidding],
                         "obligations": [t.id for t in forbidding],
-                    },
+                        "reason": answer.reason,
+                    }
+                    if source:
+                        data["source"] = clip(source, 200)
+                    self._emit(step, "refused", data)
+            self._dispatch(followups)
+        except JournalError:  # this step could not be kept (or one it waited behind): fail closed
+            return self._stopped(name)
+        except ConfigurationError:
+            if self._closed:  # closed while it waited for the lock
+                return self._stopped(name)
+            raise
+        return answer
+
+    def _stopped(self, name: str) -> Permission:
+        """The answer of a Manager that takes no more steps: nothing is permitted."""
+        what = clip(name, 80) if isinstance(name, str) else show(name)
+        if self._broken is not None:
+            why = f"the Manager can no longer keep its state ({self._broken}), so it permits nothing"
+        else:
+            why = "the Manager is closed"
+        return Permission(name, False, (), f"{what} is not permitted: {why}")
+
+    def _forbidden_by(self, name: str, forbidding: list[Tracked]) -> Permission:
+        """The answer for ``name`` given the prohibitions that forbid it now (none: permitted)."""
+        if not forbidding:  # the same answer every time: made once per event (declared events only)
+            allowed = self._allowed.get(name)
+            if allowed is None:
+                allowed = Permission(
+                    name, True, (), f"{name} is permitted: no prohibition in force forbids it now"
                 )
-        self._dispatch(followups)
-        return not forbidding
+                self._allowed[name] = allowed
+            return allowed
+        what = clip(name, 80)
+        parts = []
+        for t in forbidding:
+            until = "with no end" if t.hi is None else f"until {t.hi:g} s"
+            why = self._why(t) or f"{t.rule}: {t.obligation.describe()} from {t.start:g} s"
+            parts.append(f"by {t.rule} {until} ({clip(why, 300)})")
+        rules = tuple(dict.fromkeys(t.rule for t in forbidding))
+        return Permission(name, False, rules, f"{what} is forbidden {' and '.join(parts)}")
+
+    def _why(self, t: Tracked) -> str | None:
+        """The explanation of the decision that put ``t`` in force, while :attr:`decisions` keeps it."""
+        ds = self.decisions  # in the order of their ids: found by bisection
+        i = bisect.bisect_left(ds, t.decision_id, key=lambda d: d.id)
+        return ds[i].explanation if i < len(ds) and ds[i].id == t.decision_id else None
 
     def tick(self) -> list[Decision]:
         """Process deadlines and stale values up to now (the timer thread calls this too).
@@ -753,10 +882,11 @@ class Manager:
         }
 
     # ------------------------------------------------------------------ internals (under the lock)
-    def _known(self, name: str, what: str, step: _Step) -> bool:
-        """Is ``name`` a declared event? If not, apply ``unknown_events`` (record, then raise or refuse)."""
+    def _unknown(self, name: str, what: str, step: _Step) -> str | None:
+        """None when ``name`` is a declared event; else apply ``unknown_events`` (record, then
+        raise, or return why it is refused)."""
         if isinstance(name, str) and name in self.ruleset.events:
-            return True
+            return None
         if not isinstance(name, str):
             self.stats["rejected"] += 1
             self._emit(
@@ -770,7 +900,7 @@ class Manager:
         self._emit(step, "rejected", {"reason": reason, "what": what, "hint": hint})
         if self.unknown_events == UnknownEvents.RAISE:
             raise ContextError(reason, hint=hint)
-        return False
+        return f"{clip(name, 80)} is not an event the rules declare ({hint})"
 
     def _advance(self, now: float, step: _Step, limit: int | None = None) -> list[_Job]:
         """Everything due up to ``now``, in time order: stale values, conflict-aware
@@ -857,7 +987,7 @@ class Manager:
                 violated=t.id,
             )
             rec = self._record(d, step, queue=issued.determined)
-            job = _Job(rule, d, None, [], rec)
+            job = _Job(rule, d, None, [], rec, self.implementations)
             more = self._begin(job, issued.obligations, start, seq, t.depth + 1, t.instance, step)
             if issued.determined:
                 followups.append(job)
@@ -1115,7 +1245,7 @@ class Manager:
             else None
         )
         items = [t for t in self.tracker.active if t.decision_id == d.id]
-        self._held[d.id] = _Job(rule, d, composition, items, None)
+        self._held[d.id] = _Job(rule, d, composition, items, None, self.implementations)
         return True
 
     def _dispatch(self, jobs: list[_Job]) -> None:
@@ -1123,12 +1253,11 @@ class Manager:
         if not self.dispatch_locally:
             return
         for job in jobs:
+            impl = job.implementations if job.implementations is not None else self.implementations
             if job.composition is not None:
-                call = functools.partial(
-                    self.implementations.dispatch, job.rule, job.decision, job.composition
-                )
+                call = functools.partial(impl.dispatch, job.rule, job.decision, job.composition)
             else:
-                call = functools.partial(self.implementations.dispatch_fallback, job.rule, job.decision)
+                call = functools.partial(impl.dispatch_fallback, job.rule, job.decision)
             self._run(job.rule, job.decision, call)
 
     def _decide(self, rule: CompiledRule, event: str, now: float) -> Decision | None:
@@ -1359,6 +1488,292 @@ class Manager:
                 except Exception:  # a bug must not stop deadlines from being judged
                     log.exception("judging deadlines failed; the timer goes on")
 
+    # ------------------------------------------------------------------ reloading the rules
+    @property
+    def rules_hash(self) -> str:
+        """The digest of the rules in force (:attr:`RuleSet.digest`, sha256 of their canonical text).
+
+        The same digest heads every audit record (``rules``) and the journal (whose restore
+        reports ``rules_changed`` against it); :meth:`reload` changes it.
+        """
+        return self.ruleset.digest
+
+    def reload(
+        self,
+        rules: RuleSet,
+        *,
+        priorities: Iterable[str | tuple[str, str]] | None = None,
+        tasks: Iterable[Task] = (),
+        capabilities: Mapping[str, Capability] | None = None,
+    ) -> Reloaded:
+        """Enforce ``rules`` from now on, in place of the rules in force, without a restart.
+
+        For a deployment that adds, removes or edits rules while the robot runs (as
+        SLEEC@run.time does). What fell due before is judged first, by the rules it fell
+        due under; then, in one step under the lock -- between two decisions, never within
+        one -- the rules are swapped:
+
+        - *Obligations and prohibitions* in force (held decisions and pending ``otherwise``
+          chains included) are kept when their rule still exists: a rule of the same name
+          whose response still has the item they came from (the same item key with the same
+          event and sense, or else the one item of the rule with that event and sense) --
+          exactly what a restart on the journal with the new rules keeps, so a crash right
+          after a reload changes nothing. A kept one keeps its window (it was decided under
+          the old text) and takes the new item's ``otherwise``. The others are *withdrawn*
+          (an ``obligation`` record with status ``withdrawn`` each): they can no longer be
+          violated and their ``otherwise`` never runs; a decision of a removed rule not yet
+          run (held, or an ``otherwise`` due at the reload) is ``withheld``; a miss waiting
+          for its late event is ``dropped``. A decision already handed to its implementation
+          runs as it was decided.
+        - *Context*: the values of measures still declared are kept (a scale value by its
+          literal); those of measures no longer declared are ``dropped`` (recorded); new
+          measures start unknown. ``max_age`` applies to the measures declared now (kept for
+          the others: a later reload that declares them again ages them again).
+        - *Layers* are recomputed for the new rules under the current context (a ``layers``
+          record: a rule added switches from the base, one removed to it).
+        - *Priorities*: the new rules' own and the caller's (``priorities``; None keeps those
+          given to the Manager); activations in force that a new priority orders meet now
+          (cancellation), as after a restore.
+        - *Implementations*: tasks bound to rules still there stay bound (``tasks`` binds more
+          or replaces them, ``capabilities`` adds handlers for new response events); a task of
+          a removed rule is unbound. A decision runs with the implementations bound when it
+          was made.
+
+        One ``reloaded`` record says what changed: ``previous_hash`` and ``current_hash``
+        (:attr:`rules_hash`), rule names ``added``, ``removed`` and ``changed`` (in both, with
+        another canonical text), the obligation ids ``withdrawn`` and ``relinked`` (kept, with
+        a new item key), the decisions ``withheld``, measures added and removed, the
+        priorities. With a journal it is one commit: a restart with the new rules restores
+        what was kept and nothing withdrawn; a restart with the old rules is a restart with
+        changed rules (``restored`` says ``rules_changed``; what they lack is ``dropped``).
+
+        Refused with :class:`ReloadError` -- nothing changes, nothing is recorded, the old rules
+        stay in force -- when the Manager could not enforce ``rules`` faithfully: a measure
+        that holds a value and changes its type (boolean, numeric, scale), or a scale that
+        loses the literal its value is; a priority naming a rule the new rules lack (or a
+        cycle); a bound task naming a clause its rule no longer has, or a task or capability
+        for a rule or event the new rules lack; and, when :meth:`start` checked the bindings,
+        a rule, clause or ``otherwise`` left without an implementation. A Manager that is
+        closed or whose journal failed raises as for any step. Returns :class:`Reloaded`.
+        """
+        if not isinstance(rules, RuleSet):
+            raise TypeError(
+                f"reload needs a RuleSet, not {type(rules).__name__}: "
+                "use RuleSet.from_file(path), RuleSet.from_text(text) or RuleSet.from_spec(spec)"
+            )
+        try:
+            given = self._given if priorities is None else _given(priorities)
+        except ConfigurationError as e:
+            raise ReloadError(f"reload refused, the rules in force stay: {e}") from None
+        binding = list(tasks)
+        handlers = dict(capabilities or {})
+        self.tick()  # what fell due before the reload is judged by the rules it fell due under
+        followups: list[_Job] = []
+        with self._step() as step:
+            prio, impl = self._bindings(rules, given, binding, handlers)
+            self._carried(rules)  # refused before anything changes
+            now = self.clock.now()
+            followups = self._advance(now, step)  # (nothing, unless the clock moved since the tick)
+            result, followups = self._swap(rules, prio, impl, followups, now, step)
+            self._given = given  # the next reload keeps these
+        for t in binding:
+            t.manager = self
+        self._warn_conflicts(self.possible_conflicts)
+        if self.dispatch_locally:
+            impl.prepare()  # start-up work, not the first trigger's latency
+        self._notify_timer()
+        self._dispatch(followups)
+        return result
+
+    def _bindings(
+        self,
+        rules: RuleSet,
+        given: list[str | tuple[str, str]],
+        tasks: list[Task],
+        capabilities: dict[str, Capability],
+    ) -> tuple[Priorities, Implementations]:
+        """The priorities and implementations ``rules`` would run with, or ReloadError (under the lock)."""
+        refused = "reload refused, the rules in force stay"
+        try:
+            prio = Priorities.build(
+                (r.name for r in rules.rules),
+                [*priority_pairs(rules.spec), *given],
+                self.priorities.semantics,
+                self.priorities.lead,
+            )
+        except ConfigurationError as e:
+            raise ReloadError(
+                f"{refused}: {e}",
+                hint="give the priorities for the new rules: reload(rules, priorities=[...])",
+            ) from None
+        impl = Implementations(rules)
+        # every capability is kept, even for an event no rule obliges now: a later reload may again
+        impl.capabilities.update(self.implementations.capabilities)
+        replaced = {t.rule for t in tasks}
+        try:
+            for t in self.implementations.tasks.values():
+                if t.rule in rules.by_name and t.rule not in replaced:
+                    impl.bind(t)
+            for t in tasks:
+                impl.bind(t)
+            for event, fn in capabilities.items():
+                impl.capability(event)(fn)
+            if self._check:  # start() checked the rules it began with: the new ones are held to it too
+                impl.check()
+        except BindingError as e:
+            raise ReloadError(
+                f"{refused}: {e}",
+                hint="bind the new rules' implementations in the reload: reload(rules, tasks=[...], "
+                "capabilities={event: handler})",
+            ) from None
+        return prio, impl
+
+    def _carried(self, rules: RuleSet) -> dict[str, Any]:
+        """The values (stored form) the context keeps under ``rules``, or ReloadError when a
+        value held cannot be read as the new measure's type (under the lock, changes nothing)."""
+        out: dict[str, Any] = {}
+        problems: list[str] = []
+        for name, v in self.context.values.items():
+            new = rules.measures.get(name)
+            if new is None:
+                continue  # no longer declared: dropped
+            old = self.context.measures[name]
+            shown = show(old.external(v), 40)
+            if new.kind != old.kind:
+                problems.append(
+                    f"measure {name} holds {shown} as a {old.kind}, and the new rules make it {new.kind}"
+                )
+            elif new.kind == "scale":
+                literal = old.literals[int(v)]
+                if literal in new.literals:
+                    out[name] = new.literals.index(literal)
+                else:
+                    problems.append(
+                        f"measure {name} holds {shown}, a literal its new scale "
+                        f"({', '.join(new.literals)}) does not have"
+                    )
+            else:
+                out[name] = v
+        if problems:
+            raise ReloadError(
+                f"reload refused, the rules in force stay: {'; '.join(problems)}",
+                hint="keep the measure's type (and the literal its value is), or give the measure "
+                "a new name: its value then starts unknown",
+            )
+        return out
+
+    def _swap(
+        self,
+        rules: RuleSet,
+        prio: Priorities,
+        impl: Implementations,
+        followups: list[_Job],
+        now: float,
+        step: _Step,
+    ) -> tuple[Reloaded, list[_Job]]:
+        """Put ``rules`` in force at ``now`` (under the lock, as part of ``step``; checked before)."""
+        old = self.ruleset
+        withdrawn: list[Tracked] = []
+        kept: list[tuple[Tracked, ItemSpec]] = []
+        for t in sorted(self.tracker.active, key=lambda t: t.id):
+            item = self._item_of(t, rules)
+            if item is None:
+                withdrawn.append(t)
+            else:
+                kept.append((t, item))
+        forgotten = [t for t in self.tracker.misses() if self._item_of(t, rules) is None]
+        relinked = [t.id for t, item in kept if t.obligation.item != item.key]
+        gone = [job for job in [*self._held.values(), *followups] if job.rule.name not in rules.by_name]
+        values = self._carried(rules)
+        dropped = sorted(n for n in self.context.values if n not in values)
+        before, after = _texts(old), _texts(rules)
+        result = Reloaded(
+            previous_hash=old.digest,
+            current_hash=rules.digest,
+            added=tuple(n for n in after if n not in before),
+            removed=tuple(n for n in before if n not in after),
+            changed=tuple(n for n in after if n in before and before[n] != after[n]),
+            withdrawn=tuple(t.id for t in withdrawn),
+        )
+        self._emit(
+            step,
+            "reloaded",
+            {
+                "previous_hash": result.previous_hash,
+                "current_hash": result.current_hash,
+                "added": list(result.added),
+                "removed": list(result.removed),
+                "changed": list(result.changed),
+                "withdrawn": list(result.withdrawn),
+                "relinked": relinked,
+                "withheld": [job.decision.id for job in gone],
+                "measures_added": sorted(rules.measures.keys() - old.measures.keys()),
+                "measures_removed": sorted(old.measures.keys() - rules.measures.keys()),
+                "priorities": sorted([h, lo] for h, lo in prio.declared),
+            },
+            now,
+        )
+        # the rules, and what is computed from them
+        context = Context(rules.measures, {n: a for n, a in self._max_age.items() if n in rules.measures})
+        context.values.update(values)
+        context.stamps.update((n, self.context.stamps[n]) for n in values)
+        context.version = self.context.version
+        layers = LayerManager(rules, self.layer_manager.semantics, self.layer_manager.unknowns)
+        layers.recompute_all(context.values)
+        layers.version = self.layer_manager.version
+        switches = _switches(old, self.layer_manager, rules, layers)
+        newly = prio.above - self.priorities.above
+        self.ruleset, self.spec = rules, rules.spec
+        self.context, self.layer_manager = context, layers
+        self.implementations, self.priorities = impl, prio
+        self.tracker.reindex(bool(prio.above), prio.semantics == CONFLICT_AWARE and bool(prio.above))
+        self._cut = None  # what conflict-aware priorities force: found again, for the new priorities
+        self._held_seen = (-1, 0.0)  # every held decision is examined again
+        # what is gone, each with its record
+        for t in withdrawn:
+            self.tracker.withdraw(t, now)
+            self._track(t, step)
+        for t, item in kept:
+            moved = t.obligation.item != item.key
+            t.obligation = dataclasses.replace(t.obligation, otherwise=item.otherwise, item=item.key)
+            if moved and self.journal is not None:
+                step.change.obligations[t.id] = t.to_json()
+        for t in forgotten:
+            self.tracker.forget(t)
+            self._emit(
+                step,
+                "dropped",
+                {
+                    "what": f"obligation {t.id} ({t.rule}: {t.obligation.describe()}): the rules no longer have it"
+                },
+            )
+            if self.journal is not None:
+                step.change.obligations[t.id] = None
+        for job in gone:
+            was_held = self._held.pop(job.decision.id, None) is not None
+            if job.record is not None and not was_held:
+                job.record["dispatch"] = "withheld"
+            self._emit(
+                step,
+                "withheld",
+                {
+                    "decision": job.decision.id,
+                    "rule": job.decision.rule,
+                    "reason": f"its rule {job.decision.rule} was removed by a reload",
+                },
+            )
+            if self.journal is not None:
+                step.change.outbox[job.decision.id] = None
+        followups = [job for job in followups if job.rule.name in rules.by_name]
+        for name in dropped:
+            self._emit(step, "dropped", {"what": f"measure {name}: the rules no longer declare it"})
+            if self.journal is not None:
+                step.change.context[name] = None
+        self._switched(switches, step)
+        if newly and prio.semantics == CANCEL:
+            self._meet(self.tracker.active, now, step)
+        return result, self._ready(followups, now, step)
+
     # ------------------------------------------------------------------ restoring from a journal
     def _open_journal(self, journal: Journal) -> None:
         saved = journal.load()
@@ -1370,13 +1785,16 @@ class Manager:
         with self._step() as step:
             self._restore(saved, step)
 
-    def _item_of(self, t: Tracked) -> ItemSpec | None:
-        """The response item a restored obligation came from: by its key, or -- when the rule
-        was edited around it -- the one item of its rule with the same event and sense."""
-        item = self.ruleset.items.get(t.obligation.item)
+    def _item_of(self, t: Tracked, rules: RuleSet | None = None) -> ItemSpec | None:
+        """The response item of ``rules`` (default: the rules in force) an obligation came from,
+        when it was made under other rules (a journal's, rules before a reload): by its key,
+        or -- when the rule was edited around it -- the one item of its rule with the same
+        event and sense. None when there is none: the rules no longer have it."""
+        rules = self.ruleset if rules is None else rules
+        item = rules.items.get(t.obligation.item)
         if item is not None and item.event == t.event and item.negated == t.prohibition:
             return item
-        rule = self.ruleset.by_name.get(t.rule)
+        rule = rules.by_name.get(t.rule)
         if rule is None:
             return None
         same = [
@@ -1523,10 +1941,46 @@ class Manager:
                     step.change.obligations[int(rec["id"])] = None
         if self.priorities.above and self.priorities.semantics == CANCEL:
             # priorities declared since (or changed): activations restored together meet now
-            now = self.clock.now()
-            for t in sorted(restored, key=lambda t: t.instance):
-                if t.status == PENDING and t.clause is not None and self.tracker.of_instance(t.instance):
-                    self._prioritise(t.instance, t.rule, now, step)
+            self._meet(restored, self.clock.now(), step)
+
+    def _meet(self, items: Iterable[Tracked], now: float, step: _Step) -> None:
+        """Cancellation-based priorities between activations that were in force together before
+        the priorities between them were (a journal restored, a reload): in the order they began."""
+        for t in sorted(items, key=lambda t: t.instance):
+            if t.status == PENDING and t.clause is not None and self.tracker.of_instance(t.instance):
+                self._prioritise(t.instance, t.rule, now, step)
+
+
+def _given(priorities: Iterable[str | tuple[str, str]] | None) -> list[str | tuple[str, str]]:
+    """The ``priorities`` option as a list (checked against the rules by Priorities.build)."""
+    given = () if priorities is None else [priorities] if isinstance(priorities, str) else priorities
+    try:
+        return list(given)
+    except TypeError:
+        raise ConfigurationError(
+            f"priorities must be a list of 'H > L' strings or (H, L) pairs, not {show(priorities)}"
+        ) from None
+
+
+def _texts(rules: RuleSet) -> dict[str, str]:
+    """Each rule's canonical text, by name, in rule order: what a reload compares to tell a changed rule."""
+    dialect = rules.spec.dialect if rules.spec.dialect is not A.Dialect.PAPER else A.Dialect.TK
+    printer = Printer(rules.spec, dialect)
+    return {r.name: printer.rule(r.ast) for r in rules.rules}
+
+
+def _switches(old: RuleSet, was: LayerManager, new: RuleSet, now: LayerManager) -> list[LayerSwitch]:
+    """The layer switches of a reload, by rule name: a rule added switches from the base (None),
+    one removed to it; rules in the new order, then the removed ones."""
+    before = {r.name: _layer(r, st.clause) for r, st in zip(old.rules, was.status)}
+    after = {r.name: _layer(r, st.clause) for r, st in zip(new.rules, now.status)}
+    names = [*after, *(n for n in before if n not in after)]
+    return [LayerSwitch(n, before.get(n), after.get(n)) for n in names if before.get(n) != after.get(n)]
+
+
+def _layer(rule: CompiledRule, clause: int | None) -> str | None:
+    """A rule's active layer as a ``layers`` record names it: None the base, ``"?"`` undetermined."""
+    return "?" if clause is None else rule.layer_of(clause)
 
 
 @functools.cache

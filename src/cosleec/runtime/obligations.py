@@ -20,7 +20,9 @@ passing of time to it. The rules it applies:
   once (:meth:`Tracker.expire`).
 - An obligation can also end ``refused`` (a prohibition forbids its whole window: a
   conflict, see the Manager) or ``cancelled`` (a higher rule's priority); both are set
-  by the Manager through :meth:`Tracker.finish`.
+  by the Manager through :meth:`Tracker.finish`. It ends ``withdrawn`` when a reload
+  removes the rule (or the response item) it came from (:meth:`Tracker.withdraw`): it
+  can no longer be violated and its ``otherwise`` never starts.
 
 Causal order: an occurrence counts only for obligations created before it was handled.
 """
@@ -36,7 +38,7 @@ from typing import Any
 from cosleec.runtime.model import Obligation
 
 PENDING, FULFILLED, VIOLATED, RESPECTED = "pending", "fulfilled", "violated", "respected"
-REFUSED, CANCELLED = "refused", "cancelled"
+REFUSED, CANCELLED, WITHDRAWN = "refused", "cancelled", "withdrawn"
 MISSES_KEPT = 64  # per event: missed obligations a late occurrence is still reported for
 
 
@@ -268,6 +270,39 @@ class Tracker:
         t.status, t.outcome_at, t.by = status, now, by
         self._close(t)
 
+    def withdraw(self, t: Tracked, now: float) -> None:
+        """End ``t`` as ``withdrawn`` at ``now``: the rules it came from are gone (a reload).
+
+        Nothing settled it, so ``by`` stays None; it is no miss, so no late event is kept for it.
+        """
+        t.status, t.outcome_at, t.by = WITHDRAWN, now, None
+        self._close(t)
+
+    def misses(self) -> list[Tracked]:
+        """The missed obligations still waiting for their late event (oldest first per event)."""
+        return [t for missed in self._missed.values() for t in missed]
+
+    def forget(self, t: Tracked) -> None:
+        """Stop waiting for the late event of missed ``t`` (its rule is gone: a reload)."""
+        missed = self._missed.get(t.event)
+        if missed is not None:
+            for i, x in enumerate(missed):
+                if x is t:
+                    del missed[i]
+                    break
+
+    def reindex(self, by_instance: bool, keep_started: bool) -> None:
+        """Switch the indexes priorities need on or off, for what is in force now (a reload
+        that adds or removes the priorities): activations, and what started since last read."""
+        self.by_instance = by_instance
+        self.keep_started = keep_started
+        self.started.clear()
+        self._instances.clear()
+        self._rules.clear()
+        if by_instance:
+            for t in sorted(self._active.values(), key=lambda t: t.id):
+                self._index_instance(t)
+
     def obliging(self, event: str) -> list[Tracked]:
         """The obligations in force to produce ``event`` (not through an `else`), oldest first."""
         found = self._by_event.get(event, {}).values()
@@ -294,10 +329,13 @@ class Tracker:
         if t.hi is not None:
             heapq.heappush(self._heap, (t.hi, t.id))
         if self.by_instance:
-            self._instances.setdefault(t.instance, {})[t.id] = t
-            if t.clause is not None:  # an undetermined decision is no activation a priority acts on
-                counts = self._rules.setdefault(t.rule, {})
-                counts[t.instance] = counts.get(t.instance, 0) + 1
+            self._index_instance(t)
+
+    def _index_instance(self, t: Tracked) -> None:
+        self._instances.setdefault(t.instance, {})[t.id] = t
+        if t.clause is not None:  # an undetermined decision is no activation a priority acts on
+            counts = self._rules.setdefault(t.rule, {})
+            counts[t.instance] = counts.get(t.instance, 0) + 1
 
     def _close(self, t: Tracked) -> None:
         self.ended += 1

@@ -110,7 +110,17 @@ def test_manager_node_decides_rejects_and_answers_requests(bus: LocalBus) -> Non
     bus.wait_idle()
     assert [d["rule"] for d in decisions] == ["R4", "R6"]  # R5 waits for CallSupport, never reported
     assert [o["rule"] for o in obligations] == ["R4", "R6"]
-    assert replies == [{"id": 1, "event": "RecordVideo", "allowed": False}]
+    # a refusal says which rule forbids it, and why
+    assert replies == [
+        {
+            "id": 1,
+            "event": "RecordVideo",
+            "allowed": False,
+            "rules": ["R6"],
+            "reason": "RecordVideo is forbidden by R6 until 600 s "
+            "(R6: not RecordVideo within 600 s [default], because userConsent was false)",
+        }
+    ]
     assert {v["event"] for v in violations} == {"CallSupport"}  # nobody called support in time
     assert node.counters["rejected"] == 3
     node.close()
