@@ -5,7 +5,8 @@ End to end: the benchmark sends a context message that switches a layer, then th
 the Manager (own process) decides under the new layer and sends the obligation; the task
 node (own process) dispatches the layered implementation, which reports the response event;
 the benchmark stops the clock when that report arrives. Both are round trips measured in the
-same run, on the same machine; the ratio of their p99 is the figure (target <= 2).
+same run, on the same machine; the ratio of their p99 is the figure (target <= 2). The
+cosleec topics carry their ``cosleec_interfaces`` types, as deployed (the default wire).
 Runs inside a private network namespace (ros-setup.md §1): it re-executes itself there.
 """
 
@@ -62,6 +63,7 @@ def main() -> int:
         reexec_isolated()
     import rclpy
     from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from cosleec_interfaces.msg import ContextUpdate, Event, MeasureValue, Status
     from std_msgs.msg import String
 
     from cosleec.ros import env as rosenv
@@ -96,24 +98,24 @@ def main() -> int:
 
     ping = node.create_publisher(String, "/bench/ping", qos)
     node.create_subscription(String, "/bench/pong", arrived, qos)
-    ctx = node.create_publisher(String, f"{ns}/context", qos)
-    ev = node.create_publisher(String, f"{ns}/events", qos)
+    ctx = node.create_publisher(ContextUpdate, f"{ns}/context", qos)
+    ev = node.create_publisher(Event, f"{ns}/events", qos)
     reports: list[float] = []
     rep = threading.Event()
 
-    def reported(m: String) -> None:
-        if json.loads(m.data).get("event") == "Pong":
+    def reported(m: Event) -> None:
+        if m.event == "Pong":
             reports.append(time.perf_counter())
             rep.set()
 
-    node.create_subscription(String, f"{ns}/events", reported, qos)
+    node.create_subscription(Event, f"{ns}/events", reported, qos)
     status: dict[str, dict[str, int]] = {}
 
-    def on_status(m: String) -> None:
-        s = json.loads(m.data)
+    def on_status(m: Status) -> None:
+        s = json.loads(m.record)
         status[s["node"]] = s.get("subscribers", {})
 
-    node.create_subscription(String, f"{ns}/status", on_status, qos)
+    node.create_subscription(Status, f"{ns}/status", on_status, qos)
     executor = rclpy.executors.SingleThreadedExecutor()
     executor.add_node(node)
     spinner = threading.Thread(target=executor.spin, daemon=True)
@@ -151,8 +153,9 @@ def main() -> int:
             rep.clear()
             toggle[0] = not toggle[0]
             t0 = time.perf_counter()
-            ctx.publish(String(data=json.dumps({"values": {"toggle": toggle[0]}})))  # switches R's layer
-            ev.publish(String(data='{"event":"Ping"}'))
+            value = MeasureValue(name="toggle", kind=MeasureValue.BOOLEAN, boolean=toggle[0])
+            ctx.publish(ContextUpdate(values=[value]))  # switches R's layer
+            ev.publish(Event(event="Ping"))
             if not rep.wait(5):
                 raise TimeoutError("no report from the task node")
             return reports[-1] - t0

@@ -15,23 +15,17 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from cosleec.errors import UserError
-from cosleec.nodes import Handler, Qos, dumps
+from cosleec.nodes import Handler, Qos
 from cosleec.ros.diagnostics import Diagnostics
 from cosleec.ros.guard import CallbackGuard
 from cosleec.ros.interfaces import (
-    CLOCK_TOPIC,
-    CLOCK_TYPE,
-    Codec,
     Once,
-    ServiceCodec,
     failure,
-    interfaces,
-    kind_of,
     record_of,
 )
 from cosleec.ros.messages import message_class, to_dict
 from cosleec.ros.parameters import check_overrides, coerce
+from cosleec.ros.wire import Wire, is_status
 
 
 class Ros1Transport:
@@ -49,15 +43,8 @@ class Ros1Transport:
         import rospy
         from std_msgs.msg import String
 
-        if wire not in ("typed", "json"):
-            raise UserError(f"wire {wire!r} is not one of typed, json")
-        self.wire = wire
         self._rospy = rospy
-        self._String = String
-        self._codec: Codec | None = None
-        self.services: ServiceCodec | None = None
-        if wire == "typed":
-            self._services_codec()  # fail at once, with the fix, when the interfaces are missing
+        self._wire = Wire(wire, String, self._stamp, self._seconds)
         # signals are ours: the node's main loop stops cleanly on SIGINT/SIGTERM
         rospy.init_node(node_name, anonymous=False, disable_signals=True, argv=["cosleec", *(ros_args or [])])
         self.node_name = rospy.get_name()
@@ -69,6 +56,15 @@ class Ros1Transport:
         self._lock = threading.Lock()
         self._guard = CallbackGuard()
         self.diagnostics = Diagnostics(node_name, self._publish_diagnostics)
+
+    @property
+    def wire(self) -> str:
+        """``typed`` or ``json``: how cosleec topics advertised or subscribed from now on travel."""
+        return self._wire.mode
+
+    @wire.setter
+    def wire(self, mode: str) -> None:
+        self._wire.mode = mode
 
     # ------------------------------------------------------------------ time
     def _stamp(self, t: float) -> Any:
@@ -90,14 +86,6 @@ class Ros1Transport:
         return not self._rospy.is_shutdown()
 
     # ------------------------------------------------------------------ cosleec topics
-    def _wire_of(self, topic: str) -> tuple[str, Any, str | None]:
-        kind = kind_of(topic) if self.wire == "typed" else None
-        if kind == "clock":
-            return CLOCK_TOPIC, message_class(CLOCK_TYPE), "clock"
-        if kind is not None:
-            return topic, self.codec.message_type(kind), kind
-        return topic, self._String, None
-
     def advertise(self, topic: str, latched: bool = False) -> None:
         """Create the publisher of ``topic``, latched when ``latched``; the first call decides.
 
@@ -107,7 +95,7 @@ class Ros1Transport:
             if latched:
                 self._latched.add(topic)
             if topic not in self._pubs:
-                name, cls, _ = self._wire_of(topic)
+                name, cls, _ = self._wire.route(topic)
                 self._pubs[topic] = self._rospy.Publisher(
                     name, cls, queue_size=1000, latch=topic in self._latched, tcp_nodelay=True
                 )
@@ -119,17 +107,8 @@ class Ros1Transport:
         """
         if topic not in self._pubs:
             self.advertise(topic)
-        _, cls, kind = self._wire_of(topic)
-        if kind == "clock":
-            self._pubs[topic].publish(cls(clock=self._stamp(float(record_of(message)["t"]))))
-            return
-        if kind is None:
-            self._pubs[topic].publish(
-                self._String(data=message if isinstance(message, str) else dumps(message))
-            )
-        else:
-            self._pubs[topic].publish(self.codec.encode(kind, record_of(message)))
-        if kind == "status" or (kind is None and topic.endswith("/status")):
+        self._pubs[topic].publish(self._wire.outgoing(topic, message))
+        if is_status(topic):
             self.diagnostics.report(record_of(message))
 
     def subscribe(self, topic: str, handler: Handler) -> None:
@@ -139,23 +118,8 @@ class Ros1Transport:
         Latching is the publisher's business in ROS 1: a late subscriber gets a latched
         topic's last message without asking.
         """
-        name, cls, kind = self._wire_of(topic)
-        if kind == "clock":
-            seconds = self._seconds
-
-            def deliver(m: Any) -> None:
-                handler({"t": seconds(m.clock)})
-
-        elif kind is None:
-
-            def deliver(m: Any) -> None:
-                handler(m.data)
-
-        else:
-            codec = self.codec
-
-            def deliver(m: Any) -> None:
-                handler(lambda: codec.decode(kind, m))
+        name, cls, _ = self._wire.route(topic)
+        deliver = self._wire.incoming(topic, handler)
 
         self._subs.append(
             self._rospy.Subscriber(
@@ -227,23 +191,9 @@ class Ros1Transport:
     def _resolve(self, name: str) -> str:
         return f"{self.node_name}/{name[2:]}" if name.startswith("~/") else name
 
-    def _services_codec(self) -> ServiceCodec:
-        if self.services is None:  # services are typed whatever the wire of the topics
-            msg, srv = interfaces()
-            self._codec = Codec(msg, self._stamp, self._seconds, time.time)
-            self.services = ServiceCodec(srv, self._codec)
-        return self.services
-
-    @property
-    def codec(self) -> Codec:
-        """The typed wire's codec (loaded on first use: the JSON wire does without)."""
-        self._services_codec()
-        assert self._codec is not None
-        return self._codec
-
     def serve(self, name: str, kind: str, handler: Callable[[dict[str, Any]], dict[str, Any]]) -> None:
         """Offer service ``name`` (``~/request`` is under this node's name) of ``kind``; as on ROS 2."""
-        services = self._services_codec()
+        services = self._wire.services()
         cls = services.service_type(kind)
 
         def call(req: Any) -> Any:
@@ -265,7 +215,7 @@ class Ros1Transport:
         timeout: float,
     ) -> None:
         """Call service ``name`` on a worker thread; ``answer`` gets the reply, or None, exactly once."""
-        services = self._services_codec()
+        services = self._wire.services()
         once = Once(answer)
         timer = threading.Timer(timeout, lambda: once(None))
         timer.daemon = True

@@ -22,23 +22,17 @@ from collections.abc import Callable
 from typing import Any
 
 from cosleec.errors import UserError
-from cosleec.nodes import Handler, Qos, dumps
+from cosleec.nodes import Handler, Qos
 from cosleec.ros.diagnostics import Diagnostics
 from cosleec.ros.guard import CallbackGuard
 from cosleec.ros.interfaces import (
-    CLOCK_TOPIC,
-    CLOCK_TYPE,
-    Codec,
-    InterfacesMissingError,
     Once,
-    ServiceCodec,
     failure,
-    interfaces,
-    kind_of,
     record_of,
 )
 from cosleec.ros.messages import message_class, to_dict
 from cosleec.ros.parameters import ParameterError, check_overrides, coerce
+from cosleec.ros.wire import Wire, is_status
 
 log = logging.getLogger("cosleec.ros")
 
@@ -92,15 +86,8 @@ class Ros2Transport:
         from rclpy.executors import SingleThreadedExecutor
         from std_msgs.msg import String
 
-        if wire not in ("typed", "json"):
-            raise UserError(f"wire {wire!r} is not one of typed, json")
-        self.wire = wire
         self._rclpy = rclpy
-        self._String = String
-        self._codec: Codec | None = None
-        self.services: ServiceCodec | None = None
-        if wire == "typed":
-            self._services_codec()  # fail at once, with the fix, when the interfaces are missing
+        self._wire = Wire(wire, String, self._stamp, self._seconds)
         if not rclpy.ok():
             from rclpy.signals import SignalHandlerOptions
 
@@ -138,6 +125,15 @@ class Ros2Transport:
         self.executor.add_node(self.node)
         self._thread = threading.Thread(target=self._spin, name=f"{node_name}-spin", daemon=True)
         self._thread.start()
+
+    @property
+    def wire(self) -> str:
+        """``typed`` or ``json``: how cosleec topics advertised or subscribed from now on travel."""
+        return self._wire.mode
+
+    @wire.setter
+    def wire(self, mode: str) -> None:
+        self._wire.mode = mode
 
     # ------------------------------------------------------------------ time
     def _stamp(self, t: float) -> Any:
@@ -231,15 +227,6 @@ class Ros2Transport:
         return self.profile(Qos.LATCHED if latched else Qos("reliable", "volatile", 1000))
 
     # ------------------------------------------------------------------ cosleec topics
-    def _wire_of(self, topic: str) -> tuple[str, Any, Any]:
-        """(topic on the wire, message class, kind) of a cosleec topic on this wire."""
-        kind = kind_of(topic) if self.wire == "typed" else None
-        if kind == "clock":
-            return CLOCK_TOPIC, message_class(CLOCK_TYPE), "clock"
-        if kind is not None:
-            return topic, self.codec.message_type(kind), kind
-        return topic, self._String, None
-
     def advertise(self, topic: str, latched: bool = False) -> None:
         """Create the publisher of ``topic``, reliable; transient-local with depth 1 when ``latched``.
 
@@ -249,7 +236,7 @@ class Ros2Transport:
             if latched:
                 self._latched.add(topic)
             if topic not in self._pubs:
-                name, cls, _ = self._wire_of(topic)
+                name, cls, _ = self._wire.route(topic)
                 self._pubs[topic] = self.node.create_publisher(
                     cls, name, self._qos(topic in self._latched), event_callbacks=self._pub_events(name)
                 )
@@ -262,18 +249,8 @@ class Ros2Transport:
         """
         if topic not in self._pubs:
             self.advertise(topic)
-        _, cls, kind = self._wire_of(topic)
-        if kind == "clock":
-            record = record_of(message)
-            self._pubs[topic].publish(cls(clock=self._stamp(float(record["t"]))))
-            return
-        if kind is None:
-            self._pubs[topic].publish(
-                self._String(data=message if isinstance(message, str) else dumps(message))
-            )
-        else:
-            self._pubs[topic].publish(self.codec.encode(kind, record_of(message)))
-        if kind == "status" or (kind is None and topic.endswith("/status")):
+        self._pubs[topic].publish(self._wire.outgoing(topic, message))
+        if is_status(topic):
             self.diagnostics.report(record_of(message))
 
     def subscribe(self, topic: str, handler: Handler, latched: bool | None = None) -> None:
@@ -284,23 +261,8 @@ class Ros2Transport:
         message; None decides by the name (a topic ending in ``layers``).
         """
         is_latched = topic.rsplit("/", 1)[-1] == "layers" if latched is None else latched
-        name, cls, kind = self._wire_of(topic)
-        if kind == "clock":
-            seconds = self._seconds
-
-            def deliver(m: Any) -> None:
-                handler({"t": seconds(m.clock)})
-
-        elif kind is None:
-
-            def deliver(m: Any) -> None:
-                handler(m.data)
-
-        else:
-            codec = self.codec
-
-            def deliver(m: Any) -> None:
-                handler(lambda: codec.decode(kind, m))
+        name, cls, _ = self._wire.route(topic)
+        deliver = self._wire.incoming(topic, handler)
 
         sub = self.node.create_subscription(
             cls,
@@ -391,7 +353,7 @@ class Ros2Transport:
         exception in it answers with the service's failure form (not permitted, not
         accepted, not reloaded) and is counted: a caller is never left without an answer.
         """
-        services = self._services_codec()
+        services = self._wire.services()
         cls = services.service_type(kind)
 
         def call(req: Any, resp: Any) -> Any:
@@ -417,7 +379,7 @@ class Ros2Transport:
         None when the service is not there, fails, or does not answer within ``timeout``
         seconds: the caller decides what that means (the guard blocks).
         """
-        services = self._services_codec()
+        services = self._wire.services()
         client = self._clients.get(name)
         if client is None:
             client = self._clients[name] = self.node.create_client(services.service_type(kind), name)
@@ -438,20 +400,6 @@ class Ros2Transport:
                 once(None)
 
         future.add_done_callback(done)
-
-    def _services_codec(self) -> ServiceCodec:
-        if self.services is None:  # services are typed whatever the wire of the topics
-            msg, srv = interfaces()
-            self._codec = Codec(msg, self._stamp, self._seconds, time.time)
-            self.services = ServiceCodec(srv, self._codec)
-        return self.services
-
-    @property
-    def codec(self) -> Codec:
-        """The typed wire's codec (loaded on first use: the JSON wire does without)."""
-        self._services_codec()
-        assert self._codec is not None
-        return self._codec
 
     # ------------------------------------------------------------------ parameters
     def parameters(self, defaults: dict[str, Any]) -> dict[str, Any]:
@@ -584,5 +532,3 @@ def _lifecycle_node(name: str, args: list[str], hooks: dict[str, Callable[[], bo
 
     return Managed(name, cli_args=args or None)
 
-
-__all__ = ["InterfacesMissingError", "ParameterError", "Ros2Transport", "UnsafeNetworkError", "check_network"]
