@@ -10,6 +10,7 @@ the standard ``use_sim_time`` (``--sim-time`` sets it), read from ``/clock``.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import re
 import sys
@@ -30,7 +31,9 @@ from cosleec.nodes import (
 )
 from cosleec.runtime import RuleSet, Unknowns
 
-#: the options of each node kind that are also ROS parameters (argparse dests)
+#: the options of each node kind that are also ROS parameters (argparse dests). Not the
+#: namespace: it names the node, which exists before its parameters can be read (ROS 2 has
+#: its own `-r __ns:=/robot1`)
 PARAMETERS = {
     "manager": (
         "rules",
@@ -44,10 +47,9 @@ PARAMETERS = {
         "record",
         "status_each",
         "autostart",
-        "namespace",
     ),
-    "layers": ("rules", "semantics", "unknown", "namespace"),
-    "listener": ("mapping", "rules", "namespace"),
+    "layers": ("rules", "semantics", "unknown"),
+    "listener": ("mapping", "rules"),
     "task": (
         "rules",
         "module",
@@ -57,10 +59,20 @@ PARAMETERS = {
         "status_each",
         "when_manager_down",
         "request_timeout",
-        "namespace",
     ),
-    "guard": ("mapping", "rules", "manager", "timeout", "namespace"),
+    "guard": ("mapping", "rules", "manager", "timeout"),
 }
+
+
+def seconds(text: str) -> float:
+    """An argparse type: a positive, finite number of seconds (``nan``, ``inf`` and ``-1`` are not)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not 0 < value < math.inf:
+        raise argparse.ArgumentTypeError(f"{text!r}: give a positive, finite number of seconds")
+    return value
 
 
 def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
@@ -164,7 +176,7 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     )
     t.add_argument(
         "--request-timeout",
-        type=float,
+        type=seconds,
         default=2.0,
         metavar="SECONDS",
         help="how long a task's request waits for the Manager's answer (default 2)",
@@ -191,7 +203,7 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     )
     g.add_argument(
         "--timeout",
-        type=float,
+        type=seconds,
         default=0.5,
         metavar="SECONDS",
         help="how long a message waits for the Manager's answer before it is dropped (default 0.5)",
@@ -252,6 +264,17 @@ def run(args: argparse.Namespace) -> int:
     if node == "demo":
         return ros.run_demo(backend, args.namespace, args.json, wire=args.wire)
     ros_args = list(getattr(args, "ros_args", []) or [])
+    if backend == "ros1" and (
+        "--ros-args" in ros_args or any(a in ("-p", "--params-file") for a in ros_args)
+    ):
+        raise UserError(
+            "ROS 1 takes no --ros-args",
+            hint="give a node's private parameters as _name:=value (e.g. _semantics:=nested)",
+        )
+    if backend == "ros1" and node == "manager" and not args.autostart:
+        raise UserError(
+            "--no-autostart: ROS 1 has no lifecycle nodes", hint="the ROS 1 Manager enforces from its start"
+        )
 
     # files given as arguments are read before the middleware starts: a mistake is reported at once
     if (node in ("layers", "task") and args.rules) or (node == "manager" and args.rules and args.autostart):
@@ -346,9 +369,10 @@ class ManagedManager:
     """The Manager node as a ROS 2 lifecycle node: configure, activate, deactivate, clean up.
 
     configure reads and checks the rule file (a broken file fails the transition and
-    leaves the node unconfigured) and builds the Manager, inactive; a second configure
-    (after cleanup) reloads the file instead; activate starts enforcing; deactivate and
-    cleanup stop it: every request is refused. With ``autostart`` (the default) it
+    leaves the node unconfigured) and builds the Manager, inactive; a configure after a
+    cleanup starts a new Manager from the file (nothing of the old one's state is kept,
+    unless a journal holds it); activate starts enforcing; deactivate and cleanup stop
+    it: every request is refused. With ``autostart`` (the default) it
     configures and activates itself at once, as a plain node would start.
     """
 
@@ -361,21 +385,27 @@ class ManagedManager:
             configure=self.configure,
             activate=self.activate,
             deactivate=self.deactivate,
-            cleanup=self.deactivate,
+            cleanup=self.cleanup,
             shutdown=self.shutdown,
         )
         if autostart and not (t.transition("configure") and t.transition("activate")):
             raise UserError("the Manager could not configure and activate itself (see the log above)")
 
     def configure(self) -> bool:
-        """Load and check the rules; build the Manager (inactive) or reload it."""
+        """Load and check the rules; build the Manager (inactive), or start it afresh after a cleanup."""
         if self.node is None:
             self.node = self.build(False)
             return True
-        answer = self.node.reload(self.rules_path)
-        if not answer["success"]:
-            print(f"cosleec: configure: {answer['message']}", file=sys.stderr)
-        return bool(answer["success"])
+        try:
+            self.node.reset(RuleSet.from_file(self.rules_path))  # a broken file fails the transition
+        except UserError as e:
+            print(f"cosleec: configure: {e.render()}", file=sys.stderr)
+            return False
+        return True
+
+    def cleanup(self) -> bool:
+        """Stop enforcing; the next configure starts from the rule file afresh."""
+        return self.deactivate()
 
     def activate(self) -> bool:
         """Start enforcing."""

@@ -23,22 +23,25 @@ from __future__ import annotations
 
 import difflib
 import logging
+import math
+import re
 import threading
 from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from cosleec.errors import UserError
 from cosleec.nodes.base import Node
+from cosleec.nodes.listener import MappingError, read_yaml
 from cosleec.nodes.qos import Qos, QosError
 from cosleec.nodes.transport import DEFAULT_NAMESPACE
 
 log = logging.getLogger("cosleec.nodes")
 
 ROUTE_KEYS = ("to", "type", "event", "qos")
+#: a ROS topic name: what both ROS 2 and ROS 1 accept (no spaces, no trailing slash)
+TOPIC = re.compile(r"~?/?[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*")
 
 
 class GuardError(UserError, ValueError):
@@ -62,13 +65,15 @@ def load_routes(path: str | Path, events: frozenset[str] | None = None) -> list[
     ``events`` (the rules' events) checks that each route's event is declared.
     """
     try:
-        doc = yaml.safe_load(Path(path).read_text(encoding="utf-8")) or {}
+        text = Path(path).read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as e:
         raise GuardError(
             f"cannot read the mapping: {getattr(e, 'strerror', None) or e}", where=str(path)
         ) from None
-    except yaml.YAMLError as e:
-        raise GuardError(f"the mapping is not valid YAML: {e}", where=str(path)) from None
+    try:
+        doc = read_yaml(text, str(path))  # a route given twice is an error, not the last one silently
+    except MappingError as e:
+        raise GuardError(str(e)) from None
     section = doc.get("guards") if isinstance(doc, dict) else None
     if not isinstance(section, dict) or not section:
         raise GuardError(
@@ -82,8 +87,6 @@ def load_routes(path: str | Path, events: frozenset[str] | None = None) -> list[
 def route(source: str, spec: Any, where: str = "<guard>", events: frozenset[str] | None = None) -> Route:
     """One checked route from ``source`` with ``spec`` ``{to, type, event, qos}``."""
     at = f"{where}: guards.{source}"
-    if not source.startswith("/") and not source[:1].isalpha():
-        raise GuardError(f"{at}: the guarded topic must be a topic name", hint="give it with --from /topic")
     if not isinstance(spec, dict):
         raise GuardError(f"{at}: expected {{to, type, event}}")
     extra = sorted(set(spec) - set(ROUTE_KEYS))
@@ -96,6 +99,12 @@ def route(source: str, spec: Any, where: str = "<guard>", events: frozenset[str]
     for key in ("to", "type", "event"):
         if not isinstance(spec.get(key), str) or not spec[key]:
             raise GuardError(f"{at}: `{key}` is required and must be a string")
+    for what, name in (("guarded topic", source), ("`to`", spec["to"])):
+        if not TOPIC.fullmatch(name):
+            raise GuardError(
+                f"{at}: {what} {name!r} is not a ROS topic name",
+                hint="letters, digits, _ and / (e.g. /planner/cmd_vel)",
+            )
     if spec["to"] == source:
         raise GuardError(f"{at}: `to` must differ from the guarded topic, or the guard would feed itself")
     if events is not None and spec["event"] not in events:
@@ -141,6 +150,10 @@ class GuardNode(Node):
         timeout: float = 0.5,
         max_pending: int = 100,
     ) -> None:
+        if isinstance(timeout, bool) or not isinstance(timeout, int | float) or not 0 < timeout < math.inf:
+            raise GuardError(f"the guard's timeout must be a positive number of seconds, not {timeout!r}")
+        if isinstance(max_pending, bool) or not isinstance(max_pending, int) or max_pending < 1:
+            raise GuardError(f"max_pending must be a whole number of at least 1, not {max_pending!r}")
         super().__init__(transport, namespace)
         self.io: Any = transport  # the parts of a ROS transport beyond the Transport protocol
         self.routes = routes
@@ -154,6 +167,8 @@ class GuardNode(Node):
             self.counters[key] = 0
         self.advertise("refusals")
         for r in routes:
+            # the output first: its subscribers match it before the first message is forwarded
+            self.io.advertise_raw(r.target, r.type, r.qos)
             transport.subscribe_raw(r.source, r.type, lambda m, r=r: self._message(r, m), r.qos)
 
     def _message(self, r: Route, message: Any) -> None:
@@ -216,7 +231,18 @@ class GuardNode(Node):
             for w in ready:
                 assert w.answer is not None
                 if w.answer.get("permitted"):
-                    self.io.publish_raw(r.target, r.type, w.message, r.qos)
+                    try:
+                        self.io.publish_raw(r.target, r.type, w.message, r.qos)
+                    except Exception as e:  # counted and said; the next message is tried all the same
+                        self._count("errors")
+                        self.limiter.log(
+                            logging.ERROR,
+                            ("forward", r.target),
+                            "guard: cannot forward to %s: %s",
+                            r.target,
+                            e,
+                        )
+                        continue
                     self._count("forwarded")
                 else:
                     # the Manager publishes the refusals of its prohibitions; any other "no"

@@ -141,6 +141,25 @@ def _construct_map(loader: _Loader, node: yaml.MappingNode) -> Iterator[_Marked]
 _Loader.add_constructor("tag:yaml.org,2002:map", _construct_map)
 
 
+def read_yaml(text: str, source: str) -> Any:
+    """The YAML document ``text`` (empty: ``{}``); MappingError at ``source:line:col`` for a
+    syntax error or a key given twice (which plain YAML would silently let win)."""
+    try:
+        return yaml.load(text, Loader=_Loader) or {}
+    except _Duplicate as e:
+        where = f"{source}:{e.mark.line + 1}:{e.mark.column + 1}"
+        raise MappingError(
+            f"{where}: {show(e.key)} is given twice (the second would replace the first)"
+        ) from None
+    except yaml.MarkedYAMLError as e:
+        mark = e.problem_mark or e.context_mark
+        where = f"{source}:{mark.line + 1}:{mark.column + 1}" if mark is not None else source
+        what = "; ".join(str(x) for x in (e.context, e.problem) if x)
+        raise MappingError(f"{where}: not valid YAML: {what}") from None
+    except yaml.YAMLError as e:
+        raise MappingError(f"{source}: not valid YAML: {e}") from None
+
+
 def _at(source: str, where: Any, key: Any, otherwise: str | None = None) -> str:
     """``source:line:col`` of ``key`` in the loaded YAML mapping ``where``; ``otherwise`` (or
     ``source``) when the position is unknown (a mapping not read by :class:`_Loader`)."""
@@ -306,20 +325,7 @@ class Mapping:
         Everything is checked here, before any middleware starts: the entries, and that the
         entries sharing a topic agree on its type and QoS (:meth:`topics`, :meth:`qos_of`).
         """
-        try:
-            doc = yaml.load(text, Loader=_Loader) or {}
-        except _Duplicate as e:
-            where = f"{source}:{e.mark.line + 1}:{e.mark.column + 1}"
-            raise MappingError(
-                f"{where}: {show(e.key)} is given twice (the second would replace the first)"
-            ) from None
-        except yaml.MarkedYAMLError as e:
-            mark = e.problem_mark or e.context_mark
-            where = f"{source}:{mark.line + 1}:{mark.column + 1}" if mark is not None else source
-            what = "; ".join(str(x) for x in (e.context, e.problem) if x)
-            raise MappingError(f"{where}: not valid YAML: {what}") from None
-        except yaml.YAMLError as e:
-            raise MappingError(f"{source}: not valid YAML: {e}") from None
+        doc = read_yaml(text, source)
         if not isinstance(doc, dict):
             raise MappingError(f"{source}: expected a mapping with `measures` and/or `events`")
         unknown = set(doc) - set(SECTIONS)
@@ -570,4 +576,7 @@ class ListenerNode(Node):
         if values:
             self.publish("context", {"values": values})
         for name in fired:
-            self.publish("events", {"event": name})
+            # the values read from the same message travel with the event: topics have no order
+            # between them (ROS 1 reads each on its own thread), and the rules must decide on
+            # what this message said, not on the update before it
+            self.publish("events", {"event": name, "values": values} if values else {"event": name})

@@ -95,25 +95,12 @@ class ManagerNode(Node):
         # status after every message lets a harness know when the system is quiet; in
         # deployment the heartbeat (every 0.5 s) is enough and keeps the hot path short
         self.status_each = status_each
-        self.clock: Clock = VirtualClock() if sim_time else MonotonicClock()
-        self.manager = Manager(
-            rules, clock=self.clock, semantics=semantics, audit=audit, dispatch=False, **manager_kw
-        )
-        # with a journal, decision ids go on across restarts: so does the session task nodes
-        # de-duplicate by, and a decision published again after a restart is not run twice
-        self.session = self.manager.lineage
+        self.sim_time = sim_time
+        self._options = {"semantics": semantics, "audit": audit, "dispatch": False, **manager_kw}
         self.recorder = McapRecorder(record) if record else None
         for t in ("decisions", "obligations", "violations", "conflicts", "refusals", "request_reply"):
             self.advertise(t)
-        self.manager.subscribe(self._runtime_event)
-        # decided before a crash, perhaps never published: published again once a task node listens
-        self._republish = [{**d, "_again": True} for d in self.manager.undelivered]
-        self.manager.undelivered.clear()
-        self.manager.start(check=False, timer=not sim_time)  # may decide fallbacks: held, as above
-        with self._hand_lock:
-            # nothing held (a first start, a clean stop): publish as decided from now on; else
-            # what is decided later waits behind the held decisions, in order
-            self._settled = not self._republish
+        self._start(rules)
         self.on("context", self._context)
         self.on("events", self._event)
         self.on("request", self._request)
@@ -126,7 +113,33 @@ class ManagerNode(Node):
             serve("~/reload", "reload", self._serve_reload)
         self.status()
 
+    def _start(self, rules: RuleSet) -> None:
+        """Build and start the Manager for ``rules`` (at construction, and after :meth:`reset`)."""
+        self.clock: Clock = VirtualClock() if self.sim_time else MonotonicClock()
+        self.manager = Manager(rules, clock=self.clock, **self._options)
+        # with a journal, decision ids go on across restarts: so does the session task nodes
+        # de-duplicate by, and a decision published again after a restart is not run twice
+        self.session = self.manager.lineage
+        self.manager.subscribe(self._runtime_event)
+        # decided before a crash, perhaps never published: published again once a task node listens
+        self._republish = [{**d, "_again": True} for d in self.manager.undelivered]
+        self.manager.undelivered.clear()
+        self.manager.start(check=False, timer=not self.sim_time)  # may decide fallbacks: held, as above
+        with self._hand_lock:
+            # nothing held (a first start, a clean stop): publish as decided from now on; else
+            # what is decided later waits behind the held decisions, in order
+            self._settled = not self._republish
+
     # ------------------------------------------------------------------ lifecycle
+    def reset(self, rules: RuleSet) -> None:
+        """Forget everything and start again with ``rules``, inactive (a lifecycle cleanup, then
+        configure): the Manager is closed (its audit log ends) and a new one takes over. With a
+        journal the new one restores what the journal holds -- obligations outlive a cleanup."""
+        self.active = False
+        self.manager.close()
+        self._start(rules)
+        self.status()
+
     def activate(self) -> None:
         """Start enforcing: triggers are decided and requests answered from now on."""
         self.active = True
@@ -238,12 +251,16 @@ class ManagerNode(Node):
     # message is rejected, counted and reported (Node.on), and the node goes on.
     def _context(self, msg: dict[str, Any]) -> None:
         values = context_values(msg)
+        self._check_numbers(values)
+        self._feed(self.manager.update, values)
+
+    @staticmethod
+    def _check_numbers(values: dict[str, Any]) -> None:
         for name, v in values.items():  # the runtime takes any int; a float it cannot be is refused here
             if isinstance(v, int) and not isinstance(v, bool) and abs(v) > sys.float_info.max:
                 raise MessageError(
                     f"{show(name)} is an integer too large for a float ({v.bit_length()} bits)"
                 )
-        self._feed(self.manager.update, values)
 
     def _event(self, msg: dict[str, Any]) -> None:
         if not self.active:
@@ -253,6 +270,12 @@ class ManagerNode(Node):
             raise MessageError("event message needs a string `event`")
         if len(name) > MAX_NAME:  # unknown anyway; refused before the runtime echoes it in its records
             raise MessageError(f"event name of {len(name)} characters (at most {MAX_NAME}): {show(name)}")
+        values = msg.get("values")
+        if values is not None:  # measures observed with it: applied just before it, nothing between
+            checked = context_values({"values": values})
+            self._check_numbers(checked)
+            self._feed(lambda n: self.manager.event(n, values=checked), name)
+            return
         self._feed(self.manager.event, name)
 
     def _feed(self, step: Any, arg: Any) -> None:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import itertools
 import logging
+import math
 import queue
 import threading
 from collections import OrderedDict, deque
@@ -114,6 +115,14 @@ class TaskNode(Node):
         self.status_each = status_each  # status after every handled obligation (harnesses)
         self.ruleset = rules
         self.implementations = Implementations(rules)
+        if (
+            isinstance(request_timeout, bool)
+            or not isinstance(request_timeout, int | float)
+            or not 0 < request_timeout < math.inf
+        ):
+            raise ConfigurationError(
+                f"request_timeout must be a positive number of seconds, not {request_timeout!r}"
+            )
         self.request_timeout = request_timeout
         self.when_manager_down = when_manager_down
         self._ids = itertools.count(1)

@@ -140,7 +140,8 @@ class Codec:
         return mv
 
     def values(self, items: Any) -> dict[str, Any]:
-        """``MeasureValue[]`` -> ``{name: value}``; MessageError for an unknown kind or a name twice."""
+        """``MeasureValue[]`` -> ``{name: value}``; MessageError for a kind that is no value
+        (UNKNOWN, or none of the four) or a name given twice."""
         out: dict[str, Any] = {}
         for mv in items:
             if mv.name in out:
@@ -151,8 +152,11 @@ class Codec:
                 out[mv.name] = _number(float(mv.number))
             elif mv.kind == mv.SCALE:
                 out[mv.name] = str(mv.text)
-            elif mv.kind == mv.UNKNOWN:
-                out[mv.name] = None
+            elif mv.kind == mv.UNKNOWN:  # outputs say "no value" so; an input cannot unset one
+                raise MessageError(
+                    f"measure {mv.name!r} has kind UNKNOWN: a value cannot be set to unknown; "
+                    "leave it out, or give the Manager a max_age after which it forgets a value"
+                )
             else:
                 raise MessageError(
                     f"measure {mv.name!r} has kind {mv.kind}; kinds are 0 unknown, 1 boolean, 2 numeric, 3 scale"
@@ -196,6 +200,7 @@ class Codec:
 
     def _encode_events(self, m: Any, r: dict[str, Any]) -> None:
         m.event = str(r.get("event", ""))
+        m.values = [self.value(k, v) for k, v in (r.get("values") or {}).items()]
 
     def _encode_request(self, m: Any, r: dict[str, Any]) -> None:
         m.id, m.event, m.source = str(r.get("id", "")), str(r.get("event", "")), str(r.get("source", ""))
@@ -294,6 +299,8 @@ class Codec:
         return {"values": self.values(m.values)}
 
     def _decode_events(self, m: Any) -> dict[str, Any]:
+        if m.values:
+            return {"event": m.event, "values": self.values(m.values)}
         return {"event": m.event}
 
     def _decode_request(self, m: Any) -> dict[str, Any]:

@@ -10,12 +10,15 @@ size) and no lifecycle nodes.
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import threading
 import time
 from collections.abc import Callable
 from typing import Any
 
-from cosleec.nodes import Handler, Qos
+from cosleec.errors import UserError
+from cosleec.nodes import Handler, MessageError, Qos
 from cosleec.ros.diagnostics import Diagnostics
 from cosleec.ros.guard import CallbackGuard
 from cosleec.ros.interfaces import (
@@ -26,6 +29,8 @@ from cosleec.ros.interfaces import (
 from cosleec.ros.messages import message_class, to_dict
 from cosleec.ros.parameters import check_overrides, coerce
 from cosleec.ros.wire import Wire, is_status
+
+log = logging.getLogger("cosleec.ros")
 
 
 class Ros1Transport:
@@ -46,7 +51,18 @@ class Ros1Transport:
         self._rospy = rospy
         self._wire = Wire(wire, String, self._stamp, self._seconds)
         # signals are ours: the node's main loop stops cleanly on SIGINT/SIGTERM
-        rospy.init_node(node_name, anonymous=False, disable_signals=True, argv=["cosleec", *(ros_args or [])])
+        args = list(ros_args or [])
+        for a in args:  # name:=value remappings, _name:=value private parameters
+            name, _, value = a.partition(":=")
+            if not name or ":=" in value or not name.lstrip("_~/").replace("/", "_").isidentifier():
+                raise UserError(
+                    f"not a ROS 1 argument: {a!r}",
+                    hint="give remappings as name:=value and private parameters as _name:=value",
+                )
+        #: the private parameters this command line sets: checked for typos, removed at close
+        #: (rospy leaves them on the master, where they would outlive this node)
+        self._mine = {a.partition(":=")[0][1:] for a in args if a.startswith("_") and not a.startswith("__")}
+        rospy.init_node(node_name, anonymous=False, disable_signals=True, argv=["cosleec", *args])
         self.node_name = rospy.get_name()
         self._pubs: dict[str, Any] = {}
         self._subs: list[Any] = []
@@ -156,12 +172,19 @@ class Ros1Transport:
             )
         )
 
+    def advertise_raw(self, topic: str, type_name: str, qos: Qos | None = None) -> Any:
+        """Create the publisher :meth:`publish_raw` sends on (at start: ROS 1 delivers nothing to a
+        subscriber before its connection is made)."""
+        key = f"{topic}#{type_name}#raw"
+        with self._lock:
+            pub = self._pubs.get(key)
+            if pub is None:
+                pub = self._pubs[key] = self._rospy.Publisher(topic, message_class(type_name), queue_size=100)
+        return pub
+
     def publish_raw(self, topic: str, type_name: str, data: Any, qos: Qos | None = None) -> None:
         """Publish a message object as it came from :meth:`subscribe_raw`."""
-        key = f"{topic}#{type_name}"
-        pub = self._pubs.get(key)
-        if pub is None:
-            pub = self._pubs[key] = self._rospy.Publisher(topic, message_class(type_name), queue_size=100)
+        pub = self._pubs.get(f"{topic}#{type_name}#raw") or self.advertise_raw(topic, type_name, qos)
         pub.publish(data)
 
     def publish_typed(
@@ -198,7 +221,11 @@ class Ros1Transport:
 
         def call(req: Any) -> Any:
             try:
-                answer = handler(services.read_request(kind, req))
+                fields = services.read_request(kind, req)
+            except MessageError as e:  # the caller's mistake (a kind that is no value): said, not a bug
+                return services.fill_response(kind, cls._response_class(), failure(kind, e))
+            try:
+                answer = handler(fields)
             except Exception as e:
                 self._guard.failed(name, e)
                 answer = failure(kind, e)
@@ -222,18 +249,19 @@ class Ros1Transport:
         timer.start()
 
         def work() -> None:
+            reply = None
             try:
                 proxy = self._clients.get(name)
                 if proxy is None:
                     proxy = self._clients[name] = self._rospy.ServiceProxy(
                         self._resolve(name), services.service_type(kind), persistent=False
                     )
-                resp = proxy(services.make_request(kind, fields))
-                once(services.read_response(kind, resp))
-            except Exception:
-                once(None)
+                reply = services.read_response(kind, proxy(services.make_request(kind, fields)))
+            except Exception:  # no service, a failed call, a reply that cannot be read: no answer
+                reply = None
             finally:
                 timer.cancel()
+            once(reply)  # outside the try: an error in the caller's callback is the caller's
 
         threading.Thread(target=work, name="cosleec-ask", daemon=True).start()
 
@@ -249,9 +277,13 @@ class Ros1Transport:
             )
             for name, default in defaults.items()
         }
+        known = set(defaults) | {"use_sim_time"}
+        check_overrides(self._mine, known)  # a typo on this command line is an error
         prefix = f"{self.node_name}/"
-        given = {p[len(prefix) :] for p in self._rospy.get_param_names() if p.startswith(prefix)}
-        check_overrides({g for g in given if "/" not in g}, set(defaults) | {"use_sim_time"})
+        for p in self._rospy.get_param_names():  # set by rosparam or a launch file: said, not fatal
+            name = p[len(prefix) :] if p.startswith(prefix) else None
+            if name is not None and "/" not in name and name not in known:
+                log.warning("the parameter server has %s, which no option of this node reads", p)
         return out
 
     def use_sim_time(self) -> bool:
@@ -288,4 +320,7 @@ class Ros1Transport:
             p.unregister()
         for v in self._services:
             v.shutdown()
+        for name in self._mine:  # ours: a later start without them must not find them there
+            with contextlib.suppress(Exception):
+                self._rospy.delete_param(f"~{name}")
         self._rospy.signal_shutdown("cosleec node stopped")

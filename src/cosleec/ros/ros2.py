@@ -22,7 +22,7 @@ from collections.abc import Callable
 from typing import Any
 
 from cosleec.errors import UserError
-from cosleec.nodes import Handler, Qos
+from cosleec.nodes import Handler, MessageError, Qos
 from cosleec.ros.diagnostics import Diagnostics
 from cosleec.ros.guard import CallbackGuard
 from cosleec.ros.interfaces import (
@@ -93,7 +93,9 @@ class Ros2Transport:
 
             # the node's own loop owns SIGINT/SIGTERM: a signal during start-up must not
             # invalidate the context under our feet
-            rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+            # args=[]: the node takes its ROS arguments itself (cli_args); rclpy must not
+            # parse this process's command line, which is cosleec's
+            rclpy.init(args=[], signal_handler_options=SignalHandlerOptions.NO)
         args = ["--ros-args", *ros_args] if ros_args and ros_args[0] != "--ros-args" else (ros_args or [])
         self._hooks: dict[str, Callable[[], bool]] = {}
         try:
@@ -307,17 +309,24 @@ class Ros2Transport:
         )
         self._subs.append(sub)
 
+    def advertise_raw(self, topic: str, type_name: str, qos: Qos | None = None) -> Any:
+        """Create the publisher :meth:`publish_raw` sends on (at start, so that subscribers have
+        matched it before the first message goes out); the first call for a topic decides."""
+        key = f"{topic}#{type_name}#raw"
+        with self._lock:
+            pub = self._pubs.get(key)
+            if pub is None:
+                pub = self._pubs[key] = self.node.create_publisher(
+                    message_class(type_name),
+                    topic,
+                    self.profile(qos) if qos is not None else self._qos(False),
+                    event_callbacks=self._pub_events(topic),
+                )
+        return pub
+
     def publish_raw(self, topic: str, type_name: str, data: Any, qos: Qos | None = None) -> None:
         """Publish a serialized ``type_name`` message as it came from :meth:`subscribe_raw`."""
-        key = f"{topic}#{type_name}#raw"
-        pub = self._pubs.get(key)
-        if pub is None:
-            pub = self._pubs[key] = self.node.create_publisher(
-                message_class(type_name),
-                topic,
-                self.profile(qos) if qos is not None else self._qos(False),
-                event_callbacks=self._pub_events(topic),
-            )
+        pub = self._pubs.get(f"{topic}#{type_name}#raw") or self.advertise_raw(topic, type_name, qos)
         pub.publish(data)
 
     def publish_typed(
@@ -358,7 +367,11 @@ class Ros2Transport:
 
         def call(req: Any, resp: Any) -> Any:
             try:
-                answer = handler(services.read_request(kind, req))
+                fields = services.read_request(kind, req)
+            except MessageError as e:  # the caller's mistake (a kind that is no value): said, not a bug
+                return services.fill_response(kind, resp, failure(kind, e))
+            try:
+                answer = handler(fields)
             except Exception as e:
                 self._guard.failed(name, e)
                 answer = failure(kind, e)
@@ -388,16 +401,22 @@ class Ros2Transport:
             once(None)
             return
         future = client.call_async(services.make_request(kind, fields))
-        timer = threading.Timer(timeout, lambda: once(None))
+
+        def expired() -> None:
+            future.cancel()  # rclpy then forgets the request (and what it holds)
+            once(None)
+
+        timer = threading.Timer(timeout, expired)
         timer.daemon = True
         timer.start()
 
         def done(f: Any) -> None:
             timer.cancel()
             try:
-                once(services.read_response(kind, f.result()))
-            except Exception:
-                once(None)
+                reply = None if f.cancelled() else services.read_response(kind, f.result())
+            except Exception:  # a reply that cannot be read is no answer
+                reply = None
+            once(reply)  # outside the try: an error in the caller's callback is the caller's
 
         future.add_done_callback(done)
 
@@ -409,31 +428,22 @@ class Ros2Transport:
         given keeps ``defaults``' value. :class:`ParameterError` for a value of the wrong
         type or a parameter no option has (with did-you-mean).
         """
-        from rclpy.exceptions import ParameterUninitializedException
-        from rclpy.parameter import Parameter
+        from rcl_interfaces.msg import ParameterDescriptor
 
-        types = {
-            bool: Parameter.Type.BOOL,
-            int: Parameter.Type.INTEGER,
-            float: Parameter.Type.DOUBLE,
-            str: Parameter.Type.STRING,
-            list: Parameter.Type.STRING_ARRAY,
-        }
         out: dict[str, Any] = {}
         for name, default in defaults.items():
-            kind = types[type(default)] if default is not None else Parameter.Type.STRING
+            # dynamically typed: `-p timeout:=2` is as good as 2.0; coerce() checks the type,
+            # with a message that names the parameter, and its option's checks follow
             try:
-                self.node.declare_parameter(name, kind)
-            except Exception as e:  # an override of the wrong type
+                value = self.node.declare_parameter(
+                    name, None, ParameterDescriptor(dynamic_typing=True)
+                ).value
+            except Exception as e:  # a value rclpy cannot hold
                 raise ParameterError(
                     f"parameter {name!r}: {e}",
                     hint=f"give it as {_type_name(default)} (the option's default is {default!r})",
                 ) from None
-            try:
-                value = self.node.get_parameter(name).value
-            except ParameterUninitializedException:
-                value = default
-            out[name] = coerce(name, value, default)
+            out[name] = default if value is None else coerce(name, value, default)
         given = set(getattr(self.node, "_parameter_overrides", {}))  # what -p / --params-file set
         check_overrides(given, set(defaults) | {"use_sim_time", "qos_overrides"})
         return out
@@ -531,4 +541,3 @@ def _lifecycle_node(name: str, args: list[str], hooks: dict[str, Callable[[], bo
             return hook("shutdown")
 
     return Managed(name, cli_args=args or None)
-

@@ -604,13 +604,27 @@ class Manager:
                 )
 
     # ------------------------------------------------------------------ events
-    def event(self, name: str) -> list[Decision]:
+    def event(self, name: str, values: Mapping[str, object] | None = None) -> list[Decision]:
         """An event occurred: it may fulfil or violate obligations, and it triggers rules.
 
         Returns the decisions of the rules it triggered (whose trigger condition held, or
         might hold: an undetermined decision is returned too). An event no declaration
         names follows ``unknown_events``.
+
+        ``values`` are measures observed with the event (one sensor message that gives a
+        measure and fires a trigger): they are applied as one update just before it, with no
+        other step between, so the rules decide on them and not on what came before. If
+        they are rejected (ContextError), the event does not happen either. Observers hear
+        the update while the event still holds the Manager: one that waits for another
+        thread's step waits until the event has happened.
         """
+        if values:
+            with self._lock:  # re-entrant: the two steps below take it too
+                self.update(values)
+                return self._occur(name)
+        return self._occur(name)
+
+    def _occur(self, name: str) -> list[Decision]:
         followups: list[_Job] = []
         decisions: list[Decision] = []
         self._catch_up()
@@ -729,12 +743,19 @@ class Manager:
                 self._allowed[name] = allowed
             return allowed
         what = clip(name, 80)
-        parts = []
+        # one phrase per rule, however many of its activations forbid it: the one that ends
+        # last says until when (a reason that grew with every trigger would fill the audit log)
+        last: dict[str, Tracked] = {}
         for t in forbidding:
+            held = last.get(t.rule)
+            if held is None or (held.hi is not None and (t.hi is None or t.hi > held.hi)):
+                last[t.rule] = t
+        parts = []
+        for t in last.values():
             until = "with no end" if t.hi is None else f"until {t.hi:g} s"
             why = self._why(t) or f"{t.rule}: {t.obligation.describe()} from {t.start:g} s"
             parts.append(f"by {t.rule} {until} ({clip(why, 300)})")
-        rules = tuple(dict.fromkeys(t.rule for t in forbidding))
+        rules = tuple(last)
         return Permission(name, False, rules, f"{what} is forbidden {' and '.join(parts)}")
 
     def _why(self, t: Tracked) -> str | None:

@@ -14,6 +14,7 @@ import contextlib
 import itertools
 import json
 import random
+import re
 import threading
 from collections.abc import Callable
 from dataclasses import FrozenInstanceError, dataclass
@@ -64,6 +65,7 @@ class FakeRos:
         # None when the service is not there)
         self.answer_at_once = answer_at_once
         self.lock = threading.Lock()
+        self.outputs: list[tuple[str, str, Any]] = []  # advertise_raw: the guard's outputs
 
     # the Transport protocol, on the bus
     def publish(self, topic: str, message: dict[str, Any] | str) -> None:
@@ -79,6 +81,10 @@ class FakeRos:
         self, topic: str, type_name: str, handler: Callable[[dict[str, Any]], None], qos: Qos | None = None
     ) -> None:
         self.local.subscribe_typed(topic, type_name, handler, qos)
+
+    def advertise_raw(self, topic: str, type_name: str, qos: Any) -> None:
+        with self.lock:
+            self.outputs.append((topic, type_name, qos))
 
     def advertise(self, topic: str, latched: bool = False) -> None:
         self.advertised.append((topic, latched))
@@ -158,6 +164,8 @@ def test_it_subscribes_each_route_with_its_type_and_qos_and_advertises_refusals(
     assert t.raw["/arm/goal"][0] == "geometry_msgs/msg/Pose"
     assert t.raw["/arm/goal"][2] == Qos.SENSOR_DATA
     assert ("/robot1/refusals", False) in t.advertised
+    # each output is advertised at start, so its subscribers have matched it before a message goes
+    assert t.outputs == [("/cmd_vel", "geometry_msgs/msg/Twist", Qos.RELIABLE), ("/arm/goal_checked", "geometry_msgs/msg/Pose", Qos.SENSOR_DATA)]
     for key in ("forwarded", "blocked", "unanswered", "overflow"):
         assert node.counters[key] == 0
 
@@ -762,9 +770,22 @@ def test_load_routes_invalid_yaml(tmp_path: Path, text: str) -> None:
     p = write(tmp_path, text)
     with pytest.raises(GuardError) as info:
         load_routes(p)
-    assert str(info.value).startswith("the mapping is not valid YAML: ")
-    assert info.value.where == str(p)
+    assert re.match(re.escape(str(p)) + r":\d+:\d+: not valid YAML: ", str(info.value))  # file:line:col
     assert isinstance(info.value, UserError)
+
+
+def test_load_routes_a_route_given_twice_is_an_error_not_the_last_one(tmp_path: Path) -> None:
+    p = write(tmp_path, "guards:\n  /a: {to: /b, type: T, event: E}\n  /a: {to: /c, type: T, event: E}\n")
+    with pytest.raises(GuardError, match=r":3:3: '/a' is given twice"):
+        load_routes(p)
+
+
+@pytest.mark.parametrize("bad", ["/a b", "/a/", "", "/1a", "a//b"])
+def test_a_route_names_ros_topics(bad: str) -> None:
+    with pytest.raises(GuardError, match="is not a ROS topic name"):
+        route(bad, {"to": "/b", "type": "T", "event": "E"})
+    with pytest.raises(GuardError, match="is not a ROS topic name"):
+        route("/a", {"to": bad or "/x y", "type": "T", "event": "E"})
 
 
 def test_load_routes_names_the_file_and_route_of_a_bad_route(tmp_path: Path) -> None:
@@ -778,5 +799,5 @@ def test_load_routes_names_the_file_and_route_of_a_bad_route(tmp_path: Path) -> 
 
 def test_load_routes_a_key_that_is_no_topic_name_is_refused(tmp_path: Path) -> None:
     p = write(tmp_path, "guards:\n  1: {to: /b, type: T, event: E}\n")
-    with pytest.raises(GuardError, match=r"guards\.1: the guarded topic must be a topic name"):
+    with pytest.raises(GuardError, match=r"guards\.1: guarded topic '1' is not a ROS topic name"):
         load_routes(p)

@@ -370,3 +370,24 @@ def test_the_module_docstring_example_is_a_valid_mapping() -> None:
     m = Mapping.parse("\n".join(line[4:] for line in example.splitlines()), "docstring")
     assert {e.name for e in m.entries} >= {"batteryLevel", "CleanRequest"}
     assert m.qos_of("/fall_detector") == Qos.RELIABLE and m.qos_of("/battery") == Qos.SENSOR_DATA
+
+
+def test_an_event_carries_the_values_read_from_its_own_message() -> None:
+    # one distance reading gives `near` and fires Approach: the Manager must decide on this
+    # reading, whatever order the context and events topics arrive in (ROS 1 reads each on a
+    # thread of its own), so the event carries it
+    t = listener(
+        """
+measures:
+  near: {topic: /d, type: std_msgs/Float64, below: 1.5}
+events:
+  Approach: {topic: /d, type: std_msgs/Float64, below: 1.5}
+  Ping: {topic: /p, type: std_msgs/String, equals: x}
+"""
+    )
+    t.send("/d", data=1.0)
+    t.send("/p", data="x")
+    events = [m for topic, m in t.published if topic.endswith("/events")]
+    assert [(m["event"], m.get("values")) for m in events] == [("Approach", {"near": True}), ("Ping", None)]
+    contexts = [m for topic, m in t.published if topic.endswith("/context")]
+    assert [m["values"] for m in contexts] == [{"near": True}]  # still published for everyone else

@@ -489,3 +489,20 @@ def test_refused_and_conflict_records_are_published(bus: LocalBus) -> None:
     assert ref["event"] == "OpenCurtains" and ref["by"] == ["R2"] and ref["source"] == "/curtains/cmd"
     assert ref["reason"] == answer["reason"]
     r.node.close()
+
+
+# ----------------------------------------------------------------------------- events with values
+
+
+def test_an_event_with_values_is_decided_on_them(robot: Robot) -> None:
+    robot.send("context", {"values": {"userAsleep": False, "userNearby": False}})
+    robot.send("events", {"event": "CleanRequest", "values": {"userAsleep": True}})
+    d = robot.out["decisions"][-1]
+    assert (d["rule"], d["clause"], d["values"]["userAsleep"]) == ("R1", 1, True)
+
+
+@pytest.mark.parametrize("values", [{"userAsleep": "yes"}, {"nope": True}, {}, [1], {"batteryLevel": 10**400}])
+def test_an_event_with_bad_values_is_rejected_whole(robot: Robot, values: Any) -> None:
+    robot.send("events", {"event": "CleanRequest", "values": values})
+    assert robot.out["decisions"] == []  # the event did not happen either
+    assert len(robot.out["rejected"]) == 1
