@@ -155,3 +155,11 @@ def _jsonish(r: dict[str, Any]) -> dict[str, Any]:
     from cosleec.nodes import dumps
 
     return dict(json.loads(dumps(r)))
+
+
+def test_a_decisions_obligations_have_their_window_on_the_managers_clock(codec: Any) -> None:
+    d = {**records()["decisions"][0], "time": 100.0}  # decided at 100 s: Stop within 2 s
+    (o,) = codec.encode("decisions", d).obligations
+    assert (o.event, o.prohibition, o.window_start, o.deadline) == ("Stop", False, 100.0, 102.0)
+    untimed = {**d, "obligations": [{**d["obligations"][0], "within_s": None}]}
+    assert codec.encode("decisions", untimed).obligations[0].deadline == math.inf

@@ -163,9 +163,12 @@ class Codec:
                 )
         return out
 
-    def _obligation(self, o: dict[str, Any], decision: int = 0) -> Any:
+    def _obligation(self, o: dict[str, Any], parent: Any, decision: int = 0, at: Any = None) -> Any:
+        """An ``Obligation`` inside ``parent`` (a Decision or Violation): it shares the parent's
+        stamp, and its record is the parent's. A decision's items give their window from the
+        trigger (``at``), a tracked obligation on the Manager's clock."""
         m = self.msg.Obligation()
-        self._header(m)
+        m.header.stamp = parent.header.stamp
         nested = o.get("obligation")
         inner: dict[str, Any] = nested if isinstance(nested, dict) else o
         m.id = int(o["id"]) if "obligation" in o and isinstance(o.get("id"), int) else 0
@@ -176,13 +179,15 @@ class Codec:
         window = o.get("window")
         if isinstance(window, list) and len(window) == 2:
             lo, hi = window
-        else:
+        else:  # an item of a decision: from its trigger
+            base = float(at) if isinstance(at, int | float) else 0.0
             lo, hi = inner.get("from_s"), inner.get("within_s")
+            lo = base + lo if isinstance(lo, int | float) else base
+            hi = base + hi if isinstance(hi, int | float) else None
         m.window_start = float(lo) if isinstance(lo, int | float) else 0.0
         deadline = o.get("deadline", hi)
         m.deadline = float(deadline) if isinstance(deadline, int | float) else math.inf
         m.status = str(o.get("status") or "")
-        m.record = dumps(o)
         return m
 
     # ------------------------------------------------------------------ encode
@@ -221,13 +226,13 @@ class Codec:
         m.layer = str(r.get("layer") or "")
         m.semantics = str(r.get("semantics", ""))
         m.values = [self.value(k, v) for k, v in (r.get("values") or {}).items()]
-        m.obligations = [self._obligation(o, m.id) for o in r.get("obligations", [])]
+        m.obligations = [self._obligation(o, m, m.id, r.get("time")) for o in r.get("obligations", [])]
         m.missing = [str(x) for x in r.get("missing", [])]
         m.explanation = str(r.get("explanation") or r.get("reason") or "")
         m.record = dumps(r)
 
     def _encode_violations(self, m: Any, r: dict[str, Any]) -> None:
-        m.obligation = self._obligation(r)
+        m.obligation = self._obligation(r, m)
         m.rule = str(r.get("rule", ""))
         m.event = str(r.get("event", ""))
         m.late = bool(r.get("late"))
