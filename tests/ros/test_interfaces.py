@@ -522,3 +522,35 @@ def test_an_incompatible_publisher_is_reported(
 
         diagnostics.wait(warned, what="a WARN diagnostic naming the incompatible QoS")
         assert not any(d["rule"] == "R1" for d in driver.decisions)  # and indeed it was never heard
+
+
+def test_rostopic_echo_shows_a_decisions_fields(
+    backend: str, graph: dict[str, str], transport: Any, namespace: str
+) -> None:
+    if backend != "ros1":
+        pytest.skip("the ROS 2 wheels have no `ros2` command line")
+    rostopic = Path(sys.executable).parent / "rostopic"  # Debian's, with the venv that sees the types
+    with System(backend, namespace, env=graph, nodes=[manager()]):
+        driver = Driver(transport, namespace, tasks=())
+        driver.ready(layers=False)
+        echo = subprocess.Popen(
+            [str(rostopic), "echo", "-n", "1", f"{namespace}/decisions"],
+            env=graph,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        try:
+            end = time.monotonic() + 30
+            while echo.poll() is None:  # until rostopic has subscribed and heard one
+                assert time.monotonic() < end, "rostopic heard nothing"
+                driver.event("UserApproaches")
+                time.sleep(0.5)
+            out, err = echo.communicate(timeout=10)
+        finally:
+            if echo.poll() is None:
+                echo.kill()
+                echo.wait()
+    assert echo.returncode == 0, err
+    assert 'rule: "R3"' in out and 'trigger: "UserApproaches"' in out
+    assert 'explanation: "R3: not MoveNearUser within 30 s"' in out
