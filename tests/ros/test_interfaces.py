@@ -330,6 +330,10 @@ def test_the_lifecycle_manager_enforces_only_while_active(
         assert no["permitted"] is False and "inactive" in no["reason"]  # fail closed
         assert transition(Transition.TRANSITION_ACTIVATE) is True
         assert ask(transport, service, "MoveNearUser")["permitted"] is True
+        # a transition the state has not (configure while active) is refused; the node goes on
+        assert transition(Transition.TRANSITION_CONFIGURE) is False
+        assert state() == "active" and system.codes() == [None]
+        assert ask(transport, service, "MoveNearUser")["permitted"] is True
         assert transition(Transition.TRANSITION_DEACTIVATE) is True
         assert ask(transport, service, "MoveNearUser")["permitted"] is False
         assert transition(Transition.TRANSITION_ACTIVATE) is True

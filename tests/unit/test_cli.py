@@ -78,7 +78,9 @@ def test_a_bad_choice_lists_the_choices_as_the_user_types_them(capsys) -> None: 
     assert "(choose from 'last-wins', 'nested')" in err and "HedgeSemantics" not in err
 
 
-def test_hostile_rule_files_are_user_errors_not_internal_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_hostile_rule_files_are_user_errors_not_internal_errors(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     empty = tmp_path / "empty"
     empty.mkdir()
     assert main(["check", str(empty)]) == 1  # before: 0, nothing checked

@@ -40,8 +40,9 @@ from cosleec.nodes.transport import DEFAULT_NAMESPACE
 log = logging.getLogger("cosleec.nodes")
 
 ROUTE_KEYS = ("to", "type", "event", "qos")
-#: a ROS topic name: what both ROS 2 and ROS 1 accept (no spaces, no trailing slash)
-TOPIC = re.compile(r"~?/?[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*")
+#: a guarded topic's name: absolute (a relative name could be the same topic spelt
+#: otherwise: a guard that feeds itself), tokens as both ROS 2 and ROS 1 accept them
+TOPIC = re.compile(r"(/[A-Za-z_][A-Za-z0-9_]*)+")
 
 
 class GuardError(UserError, ValueError):
@@ -102,8 +103,8 @@ def route(source: str, spec: Any, where: str = "<guard>", events: frozenset[str]
     for what, name in (("guarded topic", source), ("`to`", spec["to"])):
         if not TOPIC.fullmatch(name):
             raise GuardError(
-                f"{at}: {what} {name!r} is not a ROS topic name",
-                hint="letters, digits, _ and / (e.g. /planner/cmd_vel)",
+                f"{at}: {what} {name!r} is not an absolute ROS topic name",
+                hint="give it from the root: /planner/cmd_vel (letters, digits and _ between slashes)",
             )
     if spec["to"] == source:
         raise GuardError(f"{at}: `to` must differ from the guarded topic, or the guard would feed itself")

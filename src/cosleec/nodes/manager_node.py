@@ -219,8 +219,14 @@ class ManagerNode(Node):
             return {"accepted": False, "error": f"unknown event {show(name)}{hint}", "decisions": []}
         try:
             if values:
-                self._context({"values": values})
-            decisions = self.manager.event(name) if name else []
+                checked = context_values({"values": values})
+                self._check_numbers(checked)
+            if not name:  # values alone (or nothing at all)
+                if values:
+                    self.manager.update(checked)
+                decisions = []
+            else:  # the values and the event as one: nothing of another thread's comes between
+                decisions = self.manager.event(name, values=checked if values else None)
         except (MessageError, ContextError) as e:
             return {"accepted": False, "error": str(e), "decisions": []}
         return {"accepted": True, "error": "", "decisions": [d.to_json() for d in decisions]}
@@ -271,7 +277,7 @@ class ManagerNode(Node):
         if len(name) > MAX_NAME:  # unknown anyway; refused before the runtime echoes it in its records
             raise MessageError(f"event name of {len(name)} characters (at most {MAX_NAME}): {show(name)}")
         values = msg.get("values")
-        if values is not None:  # measures observed with it: applied just before it, nothing between
+        if values is not None and values != {}:  # measures observed with it: applied just before it
             checked = context_values({"values": values})
             self._check_numbers(checked)
             self._feed(lambda n: self.manager.event(n, values=checked), name)

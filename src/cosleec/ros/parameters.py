@@ -51,6 +51,8 @@ def coerce(name: str, value: Any, default: Any) -> Any:
         if not isinstance(value, list | tuple) or not all(isinstance(v, str) for v in value):
             raise ParameterError(f"parameter {name!r} must be a list of strings, not {value!r}")
         return list(value)
+    if isinstance(value, bool):  # YAML reads `unknown:=false` as a boolean: the option's word
+        return "true" if value else "false"
     if not isinstance(value, str):
         raise ParameterError(f"parameter {name!r} must be a string, not {value!r}")
     return value

@@ -10,7 +10,6 @@ size) and no lifecycle nodes.
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import threading
 import time
@@ -59,10 +58,16 @@ class Ros1Transport:
                     f"not a ROS 1 argument: {a!r}",
                     hint="give remappings as name:=value and private parameters as _name:=value",
                 )
-        #: the private parameters this command line sets: checked for typos, removed at close
-        #: (rospy leaves them on the master, where they would outlive this node)
-        self._mine = {a.partition(":=")[0][1:] for a in args if a.startswith("_") and not a.startswith("__")}
-        rospy.init_node(node_name, anonymous=False, disable_signals=True, argv=["cosleec", *args])
+        #: the private parameters this command line gives, read as rospy reads them (YAML), and
+        #: kept here: rospy would put them on the master, where they outlive the node (a crash,
+        #: SIGKILL) and a later start without them would run with them, silently
+        self._mine: dict[str, Any] = {}
+        for a in args:
+            if a.startswith("_") and not a.startswith("__"):
+                name, _, value = a.partition(":=")
+                self._mine[name[1:]] = _yaml_value(value)
+        remaps = [a for a in args if not (a.startswith("_") and not a.startswith("__"))]
+        rospy.init_node(node_name, anonymous=False, disable_signals=True, argv=["cosleec", *remaps])
         self.node_name = rospy.get_name()
         self._pubs: dict[str, Any] = {}
         self._subs: list[Any] = []
@@ -271,23 +276,26 @@ class Ros1Transport:
         An option not given keeps ``defaults``' value; ParameterError for a wrong type or a
         private parameter no option has.
         """
-        out = {
-            name: coerce(
-                name, self._rospy.get_param(f"~{name}", default if default is not None else ""), default
-            )
-            for name, default in defaults.items()
-        }
         known = set(defaults) | {"use_sim_time"}
         check_overrides(self._mine, known)  # a typo on this command line is an error
+        out = {}
+        for name, default in defaults.items():
+            if name in self._mine:  # this command line's: wins over the parameter server
+                value = self._mine[name]
+            else:  # set by rosparam or a launch file
+                value = self._rospy.get_param(f"~{name}", default if default is not None else "")
+            out[name] = coerce(name, value, default)
         prefix = f"{self.node_name}/"
         for p in self._rospy.get_param_names():  # set by rosparam or a launch file: said, not fatal
-            name = p[len(prefix) :] if p.startswith(prefix) else None
-            if name is not None and "/" not in name and name not in known:
+            rest = p[len(prefix) :] if p.startswith(prefix) else None
+            if rest is not None and "/" not in rest and rest not in known:
                 log.warning("the parameter server has %s, which no option of this node reads", p)
         return out
 
     def use_sim_time(self) -> bool:
-        """ROS 1's global ``/use_sim_time`` (or this node's private ``~use_sim_time``)."""
+        """This node's ``_use_sim_time:=`` or ``~use_sim_time``, else ROS 1's global ``/use_sim_time``."""
+        if "use_sim_time" in self._mine:
+            return self._mine["use_sim_time"] is True
         return bool(self._rospy.get_param("~use_sim_time", self._rospy.get_param("/use_sim_time", False)))
 
     # ------------------------------------------------------------------ diagnostics
@@ -320,7 +328,14 @@ class Ros1Transport:
             p.unregister()
         for v in self._services:
             v.shutdown()
-        for name in self._mine:  # ours: a later start without them must not find them there
-            with contextlib.suppress(Exception):
-                self._rospy.delete_param(f"~{name}")
         self._rospy.signal_shutdown("cosleec node stopped")
+
+
+def _yaml_value(text: str) -> Any:
+    """A ``_name:=value`` value as rospy reads it: YAML (``true``, ``2``, ``[a, b]``), else the text."""
+    import yaml
+
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError:
+        return text

@@ -540,4 +540,17 @@ def _lifecycle_node(name: str, args: list[str], hooks: dict[str, Callable[[], bo
         def on_shutdown(self, state: Any) -> Any:
             return hook("shutdown")
 
+        # rclpy's change_state service raises into the executor for a transition the current
+        # state has not (configure while active): one such request from anyone on the graph
+        # would end the node, and with it enforcement. Answered "no" instead.
+        def _LifecycleNodeMixin__on_change_state(self, req: Any, resp: Any) -> Any:
+            try:
+                return LifecycleNode._LifecycleNodeMixin__on_change_state(self, req, resp)
+            except Exception as e:
+                log.warning(
+                    "lifecycle: refused transition %s: %s", req.transition.id or req.transition.label, e
+                )
+                resp.success = False
+                return resp
+
     return Managed(name, cli_args=args or None)

@@ -614,11 +614,12 @@ class Manager:
         ``values`` are measures observed with the event (one sensor message that gives a
         measure and fires a trigger): they are applied as one update just before it, with no
         other step between, so the rules decide on them and not on what came before. If
-        they are rejected (ContextError), the event does not happen either. Observers hear
+        they are rejected (ContextError), the event does not happen either; an event no
+        declaration names takes none of them. Observers hear
         the update while the event still holds the Manager: one that waits for another
         thread's step waits until the event has happened.
         """
-        if values:
+        if values and name in self.ruleset.events:  # (an unknown event takes no value: all or nothing)
             with self._lock:  # re-entrant: the two steps below take it too
                 self.update(values)
                 return self._occur(name)

@@ -111,6 +111,7 @@ def test_reachable_with_static_facts() -> None:
 
 # ---------------------------------------------------------------- the checker's lint uses them
 
+
 def lint(conditions: list[str], semantics: HedgeSemantics) -> list[tuple[str, str]]:
     from cosleec.lang import analyse
     from cosleec.lang.checker import Options

@@ -165,7 +165,10 @@ def test_it_subscribes_each_route_with_its_type_and_qos_and_advertises_refusals(
     assert t.raw["/arm/goal"][2] == Qos.SENSOR_DATA
     assert ("/robot1/refusals", False) in t.advertised
     # each output is advertised at start, so its subscribers have matched it before a message goes
-    assert t.outputs == [("/cmd_vel", "geometry_msgs/msg/Twist", Qos.RELIABLE), ("/arm/goal_checked", "geometry_msgs/msg/Pose", Qos.SENSOR_DATA)]
+    assert t.outputs == [
+        ("/cmd_vel", "geometry_msgs/msg/Twist", Qos.RELIABLE),
+        ("/arm/goal_checked", "geometry_msgs/msg/Pose", Qos.SENSOR_DATA),
+    ]
     for key in ("forwarded", "blocked", "unanswered", "overflow"):
         assert node.counters[key] == 0
 
@@ -780,12 +783,18 @@ def test_load_routes_a_route_given_twice_is_an_error_not_the_last_one(tmp_path: 
         load_routes(p)
 
 
-@pytest.mark.parametrize("bad", ["/a b", "/a/", "", "/1a", "a//b"])
-def test_a_route_names_ros_topics(bad: str) -> None:
-    with pytest.raises(GuardError, match="is not a ROS topic name"):
+@pytest.mark.parametrize("bad", ["/a b", "/a/", "", "/1a", "a//b", "hf/cmd", "~cmd", "~/cmd", "/{node}/x"])
+def test_a_route_names_absolute_ros_topics(bad: str) -> None:
+    # relative names are refused: `--from /hf/cmd --to hf/cmd` is one topic, and the guard fed itself
+    with pytest.raises(GuardError, match="is not an absolute ROS topic name"):
         route(bad, {"to": "/b", "type": "T", "event": "E"})
-    with pytest.raises(GuardError, match="is not a ROS topic name"):
+    with pytest.raises(GuardError, match="is not an absolute ROS topic name"):
         route("/a", {"to": bad or "/x y", "type": "T", "event": "E"})
+
+
+@pytest.mark.parametrize("good", ["/_private/cmd", "/a/_b", "/a1/b2_c", "/cmd_vel"])
+def test_valid_absolute_names_are_taken(good: str) -> None:
+    assert route(good, {"to": "/out", "type": "T", "event": "E"}).source == good
 
 
 def test_load_routes_names_the_file_and_route_of_a_bad_route(tmp_path: Path) -> None:
@@ -799,5 +808,5 @@ def test_load_routes_names_the_file_and_route_of_a_bad_route(tmp_path: Path) -> 
 
 def test_load_routes_a_key_that_is_no_topic_name_is_refused(tmp_path: Path) -> None:
     p = write(tmp_path, "guards:\n  1: {to: /b, type: T, event: E}\n")
-    with pytest.raises(GuardError, match=r"guards\.1: guarded topic '1' is not a ROS topic name"):
+    with pytest.raises(GuardError, match=r"guards\.1: guarded topic '1' is not an absolute ROS topic name"):
         load_routes(p)

@@ -501,7 +501,17 @@ def test_an_event_with_values_is_decided_on_them(robot: Robot) -> None:
     assert (d["rule"], d["clause"], d["values"]["userAsleep"]) == ("R1", 1, True)
 
 
-@pytest.mark.parametrize("values", [{"userAsleep": "yes"}, {"nope": True}, {}, [1], {"batteryLevel": 10**400}])
+def test_an_event_with_no_values_is_a_plain_event(robot: Robot) -> None:
+    robot.send("events", {"event": "UserApproaches", "values": {}})  # the typed wire's empty list
+    assert [d["rule"] for d in robot.out["decisions"]] == ["R3"]
+
+
+def test_an_unknown_event_with_values_changes_nothing(robot: Robot) -> None:
+    robot.send("events", {"event": "Nope", "values": {"userAsleep": True}})
+    assert robot.node.manager.values()["userAsleep"] is None and len(robot.out["rejected"]) == 1
+
+
+@pytest.mark.parametrize("values", [{"userAsleep": "yes"}, {"nope": True}, [1], {"batteryLevel": 10**400}])
 def test_an_event_with_bad_values_is_rejected_whole(robot: Robot, values: Any) -> None:
     robot.send("events", {"event": "CleanRequest", "values": values})
     assert robot.out["decisions"] == []  # the event did not happen either

@@ -88,7 +88,7 @@ def test_coerce_accepts(value: Any, default: Any, expected: Any) -> None:
         ({"a": "b"}, [], "must be a list of strings"),
         # str
         (5, "last-wins", "must be a string"),
-        (True, "last-wins", "must be a string"),
+        # (a boolean for a string option is its word: test_a_boolean_for_a_string_option_is_its_word)
         (None, "last-wins", "must be a string"),
         (["nested"], "last-wins", "must be a string"),
     ],
@@ -282,3 +282,9 @@ def test_importing_the_ros_cli_needs_neither_rclpy_nor_rospy() -> None:
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "ok"
+
+
+@pytest.mark.parametrize(("value", "word"), [(False, "false"), (True, "true")])
+def test_a_boolean_for_a_string_option_is_its_word(value: bool, word: str) -> None:
+    # ROS reads `-p unknown:=false` as a boolean; --unknown's choices include "false"
+    assert coerce("unknown", value, "undetermined") == word

@@ -406,9 +406,7 @@ def test_node_names_carry_the_namespace(namespace: str, kind: str, name: str) ->
 def test_messages_a_sender_numbered_but_never_delivered_are_counted_lost() -> None:
     # before: DDS dropped 85 % of a 10k msg/s stream and no counter anywhere said so
     bus = LocalBus()
-    rules = RuleSet.from_text(
-        "def_start event E event F def_end rule_start R1 when E then F rule_end"
-    )
+    rules = RuleSet.from_text("def_start event E event F def_end rule_start R1 when E then F rule_end")
     node = ManagerNode(bus.transport(), rules)
     t = bus.transport()
     for n in (1, 2, 5, 6, 6, 4, 10):  # 3, 4 and 7..9 missing; 6 twice; 4 after 6
@@ -434,7 +432,9 @@ def test_two_task_nodes_of_one_name_never_take_each_others_answers(bus: LocalBus
     # an answer about another event is no answer: before, ids `task-1`... matched both nodes
     rid = f"task-{a.session[:12]}-99"
     a._replies[rid] = (threading.Event(), [], "RecordVideo")
-    bus.transport().publish("/cosleec/request_reply", json.dumps({"id": rid, "event": "OpenCurtains", "allowed": True}))
+    bus.transport().publish(
+        "/cosleec/request_reply", json.dumps({"id": rid, "event": "OpenCurtains", "allowed": True})
+    )
     assert bus.wait_idle()
     assert a._replies[rid][1] == [False]
     a.close()

@@ -238,7 +238,9 @@ def test_an_undetermined_higher_rule_cancels_nothing() -> None:
 
 
 def test_start_records_the_options_the_run_judges_by(tmp_path: Any) -> None:
-    m, _clock, records, _ = build(priorities=["R1 > R2"], priority_semantics="conflict-aware", priority_lead=2.0)
+    m, _clock, records, _ = build(
+        priorities=["R1 > R2"], priority_semantics="conflict-aware", priority_lead=2.0
+    )
     (o,) = kinds(records, "options")
     assert o == {
         "semantics": "last-wins",
@@ -318,7 +320,11 @@ def test_conflict_aware_cuts_are_not_recomputed_while_nothing_in_force_changes(
         "R1 when T then E within 1000 seconds R2 when G then not E within 2000 seconds rule_end"
     )
     m = Manager.from_text(
-        rules, clock=VirtualClock(0.0), dispatch=False, priorities=["R1 > R2"], priority_semantics="conflict-aware"
+        rules,
+        clock=VirtualClock(0.0),
+        dispatch=False,
+        priorities=["R1 > R2"],
+        priority_semantics="conflict-aware",
     )
     m.start()
     m.event("G")

@@ -206,7 +206,9 @@ def test_a_determined_inner_unless_takes_its_clause() -> None:
 
 
 def test_an_undetermined_inner_unless_of_an_otherwise_runs_nothing() -> None:
-    m, clock = manager("R1 when E then F within 1 seconds otherwise { not Rec within 10 minutes unless a then G }")
+    m, clock = manager(
+        "R1 when E then F within 1 seconds otherwise { not Rec within 10 minutes unless a then G }"
+    )
     ran: list[str] = []
     m.capability("F")(lambda ob, d: None)
     m.capability("G")(lambda ob, d: ran.append("G"))
@@ -241,7 +243,9 @@ def test_a_number_beyond_float_range_is_rejected_and_nothing_changes(tmp_path: P
 
 def test_a_deadline_too_large_for_the_runtime_is_a_user_error(tmp_path: Path, capsys: Any) -> None:
     f = tmp_path / "big.sleec"
-    f.write_text(f"def_start event E event F def_end rule_start R1 when E then F within {'9' * 400} seconds rule_end")
+    f.write_text(
+        f"def_start event E event F def_end rule_start R1 when E then F within {'9' * 400} seconds rule_end"
+    )
     assert main(["decide", str(f), "--event", "E"]) == 1
     err = capsys.readouterr().err
     assert f"{f}:1:" in err and "longer than the runtime can keep" in err and len(err) < 600
@@ -457,7 +461,9 @@ def test_an_exception_inside_a_step_keeps_the_record_of_every_change_made(
 def test_a_fallback_carries_its_rule_and_clause_however_old_its_decision() -> None:
     # before (in the first runtime): the clause was looked up in the last-10,000 window, so
     # the fallback of an old decision reached no task node
-    m, clock = manager("R1 when E then F within 1 seconds otherwise Help unless a then G", history=1, dispatch=False)
+    m, clock = manager(
+        "R1 when E then F within 1 seconds otherwise Help unless a then G", history=1, dispatch=False
+    )
     m.update(a=False)
     m.event("E")
     m.update(a=True)
@@ -472,7 +478,9 @@ def test_a_fallback_carries_its_rule_and_clause_however_old_its_decision() -> No
 
 def test_an_undetermined_decision_keeps_the_prohibitions_its_otherwise_would_start() -> None:
     # nothing runs, so A may be missed: the otherwise's `not B` could apply from 5 s on
-    m, clock = manager("R1 when E then F within 5 seconds otherwise not Rec within 60 seconds unless a then F within 100 seconds")
+    m, clock = manager(
+        "R1 when E then F within 5 seconds otherwise not Rec within 60 seconds unless a then F within 100 seconds"
+    )
     (d,) = m.event("E")
     assert d.undetermined and [o.describe() for o in d.obligations] == ["not Rec within [5 s, 65 s]"]
     assert "meanwhile not Rec within [5 s, 65 s]" in d.explanation
@@ -518,7 +526,9 @@ def test_a_prohibition_in_an_unknown_unless_clause_is_enforced() -> None:
 
 @pytest.mark.parametrize("cond", ["not (n > 3)", "(({n} + 1) > 3)", "(({n} * 2) = 4)", "not (3 < n)"])
 def test_comparisons_and_arithmetic_over_an_unknown_are_unknown(cond: str) -> None:
-    m, _ = manager(f"R1 when E then F unless {cond} then not Rec within 10 minutes", defs="measure n : numeric")
+    m, _ = manager(
+        f"R1 when E then F unless {cond} then not Rec within 10 minutes", defs="measure n : numeric"
+    )
     (d,) = m.event("E")
     assert d.conditions[1][2] is None and d.undetermined and m.request("Rec") is False
 

@@ -56,3 +56,11 @@ def test_no_other_update_comes_between_the_values_and_their_event() -> None:
     others[0].join()
     assert d.clause == 1 and d.values["near"] is True
     assert m.values()["near"] is False  # the other update came, after the event
+
+
+def test_an_unknown_event_takes_none_of_its_values() -> None:
+    m = manager()
+    m.update(near=False)
+    with pytest.raises(ContextError, match="unknown event"):
+        m.event("Nope", values={"near": True})
+    assert m.values()["near"] is False  # all or nothing

@@ -31,8 +31,9 @@ rule_end
 def die_after(tmp_path: Path, body: str) -> None:
     """Run ``body`` in a new process with ``m`` (a Manager on the journal) and kill it with SIGKILL."""
     (tmp_path / "rules.sleec").write_text(RULES)
-    script = textwrap.dedent(
-        f"""
+    script = (
+        textwrap.dedent(
+            f"""
         import os, signal
         from cosleec.runtime import Manager, VirtualClock
         clock = VirtualClock(100)
@@ -42,7 +43,10 @@ def die_after(tmp_path: Path, body: str) -> None:
         m.capability("Help")(lambda ob, d: print("HELP", d.id, flush=True))
         m.start()
         """
-    ) + textwrap.dedent(body) + "\nos.kill(os.getpid(), signal.SIGKILL)\n"
+        )
+        + textwrap.dedent(body)
+        + "\nos.kill(os.getpid(), signal.SIGKILL)\n"
+    )
     p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
     assert p.returncode == -9, p.stderr
 
@@ -124,7 +128,9 @@ def test_records_of_a_step_never_committed_are_set_aside(tmp_path: Path) -> None
     log = tmp_path / "audit.jsonl"
     lines = log.read_text().splitlines(keepends=True)
     last = json.loads(lines[-1])
-    ghost = [json.dumps({**last, "seq": last["seq"] + k, "kind": "decision", "id": 99}) + "\n" for k in (1, 2)]
+    ghost = [
+        json.dumps({**last, "seq": last["seq"] + k, "kind": "decision", "id": 99}) + "\n" for k in (1, 2)
+    ]
     log.write_text("".join(lines) + "".join(ghost) + '{"seq": 99, "ki')
     m = again(tmp_path, 101)
     m.event("Watch")
@@ -141,7 +147,9 @@ def test_records_of_a_step_never_committed_are_set_aside(tmp_path: Path) -> None
 
 def test_a_changed_rule_set_keeps_what_it_still_names_and_records_what_it_drops(tmp_path: Path) -> None:
     die_after(tmp_path, 'm.update(consent=False); m.event("Watch"); m.event("Trigger")')
-    (tmp_path / "rules.sleec").write_text(RULES.replace(" R2 when Watch then not Rec within 10 minutes unless consent\n", ""))
+    (tmp_path / "rules.sleec").write_text(
+        RULES.replace(" R2 when Watch then not Rec within 10 minutes unless consent\n", "")
+    )
     m = again(tmp_path, 101).start()
     assert m.request("Rec") is True  # the rule that forbade it is gone, and that is recorded
     assert [t.rule for t in m.outstanding()] == ["R1"]
@@ -204,7 +212,9 @@ def test_after_a_reboot_obligations_are_due_sooner_and_prohibitions_stay(tmp_pat
             return self.t
 
     (tmp_path / "rules.sleec").write_text(RULES)
-    m = Manager.from_file(tmp_path / "rules.sleec", clock=Uptime(100), journal=tmp_path / "state.db", dispatch=False)
+    m = Manager.from_file(
+        tmp_path / "rules.sleec", clock=Uptime(100), journal=tmp_path / "state.db", dispatch=False
+    )
     m.update(consent=False)
     m.event("Watch")  # not Rec until 700
     m.event("Trigger")  # Act by 105
@@ -215,7 +225,9 @@ def test_after_a_reboot_obligations_are_due_sooner_and_prohibitions_stay(tmp_pat
     db.execute("UPDATE meta SET value = ? WHERE key = 'state'", (json.dumps(state),))
     db.commit()
     db.close()
-    m = Manager.from_file(tmp_path / "rules.sleec", clock=Uptime(200), journal=tmp_path / "state.db", dispatch=False)
+    m = Manager.from_file(
+        tmp_path / "rules.sleec", clock=Uptime(200), journal=tmp_path / "state.db", dispatch=False
+    )
     m.start()
     assert m.stats["violations"] == 1  # before: uptime 200 > 100 looked like the same boot, no shift
     assert m.request("Rec") is False  # the prohibition as if no time had passed: still in force
@@ -247,22 +259,36 @@ def test_an_audit_log_edited_by_hand_is_not_cut_mid_record(tmp_path: Path) -> No
 
 
 def test_a_dropped_obligation_is_reported_once(tmp_path: Path) -> None:
-    die_after(tmp_path, 'm.event("Trigger"); m.clock.set(110); m.tick()')  # Act missed: kept for its late event
-    (tmp_path / "rules.sleec").write_text(RULES.replace(" R1 when Trigger then Act within 5 seconds otherwise Help\n", ""))
+    die_after(
+        tmp_path, 'm.event("Trigger"); m.clock.set(110); m.tick()'
+    )  # Act missed: kept for its late event
+    (tmp_path / "rules.sleec").write_text(
+        RULES.replace(" R1 when Trigger then Act within 5 seconds otherwise Help\n", "")
+    )
     for t in (111, 112):
         Manager.from_file(
-            tmp_path / "rules.sleec", clock=VirtualClock(t), journal=tmp_path / "state.db", audit=tmp_path / "audit.jsonl"
+            tmp_path / "rules.sleec",
+            clock=VirtualClock(t),
+            journal=tmp_path / "state.db",
+            audit=tmp_path / "audit.jsonl",
         ).close()
     records = read_audit(tmp_path / "audit.jsonl")
     dropped = [r for r in records if r["kind"] == "dropped"]
-    assert sorted(r["what"].split(" (")[0] for r in dropped) == ["obligation 1", "obligation 2"]  # missed Act, Help
-    assert {r["run"] for r in dropped} == {records[-1]["from"]}  # none again on the next restart (before: every time)
+    assert sorted(r["what"].split(" (")[0] for r in dropped) == [
+        "obligation 1",
+        "obligation 2",
+    ]  # missed Act, Help
+    assert {r["run"] for r in dropped} == {
+        records[-1]["from"]
+    }  # none again on the next restart (before: every time)
 
 
 def test_a_prohibition_survives_an_item_inserted_before_it(tmp_path: Path) -> None:
     die_after(tmp_path, 'm.update(consent=False); m.event("Watch")')
     (tmp_path / "rules.sleec").write_text(
-        RULES.replace("then not Rec within 10 minutes", "then Act within 1 minutes and not Rec within 10 minutes")
+        RULES.replace(
+            "then not Rec within 10 minutes", "then Act within 1 minutes and not Rec within 10 minutes"
+        )
     )
     m = again(tmp_path, 160).start()
     assert m.request("Rec") is False  # before: dropped, its key R2:0 now names `Act`

@@ -163,7 +163,6 @@ def test_a_day_killed_at_random_points_ends_as_if_uninterrupted(
 # ---------------------------------------------------------------------- what the campaign found, one by one
 
 
-
 def manager(tmp_path: Path, t: float) -> Manager:
     """A Manager on the journal and audit log in ``tmp_path`` at clock time ``t``, started.
 

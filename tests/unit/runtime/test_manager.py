@@ -366,10 +366,18 @@ def test_explanations_and_audit_log(tmp_path: Path) -> None:
     m.close()
     records = read(log)
     kinds = [r["kind"] for r in records]
-    assert kinds[:5] == ["options", "context", "layers", "event", "decision"]  # options: start() says how it runs
+    assert kinds[:5] == [
+        "options",
+        "context",
+        "layers",
+        "event",
+        "decision",
+    ]  # options: start() says how it runs
     assert records[0]["semantics"] == "last-wins" and records[0]["priorities"] == []
     assert [r["seq"] for r in records] == list(range(1, len(records) + 1))
-    assert {r["run"] for r in records} == {m.run_id} and {r["rules"] for r in records} == {m.ruleset.digest[:16]}
+    assert {r["run"] for r in records} == {m.run_id} and {r["rules"] for r in records} == {
+        m.ruleset.digest[:16]
+    }
     dec = records[4]
     assert dec["rule"] == "R1" and dec["layer"] == "R1.1" and dec["values"]["userUndressed"] is True
     assert [c["value"] for c in dec["conditions"]] == [True, True, False]

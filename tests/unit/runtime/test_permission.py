@@ -85,7 +85,10 @@ def test_two_prohibitions_of_one_rule_name_it_once_and_are_both_counted(tmp_path
     p = m.permission("Rec")
     assert p.rules == ("R2",)
     # one phrase per rule, with the window that ends last: the reason does not grow per trigger
-    assert p.reason == "Rec is forbidden by R2 until 14 s (R2: not Rec within 10 s [default], because a was false)"
+    assert (
+        p.reason
+        == "Rec is forbidden by R2 until 14 s (R2: not Rec within 10 s [default], because a was false)"
+    )
     assert sorted(t.refused for t in m.tracker.active) == [1, 1]
     m.close()
     (r,) = refused(log)

@@ -97,7 +97,9 @@ obligations = st.builds(
     eventually=st.booleans(),
     alternatives=st.lists(
         st.lists(
-            st.tuples(st.sampled_from(["A", "B"]), st.floats(0, 1e3), st.none() | st.floats(0, 1e6)), min_size=1, max_size=2
+            st.tuples(st.sampled_from(["A", "B"]), st.floats(0, 1e3), st.none() | st.floats(0, 1e6)),
+            min_size=1,
+            max_size=2,
         ).map(tuple),
         max_size=1,
     ).map(tuple),

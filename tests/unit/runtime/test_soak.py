@@ -40,10 +40,12 @@ def test_a_long_run_with_misses_stays_bounded(tmp_path: Path) -> None:
     m = Manager.from_text(RULES, clock=clock, audit=audit, journal=journal, history=100)
     helped: list[int] = []
     m.capability("Do")(lambda ob, d: None)
+
     @m.capability("Help")
     def call_for_help(ob: object, d: Decision) -> None:
         helped.append(d.id)
         m.event("Help")  # the robot reports what it did
+
     m.start()
     base = 0.0
     for i in range(triggers):
