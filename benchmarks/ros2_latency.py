@@ -62,8 +62,8 @@ def main() -> int:
     if not isolated():
         reexec_isolated()
     import rclpy
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
     from cosleec_interfaces.msg import ContextUpdate, Event, MeasureValue, Status
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
     from std_msgs.msg import String
 
     from cosleec.ros import env as rosenv
