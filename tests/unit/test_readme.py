@@ -65,3 +65,28 @@ def test_the_readme_shows_lines_the_analysis_prints(
 
 def test_there_are_readme_analyse_sessions() -> None:
     assert len(sessions("analyse")) >= 3
+
+
+PYTHON = re.compile(r"```python\n(.*?)```", re.S)
+#: blocks that need a middleware and a running system (ROS): shown, not run here
+NEEDS_ROS = ("rclpy", "cosleec_interfaces", "node.create")
+
+
+def python_blocks() -> list[str]:
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    return [b for b in PYTHON.findall(text) if not any(word in b for word in NEEDS_ROS)]
+
+
+@pytest.mark.parametrize("block", python_blocks(), ids=lambda b: b.strip().splitlines()[0][:40])
+def test_every_python_block_of_the_readme_runs_as_written(
+    block: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.chdir(ROOT)  # the README says: from the repository root
+    exec(compile(block, "README.md", "exec"), {"__name__": "readme"})
+    out = capsys.readouterr().out
+    for comment in re.findall(r"^# (\S.*)$", block, re.M):  # an output shown as a comment line
+        assert comment in out
+
+
+def test_some_python_blocks_run() -> None:
+    assert len(python_blocks()) >= 2
