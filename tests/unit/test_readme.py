@@ -90,3 +90,15 @@ def test_every_python_block_of_the_readme_runs_as_written(
 
 def test_some_python_blocks_run() -> None:
     assert len(python_blocks()) >= 2
+
+
+def test_the_readme_demo_excerpt_is_what_the_demo_prints(capsys: pytest.CaptureFixture[str]) -> None:
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    excerpt = text.split("## The demo", 1)[1].split("```\n", 2)[1]  # the demo's first code block
+    main(["demo"])
+    printed = " ".join(capsys.readouterr().out.split())  # rich wraps lines at the terminal width
+    at = 0
+    for part in excerpt.split("\n...\n"):  # `...` marks what the README leaves out
+        words = " ".join(part.split())
+        assert words in printed[at:], f"not printed (in this order): {words}"
+        at = printed.index(words, at) + len(words)
