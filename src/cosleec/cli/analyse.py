@@ -23,7 +23,7 @@ from types import ModuleType
 from rich.text import Text
 
 from cosleec.analysis import CHECKS, DEFAULT_BOUND, Coverage, FileReport, Settings, analyse_file, sarif
-from cosleec.cli.common import add_clause_options, add_priority_options, console, expand
+from cosleec.cli.common import add_clause_options, add_priority_options, console, expand, input_file
 from cosleec.errors import UserError
 from cosleec.lang import HedgeSemantics, SleecError, cycle, load, parse_priority
 from cosleec.lang import analyse_file as check_file
@@ -126,9 +126,12 @@ def _checks(text: str | None) -> list[str]:
         if not name:
             continue
         if name not in CHECKS:
-            close = difflib.get_close_matches(name, list(CHECKS), n=1)
+            close = (
+                difflib.get_close_matches(name, list(CHECKS), n=1)
+                or [c for c in CHECKS if difflib.get_close_matches(name, c.split("-"), n=1, cutoff=0.7)][:2]
+            )
             raise UserError(
-                f"unknown check {name[:40]!r}" + (f" (did you mean {close[0]}?)" if close else ""),
+                f"unknown check {name[:40]!r}" + (f" (did you mean {' or '.join(close)}?)" if close else ""),
                 hint="one or more of: " + ", ".join(CHECKS),
             )
         out.append(name)
@@ -273,7 +276,11 @@ def _coverage(args: argparse.Namespace, path: Path) -> Coverage | None:
         from cosleec.runtime import RuleSet
 
         rules = RuleSet.from_spec(spec)
-        m = Mapping.load(args.mapping, dict(rules.measures), frozenset(e.name for e in spec.events))
+        m = Mapping.load(
+            input_file(args.mapping, "the mapping", text=True),
+            dict(rules.measures),
+            frozenset(e.name for e in spec.events),
+        )
         measures = frozenset(e.name for e in m.entries if e.kind == "measure")
         events = frozenset(e.name for e in m.entries if e.kind == "event")
     return Coverage(unimplemented, measures, events)

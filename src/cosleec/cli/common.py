@@ -30,6 +30,72 @@ def expand(paths: list[str]) -> list[Path]:
     return out
 
 
+def input_file(path: str, what: str, *, text: bool = False) -> str:
+    """``path`` if it names a file that can be opened for reading; else a UserError naming it.
+
+    ``what`` says what the file is for (``the mapping``): "cannot read the mapping: no such
+    file", "... is a directory"; with ``text``, a regular file that is not UTF-8 is refused
+    too, at the line and column of its first bad byte. Whether its content is right is for
+    its reader to say.
+    """
+    p = Path(path)
+    if p.is_dir():
+        raise UserError(f"cannot read {what}: it is a directory", where=path, hint=f"give the file of {what}")
+    try:
+        with p.open("rb"):
+            pass
+    except OSError as e:
+        raise UserError(
+            f"cannot read {what}: {e.strerror or e}",
+            where=path,
+            hint="check the path (relative paths are from the current directory)"
+            if isinstance(e, FileNotFoundError)
+            else "check the file's permissions",
+        ) from None
+    if text and p.is_file():
+        data = p.read_bytes()
+        try:
+            data.decode("utf-8")
+        except UnicodeDecodeError as e:
+            line = data.count(b"\n", 0, e.start) + 1
+            col = e.start - (data.rfind(b"\n", 0, e.start) + 1) + 1
+            raise UserError(
+                f"cannot read {what}: it is not UTF-8 text (byte 0x{data[e.start]:02x})",
+                where=f"{path}:{line}:{col}",
+                hint="give the text file (YAML), saved as UTF-8",
+            ) from None
+    return path
+
+
+def output_file(path: str, what: str, option: str) -> str:
+    """``path`` if a file can be written there: its directory exists (none is created) and it is no directory.
+
+    ``what`` says what is written (``the audit log``), ``option`` the option that gave
+    ``path`` (``--audit``); a UserError names both and the fix.
+    """
+    p = Path(path)
+    if p.is_dir():
+        raise UserError(
+            f"cannot open {what}: {option} names a directory",
+            where=path,
+            hint=f"give a file name, e.g. {option} {p / 'out'}",
+        )
+    parent = p.parent
+    if parent.exists() and not parent.is_dir():
+        raise UserError(
+            f"cannot open {what}: {parent} is a file, not a directory",
+            where=path,
+            hint=f"give {option} a path in a directory",
+        )
+    if not parent.is_dir():
+        raise UserError(
+            f"cannot open {what}: the directory {parent} does not exist (cosleec creates no directory)",
+            where=path,
+            hint=f"create it first (mkdir -p {parent}), or give {option} a path in a directory that exists",
+        )
+    return path
+
+
 def console(stderr: bool = False) -> Console:
     """A rich console on stdout (or stderr) without highlighting or hard wraps, so output pipes cleanly."""
     return Console(stderr=stderr, highlight=False, soft_wrap=True, file=sys.stderr if stderr else sys.stdout)

@@ -3,18 +3,22 @@
 from __future__ import annotations
 
 import argparse
+import difflib
 import json
 import sys
+from collections.abc import Iterable
 
 from cosleec.cli.common import add_clause_options
-from cosleec.runtime import ContextError, Manager, RuleSet, VirtualClock
+from cosleec.runtime import ContextError, Manager, MeasureSpec, RuleSet, VirtualClock
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Register ``cosleec decide`` and its options."""
     p = sub.add_parser("decide", help="evaluate the rules triggered by an event against given values")
-    p.add_argument("rules", metavar="RULES")
-    p.add_argument("--event", required=True, metavar="EVENT")
+    p.add_argument("rules", metavar="RULES", help="the rule file")
+    p.add_argument(
+        "--event", required=True, metavar="EVENT", help="the event that happens (declared in RULES)"
+    )
     p.add_argument(
         "--set",
         action="append",
@@ -24,8 +28,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         help="a measure value: true/false, a number, or a scale literal",
     )
     add_clause_options(p, unknown=False)
-    p.add_argument("--json", action="store_true")
-    p.add_argument("--infer-defs", action="store_true")
+    p.add_argument("--json", action="store_true", help="print one JSON document instead of text")
+    p.add_argument(
+        "--infer-defs", action="store_true", help="infer declarations for files without a def block"
+    )
     p.set_defaults(run=run)
 
 
@@ -49,18 +55,27 @@ def run(args: argparse.Namespace) -> int:
         name = name.strip()
         spec = m.ruleset.measures.get(name)
         if not sep:
-            print(f"cosleec decide: --set {item!r}: expected NAME=VALUE", file=sys.stderr)
+            hint = f"e.g. --set {name or 'MEASURE'}=true"
+            print(f"cosleec decide: --set {item!r}: expected NAME=VALUE\n  hint: {hint}", file=sys.stderr)
             return 2
         if spec is None:
-            print(f"cosleec decide: --set {name}: no measure named {name!r}", file=sys.stderr)
+            print(
+                f"cosleec decide: --set {name}: the rules declare no measure {name!r}"
+                f"\n  hint: {_hint(name, m.ruleset.measures, 'measure')}",
+                file=sys.stderr,
+            )
             return 2
         try:
             values[name] = spec.external(spec.parse(text))
         except ContextError as e:
-            print(f"cosleec decide: --set {name}: {e}", file=sys.stderr)
+            print(f"cosleec decide: --set {name}: {e}\n  hint: {_kind_hint(spec, text)}", file=sys.stderr)
             return 2
     if args.event not in m.ruleset.events:
-        print(f"cosleec decide: --event {args.event}: no event named {args.event!r}", file=sys.stderr)
+        print(
+            f"cosleec decide: --event {args.event}: the rules declare no event {args.event!r}"
+            f"\n  hint: {_hint(args.event, m.ruleset.events, 'event')}",
+            file=sys.stderr,
+        )
         return 2
     if values:
         m.update(values)
@@ -100,3 +115,27 @@ def run(args: argparse.Namespace) -> int:
         for c in cancelled:
             print(f"cancelled: {c['rule']}, by the priority of {c['by']} ({c['priority']})")
     return 0
+
+
+def _hint(name: str, declared: Iterable[str], what: str) -> str:
+    """Did you mean the closest declared name? Else the names declared (or that there are none)."""
+    names = sorted(declared)
+    close = difflib.get_close_matches(name, names, n=1) or [n for n in names if n.lower() == name.lower()]
+    if close:
+        return f"did you mean {close[0]!r}?"
+    if not names:
+        return f"the rules declare no {what}"
+    shown = ", ".join(names[:12]) + (f", ... ({len(names) - 12} more)" if len(names) > 12 else "")
+    return f"the rules declare the {what}s {shown}"
+
+
+def _kind_hint(spec: MeasureSpec, text: str) -> str:
+    """What a value of this measure looks like on the command line."""
+    if spec.kind == "boolean":
+        return f"{spec.name} is boolean: --set {spec.name}=true or --set {spec.name}=false"
+    if spec.kind == "numeric":
+        return f"{spec.name} is numeric: a finite number, e.g. --set {spec.name}=3 or --set {spec.name}=0.5"
+    close = difflib.get_close_matches(text.strip(), spec.literals, n=1)
+    return (f"did you mean {close[0]!r}? " if close else "") + (
+        f"{spec.name} is a scale: one of its literals, {', '.join(spec.literals)}"
+    )

@@ -11,7 +11,7 @@ from cosleec.lang import Diagnostic, Dialect, Severity, analyse_file, format_spe
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Register ``cosleec fmt`` and its options."""
     p = sub.add_parser("fmt", help="print a rule file in canonical form (converts between dialects)")
-    p.add_argument("file", metavar="FILE")
+    p.add_argument("file", metavar="FILE", help="the rule file to print")
     p.add_argument(
         "--dialect",
         choices=["tk", "legos"],

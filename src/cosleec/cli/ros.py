@@ -10,6 +10,7 @@ the standard ``use_sim_time`` (``--sim-time`` sets it), read from ``/clock``.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import math
 import os
 import re
@@ -17,7 +18,7 @@ import sys
 from typing import Any
 
 from cosleec import ros
-from cosleec.cli.common import add_clause_options, add_priority_options
+from cosleec.cli.common import add_clause_options, add_priority_options, input_file, output_file
 from cosleec.errors import UserError
 from cosleec.nodes import (
     GuardNode,
@@ -210,12 +211,12 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     )
     common(g)
     lp = nodes.add_parser("launch", help="start the nodes of a launch file; stop them on SIGINT/SIGTERM")
-    lp.add_argument("file")
+    lp.add_argument("file", metavar="FILE", help="the launch file (YAML: backend, namespace, nodes)")
     lp.set_defaults(run=run, backend=backend)
     d = nodes.add_parser(
         "demo", help="the assistive-care scenario over real middleware, in separate processes"
     )
-    d.add_argument("--json", action="store_true")
+    d.add_argument("--json", action="store_true", help="print runtime events as JSON lines")
     common(d)
 
 
@@ -260,7 +261,7 @@ def run(args: argparse.Namespace) -> int:
     """
     backend, node = args.backend, args.node
     if node == "launch":
-        return ros.launch(args.file)
+        return ros.launch(input_file(args.file, "the launch file", text=True))
     if node == "demo":
         return ros.run_demo(backend, args.namespace, args.json, wire=args.wire)
     ros_args = list(getattr(args, "ros_args", []) or [])
@@ -279,11 +280,35 @@ def run(args: argparse.Namespace) -> int:
     # files given as arguments are read before the middleware starts: a mistake is reported at once
     if (node in ("layers", "task") and args.rules) or (node == "manager" and args.rules and args.autostart):
         RuleSet.from_file(args.rules)  # (a managed Manager reads its rules when configured)
+    if node == "manager":  # written by the node: the directory must exist (none is created)
+        for option, what, path in (
+            ("--audit", "the audit log", args.audit),
+            ("--journal", "the journal", args.journal),
+            ("--record", "the recording", args.record),
+        ):
+            if path:
+                output_file(path, what, option)
+    early = RuleSet.from_file(args.rules) if node in ("listener", "guard") and args.rules else None
+    typed: list[tuple[str, str, str]] = []  # (where, what, message type) of the robot's topics
     if node == "listener" and args.mapping:
-        early = RuleSet.from_file(args.rules) if args.rules else None
-        Mapping.load(args.mapping, dict(early.measures) if early else None, early.events if early else None)
+        mapping = Mapping.load(
+            input_file(args.mapping, "the mapping", text=True),
+            dict(early.measures) if early else None,
+            early.events if early else None,
+        )
+        typed += [(e.where or args.mapping, e.label, e.type) for e in mapping.entries]
     if node == "guard" and args.mapping:
-        load_routes(args.mapping)
+        routes = load_routes(
+            input_file(args.mapping, "the mapping", text=True), early.events if early else None
+        )
+        typed += [(args.mapping, f"guards.{r.source}", r.type) for r in routes]
+    if node == "guard" and (args.source or args.target or args.msg_type or args.event):
+        spec = {"to": args.target, "type": args.msg_type, "event": args.event}
+        r = route(str(args.source or ""), spec, "--from/--to/--type/--event", early.events if early else None)
+        typed.append(("--type", f"the guard of {r.source}", r.type))
+    _check_types(backend, typed)
+    if node == "task" and args.module:  # imported now: a module without install(node) is said at once
+        ros.load_module(args.module, args.path)
     name = node_name(args.namespace, node if node != "task" else args.name)
     lifecycle = backend == "ros2" and node == "manager"
 
@@ -363,6 +388,29 @@ def run(args: argparse.Namespace) -> int:
     if backend == "ros2" and not os.environ.get("ROS_DOMAIN_ID"):
         print("cosleec: note: ROS_DOMAIN_ID is not set (domain 0)", file=sys.stderr)
     return ros.serve(backend, node, make, name, wire=args.wire, ros_args=ros_args, lifecycle=lifecycle)
+
+
+def _check_types(backend: str, typed: list[tuple[str, str, str]]) -> None:
+    """A message type of the robot's topics that this environment lacks is a UserError naming where it is given.
+
+    Checked only when the middleware can be imported here (importing message classes starts
+    no middleware); without it, starting the node says that the middleware is missing.
+    """
+    if not typed or importlib.util.find_spec("rclpy" if backend == "ros2" else "rospy") is None:
+        return
+    from cosleec.ros.messages import MessageTypeError, message_class
+
+    for where, what, type_name in typed:
+        try:
+            message_class(type_name)
+        except MessageTypeError as e:
+            raise MessageTypeError(
+                f"{what}: {e}",
+                where=where,
+                hint=e.hint
+                or "give the type as package/msg/Type (std_msgs/msg/Bool); "
+                f"`{'ros2 interface list' if backend == 'ros2' else 'rosmsg list'}` lists those installed",
+            ) from None
 
 
 class ManagedManager:
