@@ -158,6 +158,11 @@ def test_a_best_effort_battery_publisher_drives_a_rule(
     with System(backend, namespace, env=graph, nodes=nodes) as system:
         driver = Driver(transport, namespace, tasks=())
         driver.ready(layers=False)
+        # the listener's outputs must reach the Manager before the first (edge) event fires
+        driver.wait(
+            lambda: driver.status.get("listener", {}).get("subscribers", {}).get("events", 0) >= 1,
+            what="the listener's events reaching the Manager",
+        )
         topic, kind = f"{namespace}/battery", "sensor_msgs/msg/BatteryState"
         # a driver's usual QoS: best effort (a RELIABLE subscription would never hear it)
         end = time.monotonic() + 30
