@@ -95,3 +95,4 @@ _.on_activate  #
 _.on_deactivate  #
 _.on_cleanup  #
 _.on_shutdown  #
+_.potherwise  # a Lark transformer callback of the paper notation (lang/paper.py)

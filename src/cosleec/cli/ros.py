@@ -398,7 +398,7 @@ def _check_types(backend: str, typed: list[tuple[str, str, str]]) -> None:
     """
     if not typed or importlib.util.find_spec("rclpy" if backend == "ros2" else "rospy") is None:
         return
-    from cosleec.ros.messages import MessageTypeError, message_class
+    from cosleec.ros import MessageTypeError, message_class
 
     for where, what, type_name in typed:
         try:

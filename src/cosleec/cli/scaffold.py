@@ -8,8 +8,7 @@ import sys
 from pathlib import Path
 
 from cosleec.errors import UserError
-from cosleec.runtime import RuleSet
-from cosleec.runtime.scaffold import STYLES, scaffold
+from cosleec.runtime import SCAFFOLD_STYLES, RuleSet, scaffold
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -27,7 +26,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     )
     p.add_argument(
         "--style",
-        choices=STYLES,
+        choices=SCAFFOLD_STYLES,
         default="task",
         help="task: a class per rule with a method per clause (the paper's style, default); "
         "capability: a handler per event the rules oblige",

@@ -20,6 +20,7 @@ from __future__ import annotations
 from cosleec.lang import ast, priorities, visit
 from cosleec.lang.ast import Dialect, Specification
 from cosleec.lang.checker import Options, SymbolTable, check
+from cosleec.lang.deep import deeply
 from cosleec.lang.diagnostics import Diagnostic, DiagnosticSink, Severity, SleecError
 from cosleec.lang.dialect import legos_misreads
 from cosleec.lang.frontend import DIALECTS, CheckResult, analyse, analyse_file, load, parse, read_source
@@ -62,6 +63,7 @@ __all__ = [
     "closure",
     "cycle",
     "decisive",
+    "deeply",
     "format_spec",
     "infer_definitions",
     "legos_misreads",

@@ -438,12 +438,20 @@ class Checker:
         """Check a duration; return its length in seconds when it is constant."""
         unit = A.TIME_UNITS.get(d.unit)
         if unit is None:
-            plural = d.unit + "s"
-            hint = f"SLEEC uses plural units: `{plural}`" if plural in A.TIME_UNITS else None
+            lower = d.unit.lower()
+            plural = lower + "s"
+            if lower in A.TIME_UNITS:  # `Seconds`, `MINUTES`: a keyword, and SLEEC's are lower-case
+                hint: str | None = f"units are keywords, written in lower case: `{lower}`"
+            elif plural in A.TIME_UNITS:
+                hint = f"SLEEC uses plural units: `{plural}`"
+            else:
+                hint = None
             if hint is None:
                 close = difflib.get_close_matches(d.unit, list(A.TIME_UNITS), n=1)
                 hint = f"did you mean `{close[0]}`?" if close else "units are seconds, minutes, hours, days"
-            self.sink.error("bad-unit", f"`{clip(d.unit)}` is not a time unit", d.span, hint=hint)
+            # the unit is the span's last token, on its last line
+            at = A.Span(d.span.end_line, d.span.end_col - len(d.unit), d.span.end_line, d.span.end_col)
+            self.sink.error("bad-unit", f"`{clip(d.unit)}` is not a time unit", at, hint=hint)
         ty = self._expr(d.value)
         if ty is not None and ty != NUM:
             self.sink.error(
@@ -576,6 +584,8 @@ class Checker:
         return None
 
     def _compare(self, e: A.Compare) -> Type:
+        if self._unknown_literal(e):
+            return BOOL
         lt, rt = self._expr(e.left), self._expr(e.right)
         if lt is None or rt is None:
             return BOOL
@@ -641,6 +651,35 @@ class Checker:
     # as its position in its scale, and compares positions as integers (compat.py). Each
     # method below reads one such comparison that way, warns, records the reading and returns
     # True; it returns False (the caller reports the error) where LEGOS-SLEEC has no reading.
+
+    def _unknown_literal(self, e: A.Compare) -> bool:
+        """``m op x`` with ``m`` a scale measure and ``x`` a bare name declared nowhere, not
+        even as a literal of another scale: ``x`` can only be a literal of ``m``'s scale, so
+        report it as one that is not, listing that scale (and the closest literal)."""
+        t = self.table
+        for side, other in ((e.left, e.right), (e.right, e.left)):
+            if not (isinstance(side, A.Name) and isinstance(other, A.Name)):
+                continue
+            m = t.measures.get(side.name)
+            if m is None or not isinstance(m.type, A.ScaleType) or other.braced or other.arrow:
+                continue
+            lit = other.name
+            if lit in self.scale_literals or t.kind(lit) is not None:
+                continue
+            self._expr(side)  # the measure's own checks (`->m`)
+            literals = m.type.literals
+            close = difflib.get_close_matches(lit, literals, n=1, cutoff=0.6)
+            shown = ", ".join(literals)
+            self.sink.error(
+                "scale-literal",
+                f"`{clip(lit)}` is not in the scale of `{clip(m.name)}` ({clip(shown, 4 * QUOTE_LIMIT)})",
+                other.span,
+                hint=f"did you mean `{clip(close[0])}`?"
+                if close
+                else f"compare `{clip(m.name)}` with one of its literals: {clip(shown, 4 * QUOTE_LIMIT)}",
+            )
+            return True
+        return False
 
     def _legos_position(self, lit: str) -> int | None:
         """``lit``'s position in LEGOS-SLEEC's one table of literals: its index in its scale,

@@ -14,10 +14,12 @@ from pathlib import Path
 from cosleec.errors import ConfigurationError
 from cosleec.lang import ast as A
 from cosleec.lang.checker import Options, SymbolTable, check_and_read
+from cosleec.lang.deep import deeply
 from cosleec.lang.diagnostics import Diagnostic, DiagnosticSink, Severity, SleecError
 from cosleec.lang.dialect import check_mixed, check_strict, collect, detect
 from cosleec.lang.infer import infer_definitions
 from cosleec.lang.parser import assemble, looks_like_paper, parse_blocks, parse_paper_rules
+from cosleec.lang.transformer import Block
 
 DIALECTS = ("auto", "tk", "legos", "paper")
 """The values of ``analyse(dialect=...)`` (and of the CLI's ``--dialect``)."""
@@ -99,20 +101,48 @@ def analyse(
     if dialect == "tk":
         opts = replace(opts, tk_names=True)
     sink = DiagnosticSink(path)
-    spec: A.Specification | None
-    if dialect == "paper" or (dialect == "auto" and looks_like_paper(text)):
-        rules = parse_paper_rules(text, sink)
-        if rules is None:
-            return CheckResult(
-                path=path, source=text, spec=None, dialect=A.Dialect.PAPER, diagnostics=sink.sorted()
-            )
+    paper = dialect == "paper" or (dialect == "auto" and looks_like_paper(text))
+    parsed: list[A.Rule] | list[Block] | None
+    parsed = parse_paper_rules(text, sink) if paper else parse_blocks(text, sink)
+    if parsed is None:
+        return CheckResult(
+            path=path,
+            source=text,
+            spec=None,
+            dialect=A.Dialect.PAPER if paper else None,
+            diagnostics=sink.sorted(),
+        )
+    # Parsing uses no recursion; the passes after it recurse once per level of an
+    # expression: for a generated one 10,000 deep they run again in a deep thread (deep.py),
+    # without the diagnostics of the attempt that met Python's recursion limit.
+    mark = len(sink.items)
+
+    def passes() -> CheckResult:
+        del sink.items[mark:]
+        return _passes(text, path, dialect, paper, parsed, infer_defs, opts, sink)
+
+    return deeply(passes)
+
+
+def _passes(
+    text: str,
+    path: str,
+    dialect: str,
+    paper: bool,
+    parsed: list[A.Rule] | list[Block],
+    infer_defs: bool,
+    opts: Options,
+    sink: DiagnosticSink,
+) -> CheckResult:
+    """Everything after parsing: assembling, inferring, the dialect facts and checks, the checker."""
+    spec: A.Specification
+    if paper:
+        rules: list[A.Rule] = parsed  # type: ignore[assignment]
         spec = A.Specification((), tuple(rules), dialect=A.Dialect.PAPER, path=path)
         spec = infer_definitions(spec, sink)
         detected = A.Dialect.PAPER
     else:
-        blocks = parse_blocks(text, sink)
-        if blocks is None:
-            return CheckResult(path=path, source=text, spec=None, dialect=None, diagnostics=sink.sorted())
+        blocks: list[Block] = parsed  # type: ignore[assignment]
         spec = assemble(blocks, path, sink)
         if infer_defs and not spec.definitions:
             spec = infer_definitions(spec, sink)

@@ -37,7 +37,20 @@ class PaperToAst(ToAst):
         return A.Response(tuple(c), (), span=c[0].span)
 
     def pitem(self, c: list[Any]) -> A.ResponseItem:
-        not_tok, name, duration = c
+        not_tok, name, duration, otherwise = c
         limit = A.TimeLimit(duration, None, span=duration.span) if duration is not None else None
         occ = A.Occurrence(ident(name), not_tok is not None, limit, False, span=tok_span(name))
-        return A.ResponseItem(occ, span=occ.span)
+        return A.ResponseItem(occ, otherwise, span=occ.span)
+
+    def potherwise(self, c: list[Any]) -> A.Response:
+        r: A.Response = c[0]
+        return r
+
+    def duration(self, c: list[Any]) -> A.Duration:
+        """Units are keywords, and the paper's keywords are case-insensitive: ``MINUTES`` is
+        ``minutes``. A unit the grammar does not know (a NAME) stays as written, for the
+        checker's message."""
+        d = super().duration(c)
+        if c[1].type != "NAME":
+            return A.Duration(d.value, d.unit.lower(), span=d.span)
+        return d

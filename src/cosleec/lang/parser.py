@@ -16,6 +16,7 @@ May import: lark (public API), the other lang modules below the front end.
 from __future__ import annotations
 
 import difflib
+import itertools
 import re
 from dataclasses import dataclass
 from importlib import resources
@@ -118,8 +119,9 @@ def parse_paper_rules(text: str, sink: DiagnosticSink) -> list[A.Rule] | None:
 def _parse(g: Grammar, text: str, sink: DiagnosticSink) -> Any:
     problems: list[SyntaxProblem] = []
     result = g.parse(text, problems)
+    parens = _Parens(g, text) if problems else None
     for p in problems:
-        _report(p, g, text, sink)
+        _report(p, g, text, sink, parens)
     return None if problems else result
 
 
@@ -186,10 +188,23 @@ def assemble(blocks: list[Block], path: str, sink: DiagnosticSink) -> A.Specific
 # ------------------------------------------------------------------ syntax messages
 
 
-def _report(p: SyntaxProblem, g: Grammar, text: str, sink: DiagnosticSink) -> None:
+def _report(
+    p: SyntaxProblem, g: Grammar, text: str, sink: DiagnosticSink, parens: _Parens | None = None
+) -> None:
     tok = p.token
     ttype, value = tok.type, tok.value
     span = A.Span(tok.line, tok.column, tok.line, tok.column + max(len(value), 1))
+    opened = parens.unclosed(p) if parens is not None else None
+    if opened is not None:
+        where = "end of file" if ttype == END else f"`{value}`"
+        sink.error(
+            "unclosed-paren",
+            "`(` is never closed",
+            A.Span(opened.line, opened.column, opened.line, opened.column + 1),
+            related=((f"the parser reached {where} with it still open", span),),
+            hint="add the `)` where the parenthesised expression ends",
+        )
+        return
     expected = sorted({g.display.get(t, t) for t in p.expected if t != BAD_CHAR})
     expected_values = {g.display.get(t, t).strip("`") for t in p.expected}
     special = _special_message(g, tok, p.expected, expected_values, text)
@@ -210,6 +225,54 @@ def _report(p: SyntaxProblem, g: Grammar, text: str, sink: DiagnosticSink) -> No
     elif ttype != END and g.lexicon.reserved(value) and "NAME" in p.expected:
         hint = f"`{value}` is a reserved keyword and cannot be used as a name"
     sink.error("syntax", f"unexpected {shown}; expected {exp}", span, hint=hint)
+
+
+_CONDITION_WORDS = frozenset({"and", "or", "not", "true", "false"})
+"""The keywords that may stand inside parentheses (of a condition)."""
+
+
+class _Parens:
+    """Which `(` is left open where the parser met a problem: asked about a file's problems
+    in order, it reads the file's tokens once in all."""
+
+    def __init__(self, g: Grammar, text: str) -> None:
+        self.g = g
+        self.text = text
+        self.tokens: list[Token] | None = None  # scanned when first needed
+        self.at = 0  # the tokens before this one have been read into `open`
+        self.open: list[Token] = []
+
+    def unclosed(self, p: SyntaxProblem) -> Token | None:
+        """The `(` left open where the parser met ``p``'s token, if one is and nothing closes
+        it before the text goes on with what cannot be inside parentheses (`then`, `unless`,
+        the next rule's `when`, the end): the mistake is that `(`, not where it showed."""
+        g = self.g
+        if not any(g.display.get(t) == "`)`" for t in p.expected):
+            return None
+        if self.tokens is None:
+            self.tokens = g.lexicon.tokens(self.text)
+        tokens = self.tokens
+        end = p.token.type == END
+        while self.at < len(tokens) and (end or tokens[self.at].start_pos < p.token.start_pos):
+            t = tokens[self.at]
+            if t.value == "(":
+                self.open.append(t)
+            elif t.value == ")" and self.open:
+                self.open.pop()
+            self.at += 1
+        if not self.open:
+            return None
+        depth = 0
+        for t in itertools.islice(tokens, self.at, None):
+            if t.value == "(":
+                depth += 1
+            elif t.value == ")":
+                if depth == 0:
+                    return None  # closed after all: some other mistake inside
+                depth -= 1
+            elif g.lexicon.reserved(t.value) and t.value.lower() not in _CONDITION_WORDS:
+                break
+        return self.open[-1]
 
 
 def _special_message(

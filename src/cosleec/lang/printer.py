@@ -10,6 +10,7 @@ docs/reference/sleec-language.md §4.5, and in the LEGOS dialect it writes LEGOS
 from __future__ import annotations
 
 from cosleec.lang import ast as A
+from cosleec.lang.deep import deeply
 from cosleec.lang.parser import CONTEXTUAL_KEYWORDS, KEYWORDS
 
 # precedence levels of the unified grammar (higher binds tighter)
@@ -200,4 +201,5 @@ def format_spec(spec: A.Specification, dialect: A.Dialect | str | None = None) -
     d = A.Dialect(dialect) if dialect is not None else spec.dialect
     if d is A.Dialect.PAPER:
         d = A.Dialect.TK
-    return Printer(spec, d).specification()
+    printer = Printer(spec, d)
+    return deeply(printer.specification)  # recursive: a deep expression runs in a deep thread

@@ -8,12 +8,15 @@ imported only when a transport is created, so this face imports without either.
 
 from cosleec.ros.demo import main as run_demo
 from cosleec.ros.launch import launch, node_command, start, stop
+from cosleec.ros.messages import MessageTypeError, message_class
 from cosleec.ros.run import MiddlewareMissingError, load_module, serve, transport
 
 __all__ = [
+    "MessageTypeError",
     "MiddlewareMissingError",
     "launch",
     "load_module",
+    "message_class",
     "node_command",
     "run_demo",
     "serve",

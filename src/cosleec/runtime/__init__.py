@@ -26,11 +26,14 @@ from cosleec.runtime.manager import Manager, Permission, Reloaded, RuntimeEvent,
 from cosleec.runtime.model import MAX_WINDOW_S, CompiledRule, DeadlineError, Obligation
 from cosleec.runtime.obligations import Tracked
 from cosleec.runtime.ruleset import RuleSet
+from cosleec.runtime.scaffold import STYLES as SCAFFOLD_STYLES
+from cosleec.runtime.scaffold import scaffold
 from cosleec.runtime.tasks import Reporter, Task, hedge
 from cosleec.runtime.values import MeasureSpec, Value
 
 __all__ = [
     "MAX_WINDOW_S",
+    "SCAFFOLD_STYLES",
     "AuditLog",
     "BindingError",
     "Capability",
@@ -67,4 +70,5 @@ __all__ = [
     "VirtualClock",
     "hedge",
     "read_audit",
+    "scaffold",
 ]

@@ -19,8 +19,8 @@ import textwrap
 from collections.abc import Iterable
 from pathlib import Path
 
+from cosleec.lang import Printer
 from cosleec.lang import ast as A
-from cosleec.lang.printer import Printer
 from cosleec.runtime.model import CompiledRule, ItemSpec, ResponseSpec
 from cosleec.runtime.ruleset import RuleSet
 
