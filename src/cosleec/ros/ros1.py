@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import logging
 import threading
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -300,20 +299,13 @@ class Ros1Transport:
 
     # ------------------------------------------------------------------ diagnostics
     def _publish_diagnostics(self, fields: dict[str, Any]) -> None:
-        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+        from diagnostic_msgs.msg import DiagnosticArray
 
         key = "/diagnostics#"
         pub = self._pubs.get(key)
         if pub is None:
             pub = self._pubs[key] = self._rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=10)
-        arr = DiagnosticArray()
-        arr.header.stamp = self._stamp(time.time())
-        st = DiagnosticStatus(
-            level=fields["level"], name=fields["name"], message=fields["message"], hardware_id=""
-        )
-        st.values = [KeyValue(key=k, value=v) for k, v in fields["values"]]
-        arr.status = [st]
-        pub.publish(arr)
+        pub.publish(self._wire.diagnostics(fields))
 
     # ------------------------------------------------------------------ end
     def ok(self) -> bool:

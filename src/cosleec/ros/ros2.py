@@ -17,7 +17,6 @@ import contextlib
 import logging
 import os
 import threading
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -466,21 +465,14 @@ class Ros2Transport:
         return bool(result == TransitionCallbackReturn.SUCCESS)
 
     # ------------------------------------------------------------------ diagnostics
-    def _publish_diagnostics(self, array_fields: dict[str, Any]) -> None:
-        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    def _publish_diagnostics(self, fields: dict[str, Any]) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray
 
         key = "/diagnostics#"
         pub = self._pubs.get(key)
         if pub is None:
             pub = self._pubs[key] = self.node.create_publisher(DiagnosticArray, "/diagnostics", 10)
-        arr = DiagnosticArray()
-        arr.header.stamp = self._stamp(time.time())
-        st = DiagnosticStatus()
-        st.level = bytes([array_fields["level"]])
-        st.name, st.message, st.hardware_id = array_fields["name"], array_fields["message"], ""
-        st.values = [KeyValue(key=k, value=v) for k, v in array_fields["values"]]
-        arr.status = [st]
-        pub.publish(arr)
+        pub.publish(self._wire.diagnostics(fields))
 
     # ------------------------------------------------------------------ end
     def ok(self) -> bool:

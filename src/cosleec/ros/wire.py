@@ -109,6 +109,23 @@ class Wire:
 
         return typed
 
+    def diagnostics(self, fields: dict[str, Any]) -> Any:
+        """A ``diagnostic_msgs/DiagnosticArray`` of one status (:class:`~cosleec.ros.diagnostics.Diagnostics`'s
+        ``{"name", "level", "message", "values"}``), stamped now."""
+        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+        level = fields["level"]  # a `byte` field: bytes on ROS 2, an int on ROS 1
+        status = DiagnosticStatus(
+            level=bytes([level]) if isinstance(DiagnosticStatus.OK, bytes) else level,
+            name=fields["name"],
+            message=fields["message"],
+            hardware_id="",
+            values=[KeyValue(key=k, value=v) for k, v in fields["values"]],
+        )
+        arr = DiagnosticArray(status=[status])
+        arr.header.stamp = self.stamp(time.time())
+        return arr
+
 
 def is_status(topic: str) -> bool:
     """Does ``topic`` carry a node's status (summarised on ``/diagnostics`` too)?"""

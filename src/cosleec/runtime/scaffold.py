@@ -186,16 +186,8 @@ def scaffold(
         "def install(node: Manager | TaskNode) -> None:",
         '    """Bind every task: a cosleec task node calls it (`--module`), or pass a Manager."""',
         "    node.bind(*TASKS)",
-        "",
-        "",
-        'if __name__ == "__main__":  # run as a ROS 2 task node of these rules',
-        "    from cosleec.cli.main import main",
-        "",
-        f"    rules = {_str(rules_path)}",
-        '    sys.exit(main(["ros2", "task", rules, "--module", __file__, *sys.argv[1:]]))',
-        "",
     ]
-    return "\n".join(lines)
+    return "\n".join([*lines, *_entry_point(rules_path)])
 
 
 def _capabilities(chosen: list[CompiledRule], rules_path: str) -> str:
@@ -246,7 +238,13 @@ def _capabilities(chosen: list[CompiledRule], rules_path: str) -> str:
         ]
     if not by_event:
         lines += ["    pass  # these rules oblige no action (only prohibitions)"]
-    lines += [
+    lines += []
+    return "\n".join([*lines, *_entry_point(rules_path)])
+
+
+def _entry_point(rules_path: str) -> list[str]:
+    """The module's end: run as a script, it is a ROS 2 task node of these rules."""
+    return [
         "",
         "",
         'if __name__ == "__main__":  # run as a ROS 2 task node of these rules',
@@ -256,7 +254,6 @@ def _capabilities(chosen: list[CompiledRule], rules_path: str) -> str:
         '    sys.exit(main(["ros2", "task", rules, "--module", __file__, *sys.argv[1:]]))',
         "",
     ]
-    return "\n".join(lines)
 
 
 def _method(r: CompiledRule, clause: int | None, name: str) -> list[str]:
