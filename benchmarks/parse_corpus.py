@@ -19,6 +19,7 @@ over plain Lark + transformer -- over the faster of the two settings.
 from __future__ import annotations
 
 import contextlib
+import gc
 import sys
 import time
 from collections.abc import Callable
@@ -37,10 +38,17 @@ DRIVER_RULE = 2.0
 
 
 def interleaved_best(fns: dict[str, Callable[[], object]], repeats: int) -> dict[str, float]:
-    """Best wall time of each function over ``repeats`` rounds, one run of each per round."""
+    """Best wall time of each function over ``repeats`` rounds, one run of each per round.
+
+    Each run starts after a full collection (not timed): otherwise Python's full (generation
+    2) collections, ~50 ms each over this benchmark's heap, fall wherever the allocation
+    count puts them -- the same place on every round, so best-of-N does not remove them --
+    and move a function's figure by 20% from one commit to the next with no change to its
+    code. The young-generation collections a function causes stay in its time."""
     best = dict.fromkeys(fns, float("inf"))
     for _ in range(repeats):
         for name, fn in fns.items():
+            gc.collect()
             t = time.perf_counter()
             fn()
             best[name] = min(best[name], time.perf_counter() - t)

@@ -10,9 +10,11 @@ library module never prints or calls ``sys.exit``.
 
 from __future__ import annotations
 
+import difflib
+from collections.abc import Iterable
 from typing import Any
 
-__all__ = ["ConfigurationError", "CosleecError", "UserError", "clip", "show"]
+__all__ = ["ConfigurationError", "CosleecError", "UserError", "clip", "closest", "show"]
 
 
 class CosleecError(Exception):
@@ -46,6 +48,22 @@ class ConfigurationError(UserError, ValueError):
 
     Also a ``ValueError``, for callers who catch that.
     """
+
+
+def closest(word: object, choices: Iterable[str], cutoff: float = 0.6) -> str | None:
+    """The one of ``choices`` that ``word`` most likely misspells, or None: a close match
+    (difflib, similarity at least ``cutoff``), else one ignoring case (``userdistresed`` ->
+    ``userDistressed``, ``HIGH`` -> ``high``)."""
+    text = str(word)
+    if len(text) > 200:  # a pasted paragraph misspells nothing
+        return None
+    names = sorted(choices)
+    close = difflib.get_close_matches(text, names, n=1, cutoff=cutoff)
+    if close:
+        return close[0]
+    lowered = {n.lower(): n for n in reversed(names)}
+    close = difflib.get_close_matches(text.lower(), list(lowered), n=1, cutoff=cutoff)
+    return lowered[close[0]] if close else None
 
 
 def clip(text: str, limit: int = 200) -> str:

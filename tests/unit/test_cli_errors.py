@@ -448,3 +448,98 @@ def test_only_a_bug_is_an_internal_error(
     assert main(["check", "good.sleec"]) == rc
     err = capsys.readouterr().err
     assert said in err and "Traceback" not in err
+
+
+# ---------------------------------------------------------------- did you mean, everywhere
+
+
+@pytest.mark.parametrize(
+    ("extra", "said"),
+    [
+        (["--event", "E", "--set", "s=HIGH"], "hint: did you mean 'high'? s is a scale"),
+        (["--event", "E", "--set", "s=3"], "hint: s is a scale: one of its literals, low, mid, high"),
+        (["--event", "E", "--set", "a="], "a is boolean: write true or false, not ''"),
+        (["--event", "E", "--set", "n=inf"], "hint: n is numeric: a finite number"),
+        (["--event", "E", "--set", "zzz=1"], "hint: the rules declare the measures a, n, s"),
+        (["--event", "E", "--set", "F=true"], "hint: F is an event: give it with --event F"),
+        (["--event", "a"], "hint: a is a measure: give its value with --set a=VALUE"),
+    ],
+)
+def test_decide_suggests_in_any_case_and_tells_events_from_measures(
+    d: Path, capsys: pytest.CaptureFixture[str], extra: list[str], said: str
+) -> None:
+    rc, err = run(["decide", "good.sleec", *extra], capsys)
+    assert rc == 2 and said in err, err
+
+
+@pytest.mark.parametrize(
+    ("entry", "message"),
+    [
+        (
+            "measures:\n  a: {topc: /a, type: std_msgs/Bool}\n",
+            "unknown key(s) ['topc'] (did you mean 'topic'?)",
+        ),
+        ("measures:\n  aa: {topic: /a, type: std_msgs/Bool}\n", "no measure 'aa' (did you mean 'a'?)"),
+        (
+            "measures:\n  zzz: {topic: /a, type: std_msgs/Bool}\n",
+            "no measure 'zzz'; the rules declare the measures a, n, s",
+        ),
+        (
+            "measures:\n  E: {topic: /a, type: std_msgs/Bool}\n",
+            "it is an event of the rules: list it under `events`",
+        ),
+        (
+            "events:\n  e: {topic: /a, type: std_msgs/Bool, equals: true}\n",
+            "no event 'e' (did you mean 'E'?)",
+        ),
+        (
+            "events:\n  a: {topic: /a, type: std_msgs/Bool, equals: true}\n",
+            "it is a measure of the rules: list it under `measures`",
+        ),
+        (
+            "events:\n  E: {topic: /a, type: std_msgs/Bool, equals: true, qos: reliabel}\n",
+            "no QoS profile 'reliabel'; profiles: sensor_data, reliable, latched (did you mean 'reliable'?)",
+        ),
+        (
+            "events:\n  E: {topic: /a, type: std_msgs/Bool, equals: true, qos: {reliabilty: reliable}}\n",
+            "unknown qos key(s) ['reliabilty'] (did you mean 'reliability'?)",
+        ),
+        (
+            "events:\n  E: {topic: /a, type: std_msgs/Bool, equals: true, qos: {durability: transient}}\n",
+            "durability 'transient' is not one of volatile, transient_local (did you mean 'transient_local'?)",
+        ),
+        (
+            "events:\n  E: {topic: /a, type: std_msgs/Bool, equals: true, fire: eahc}\n",
+            "not 'eahc' (did you mean 'each'?)",
+        ),
+        (
+            "measures:\n  s: {topic: /a, type: std_msgs/Float64, bands: [[1, low], [2, meid], [hihg]]}\n",
+            "['meid', 'hihg'] not in the scale of s (low, mid, high) (did you mean 'mid' for 'meid', 'high' for 'hihg'?)",
+        ),
+    ],
+)
+def test_a_listener_mapping_suggests_keys_names_and_values(
+    d: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    entry: str,
+    message: str,
+) -> None:
+    fake_std_msgs(monkeypatch)
+    (d / "map.yaml").write_text(entry)
+    rc, err = run(["ros2", "listener", "map.yaml", "--rules", "good.sleec"], capsys)
+    assert rc == 1 and err.startswith("cosleec: map.yaml:2:") and message in err, err
+
+
+def test_check_suggests_a_declared_name_or_literal_in_another_case(
+    d: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (d / "case.sleec").write_text(
+        GOOD.replace("when E then F unless a", "when e and s > HIGH then F unless A")
+    )
+    rc = main(["check", "case.sleec"])
+    out = capsys.readouterr().out
+    assert rc == 1
+    assert out.count("hint: did you mean") == 3, out
+    for name in ("`E`", "`high`", "`a`"):
+        assert f"hint: did you mean {name}?" in out, out

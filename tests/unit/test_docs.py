@@ -1,20 +1,17 @@
 """The documentation site builds (`mkdocs build --strict`: no broken link, no missing page),
-and what its pages show runs: every Python block, and the getting-started commands print
-what the page says they print."""
+and every Python block of its pages runs. Its ```console and ```bash blocks are run and
+compared by ``tests/unit/test_doc_commands.py``."""
 
 from __future__ import annotations
 
 import importlib.util
 import os
 import re
-import shlex
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
-
-from cosleec.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
@@ -55,15 +52,3 @@ def pages() -> list[Path]:
 def test_every_python_block_of_the_docs_runs(block: str, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(ROOT)
     exec(compile(block, "docs", "exec"), {"__name__": "docs"})
-
-
-def test_getting_started_prints_what_it_shows(
-    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
-) -> None:
-    text = (DOCS / "getting-started.md").read_text(encoding="utf-8")
-    bash = re.findall(r"```bash\n(.*?)```", text, re.S)[1]  # the second: check and decide
-    shown = re.findall(r"```text\n(.*?)```", text, re.S)[0]
-    monkeypatch.chdir(ROOT)
-    for line in bash.replace("\\\n", " ").splitlines():
-        assert main(shlex.split(line)[1:]) == 0
-    assert capsys.readouterr().out == shown

@@ -1,11 +1,10 @@
-"""The README's `cosleec conforms` and `cosleec decide` sessions are real: each command is
-run and its output compared with what the README shows. Its `cosleec analyse` sessions are
-abridged: every line they show must be a line of the output, in the same order."""
+"""The README's Python blocks run as written, and its demo excerpt is what the demo prints.
+Its ```console and ```bash blocks (check, decide, conforms, analyse) are run and compared by
+``tests/unit/test_doc_commands.py``."""
 
 from __future__ import annotations
 
 import re
-import shlex
 from pathlib import Path
 
 import pytest
@@ -13,60 +12,6 @@ import pytest
 from cosleec.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[2]
-SESSION = re.compile(r"```console\n(.*?)```", re.S)
-
-
-def sessions(command: str = "conforms") -> list[tuple[list[str], str]]:
-    """(arguments, expected output) of each README ``cosleec COMMAND`` whose output is shown."""
-    out = []
-    for block in SESSION.findall((ROOT / "README.md").read_text(encoding="utf-8")):
-        lines = block.splitlines()
-        for i, line in enumerate(lines):
-            if not line.startswith(f"$ cosleec {command}") or "&&" in line:
-                continue
-            shown = []
-            for later in lines[i + 1 :]:
-                if later.startswith("$ "):
-                    break
-                shown.append(later)
-            out.append((shlex.split(line[2:])[1:], "\n".join(shown)))
-    return out
-
-
-@pytest.mark.parametrize(
-    ("argv", "shown"), sessions(), ids=lambda x: " ".join(x) if isinstance(x, list) else ""
-)
-def test_the_readme_shows_what_the_command_prints(
-    argv: list[str], shown: str, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
-) -> None:
-    monkeypatch.chdir(ROOT)
-    main(argv)
-    assert capsys.readouterr().out.strip() == shown.strip()
-
-
-def test_there_are_readme_sessions_to_check() -> None:
-    assert len(sessions()) >= 2
-
-
-@pytest.mark.parametrize(
-    ("argv", "shown"), sessions("analyse"), ids=lambda x: " ".join(x) if isinstance(x, list) else ""
-)
-def test_the_readme_shows_lines_the_analysis_prints(
-    argv: list[str], shown: str, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
-) -> None:
-    monkeypatch.chdir(ROOT)
-    assert main(argv) == 1  # every README example finds something
-    out = capsys.readouterr().out.splitlines()
-    at = 0
-    for line in shown.splitlines():
-        assert line in out[at:], f"not in the output (after line {at}): {line}"
-        at = out.index(line, at) + 1
-
-
-def test_there_are_readme_analyse_sessions() -> None:
-    assert len(sessions("analyse")) >= 3
-
-
 PYTHON = re.compile(r"```python\n(.*?)```", re.S)
 #: blocks that need a middleware and a running system (ROS): shown, not run here
 NEEDS_ROS = ("rclpy", "cosleec_interfaces", "node.create")

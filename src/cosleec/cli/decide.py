@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import difflib
 import json
 import sys
 from collections.abc import Iterable
 
 from cosleec.cli.common import add_clause_options
+from cosleec.errors import closest
 from cosleec.runtime import ContextError, Manager, MeasureSpec, RuleSet, VirtualClock
+
+CONDITION_WIDTH = 100
+"""The text view shortens a longer condition (``--json`` has it whole): Decision.explain."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -59,9 +62,11 @@ def run(args: argparse.Namespace) -> int:
             print(f"cosleec decide: --set {item!r}: expected NAME=VALUE\n  hint: {hint}", file=sys.stderr)
             return 2
         if spec is None:
+            hint = _hint(name, m.ruleset.measures, "measure")
+            if name in m.ruleset.events and not hint.startswith("did you mean"):
+                hint = f"{name} is an event: give it with --event {name}"
             print(
-                f"cosleec decide: --set {name}: the rules declare no measure {name!r}"
-                f"\n  hint: {_hint(name, m.ruleset.measures, 'measure')}",
+                f"cosleec decide: --set {name}: the rules declare no measure {name!r}\n  hint: {hint}",
                 file=sys.stderr,
             )
             return 2
@@ -71,9 +76,11 @@ def run(args: argparse.Namespace) -> int:
             print(f"cosleec decide: --set {name}: {e}\n  hint: {_kind_hint(spec, text)}", file=sys.stderr)
             return 2
     if args.event not in m.ruleset.events:
+        hint = _hint(args.event, m.ruleset.events, "event")
+        if args.event in m.ruleset.measures and not hint.startswith("did you mean"):
+            hint = f"{args.event} is a measure: give its value with --set {args.event}=VALUE"
         print(
-            f"cosleec decide: --event {args.event}: the rules declare no event {args.event!r}"
-            f"\n  hint: {_hint(args.event, m.ruleset.events, 'event')}",
+            f"cosleec decide: --event {args.event}: the rules declare no event {args.event!r}\n  hint: {hint}",
             file=sys.stderr,
         )
         return 2
@@ -84,8 +91,8 @@ def run(args: argparse.Namespace) -> int:
     if undetermined:
         names = sorted({n for d in undetermined for n in d.missing})
         print(
-            f"cosleec decide: no value for {', '.join(names)} (needed by "
-            f"{', '.join(d.rule for d in undetermined)}); give it with --set",
+            f"cosleec decide: no value for {_some(names)} (needed by "
+            f"{_some([d.rule for d in undetermined])}); give it with --set",
             file=sys.stderr,
         )
         return 2
@@ -98,6 +105,7 @@ def run(args: argparse.Namespace) -> int:
                     "clause": d.clause,
                     "layer": d.layer,
                     "obligations": [o.to_json() for o in d.obligations],
+                    "explanation": d.explanation,  # whole: the text view shortens long conditions
                 }
                 for d in decisions
             ],
@@ -109,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
         if not decisions:
             print(f"{args.event}: no rule applies")
         for d in decisions:
-            print(d.explanation)
+            print(d.explain(width=CONDITION_WIDTH))
         for c in conflicts:
             print(f"conflict: {c['explanation']}")
         for c in cancelled:
@@ -117,16 +125,22 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _some(names: list[str], most: int = 12) -> str:
+    """``a, b, c`` -- at most ``most`` of ``names``, then how many more (a generated rule set
+    may need 10,000 values)."""
+    more = f", ... ({len(names) - most:,} more)" if len(names) > most else ""
+    return ", ".join(names[:most]) + more
+
+
 def _hint(name: str, declared: Iterable[str], what: str) -> str:
     """Did you mean the closest declared name? Else the names declared (or that there are none)."""
     names = sorted(declared)
-    close = difflib.get_close_matches(name, names, n=1) or [n for n in names if n.lower() == name.lower()]
+    close = closest(name, names)
     if close:
-        return f"did you mean {close[0]!r}?"
+        return f"did you mean {close!r}?"
     if not names:
         return f"the rules declare no {what}"
-    shown = ", ".join(names[:12]) + (f", ... ({len(names) - 12} more)" if len(names) > 12 else "")
-    return f"the rules declare the {what}s {shown}"
+    return f"the rules declare the {what}s {_some(names)}"
 
 
 def _kind_hint(spec: MeasureSpec, text: str) -> str:
@@ -135,7 +149,7 @@ def _kind_hint(spec: MeasureSpec, text: str) -> str:
         return f"{spec.name} is boolean: --set {spec.name}=true or --set {spec.name}=false"
     if spec.kind == "numeric":
         return f"{spec.name} is numeric: a finite number, e.g. --set {spec.name}=3 or --set {spec.name}=0.5"
-    close = difflib.get_close_matches(text.strip(), spec.literals, n=1)
-    return (f"did you mean {close[0]!r}? " if close else "") + (
+    close = closest(text.strip(), spec.literals)
+    return (f"did you mean {close!r}? " if close else "") + (
         f"{spec.name} is a scale: one of its literals, {', '.join(spec.literals)}"
     )

@@ -1,22 +1,53 @@
-"""``cosleec fmt``: print a rule file in canonical form, in either dialect."""
+"""``cosleec fmt``: rule files in canonical form, comments and blank lines kept.
+
+Three ways to use it, as with the formatters programmers know: print the formatted file
+(the default), ``--check`` (exit 1 and show a diff when a file is not formatted: for CI and
+pre-commit hooks) and ``--in-place`` (rewrite the files that change, atomically).
+"""
 
 from __future__ import annotations
 
 import argparse
+import difflib
+import os
 import sys
+import tempfile
+from pathlib import Path
 
-from cosleec.lang import Diagnostic, Dialect, Severity, analyse_file, format_spec, legos_misreads
+from cosleec.lang import WIDTH, SleecError, analyse_file, format_source
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Register ``cosleec fmt`` and its options."""
-    p = sub.add_parser("fmt", help="print a rule file in canonical form (converts between dialects)")
-    p.add_argument("file", metavar="FILE", help="the rule file to print")
+    p = sub.add_parser(
+        "fmt",
+        help="format rule files: canonical form, comments kept, long rules one clause per line",
+        description="Print FILE in canonical form, keeping its comments and blank lines; "
+        "rules longer than --width are printed one clause per line. With --check or "
+        "--in-place, any number of files.",
+    )
+    p.add_argument("files", nargs="+", metavar="FILE", help="the rule files")
     p.add_argument(
         "--dialect",
-        choices=["tk", "legos"],
+        choices=["tk", "legos", "paper"],
         default=None,
-        help="dialect to print in (default: the file's own; the paper notation prints as TK)",
+        help="notation to print in (default: each file's own); `paper` is the CO-SLEEC "
+        "paper's WHEN ... THEN ... UNLESS ... IN WHICH CASE ...",
+    )
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument(
+        "--check",
+        action="store_true",
+        help="change nothing; exit 1 and print a diff if any file is not formatted",
+    )
+    mode.add_argument(
+        "-i", "--in-place", action="store_true", help="rewrite the files that are not formatted"
+    )
+    p.add_argument(
+        "--width",
+        type=_width,
+        default=WIDTH,
+        help=f"print a rule one clause per line when it is longer than this (default {WIDTH})",
     )
     p.add_argument(
         "--infer-defs", action="store_true", help="infer declarations for files without a def block"
@@ -24,32 +55,80 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.set_defaults(run=run)
 
 
-def run(args: argparse.Namespace) -> int:
-    """Print the file in canonical form; on errors print the diagnostics to stderr and return 1.
+def _width(text: str) -> int:
+    try:
+        width = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if width < 20:
+        raise argparse.ArgumentTypeError(f"{width} is too narrow: give 20 or more")
+    return width
 
-    Printing in the LEGOS dialect, a name that LEGOS-SLEEC's parser would cut in two
-    (``notStop`` read as ``not Stop``, docs/reference/sleec-language.md §11 item 10) is an error:
-    the file would not mean to LEGOS-SLEEC what it means to cosleec.
-    """
-    result = analyse_file(args.file, infer_defs=args.infer_defs)
+
+def run(args: argparse.Namespace) -> int:
+    """Format each file; 0 when all is well, 1 on a rule error or (``--check``) an unformatted file."""
+    files: list[str] = args.files
+    if len(files) > 1 and not (args.check or args.in_place):
+        print(
+            "cosleec fmt: error: several files need --check or --in-place "
+            "(printing them one after another would make one file of them)",
+            file=sys.stderr,
+        )
+        return 2
+    status = 0
+    for path in files:
+        status = max(status, _one(path, args))
+    return status
+
+
+def _one(path: str, args: argparse.Namespace) -> int:
+    result = analyse_file(path, infer_defs=args.infer_defs)
     if result.spec is None or not result.ok:
         print(result.render(), file=sys.stderr)
         return 1
-    out = Dialect(args.dialect) if args.dialect else result.spec.dialect
-    if out is Dialect.LEGOS:
-        misread = [
-            Diagnostic(
-                severity=Severity.ERROR,
-                code="legos-keyword-prefix",
-                message=message,
-                span=span,
-                path=result.path,
-                hint="rename it: LEGOS-SLEEC would read the printed file differently",
-            )
-            for message, span in legos_misreads(result.spec)
-        ]
-        if misread:
-            print("\n".join(d.render(result.source) for d in misread), file=sys.stderr)
-            return 1
-    sys.stdout.write(format_spec(result.spec, args.dialect))
+    try:
+        text = format_source(result.source, result.spec, args.dialect, args.width)
+    except SleecError as e:
+        print(e.render(), file=sys.stderr)
+        return 1
+    source = result.source
+    if source.startswith("\ufeff"):
+        text = "\ufeff" + text
+    if "\r\n" in source:
+        text = text.replace("\n", "\r\n")
+    if args.check:
+        if text == source:
+            return 0
+        diff = difflib.unified_diff(
+            source.splitlines(keepends=True),
+            text.splitlines(keepends=True),
+            fromfile=path,
+            tofile=f"{path} (formatted)",
+        )
+        sys.stdout.writelines(line if line.endswith("\n") else line + "\n" for line in diff)
+        print(f"{path}: would be reformatted (cosleec fmt --in-place {path})", file=sys.stderr)
+        return 1
+    if args.in_place:
+        if text != source:
+            _replace(Path(path), text)
+            print(f"{path}: reformatted", file=sys.stderr)
+        return 0
+    sys.stdout.write(text)
     return 0
+
+
+def _replace(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` atomically, keeping its permissions: a crash leaves the
+    old file or the new one, never half of one."""
+    mode = path.stat().st_mode & 0o7777
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.chmod(tmp, mode)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

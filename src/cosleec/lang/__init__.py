@@ -22,11 +22,12 @@ from cosleec.lang.ast import Dialect, Specification
 from cosleec.lang.checker import Options, SymbolTable, check
 from cosleec.lang.deep import deeply
 from cosleec.lang.diagnostics import Diagnostic, DiagnosticSink, Severity, SleecError
-from cosleec.lang.dialect import legos_misreads
+from cosleec.lang.dialect import legos_features, legos_misreads
+from cosleec.lang.formatter import format_source
 from cosleec.lang.frontend import DIALECTS, CheckResult, analyse, analyse_file, load, parse, read_source
 from cosleec.lang.hedges import HedgeSemantics, Unknowns, candidates, choose, decisive
 from cosleec.lang.infer import infer_definitions
-from cosleec.lang.printer import Printer, format_spec
+from cosleec.lang.printer import WIDTH, PaperPrinter, Printer, format_spec
 from cosleec.lang.priorities import (
     CANCEL,
     CONFLICT_AWARE,
@@ -42,12 +43,14 @@ __all__ = [
     "CONFLICT_AWARE",
     "DIALECTS",
     "PRIORITY_SEMANTICS",
+    "WIDTH",
     "CheckResult",
     "Diagnostic",
     "DiagnosticSink",
     "Dialect",
     "HedgeSemantics",
     "Options",
+    "PaperPrinter",
     "Printer",
     "Severity",
     "SleecError",
@@ -64,8 +67,10 @@ __all__ = [
     "cycle",
     "decisive",
     "deeply",
+    "format_source",
     "format_spec",
     "infer_definitions",
+    "legos_features",
     "legos_misreads",
     "load",
     "pairs",

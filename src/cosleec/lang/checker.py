@@ -12,6 +12,7 @@ import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+from cosleec.errors import closest
 from cosleec.lang import ast as A
 from cosleec.lang import hedges
 from cosleec.lang.compat import LegosReading, apply, fresh_name, holds, mirrored, ordinal
@@ -668,13 +669,13 @@ class Checker:
                 continue
             self._expr(side)  # the measure's own checks (`->m`)
             literals = m.type.literals
-            close = difflib.get_close_matches(lit, literals, n=1, cutoff=0.6)
+            close = closest(lit, literals)
             shown = ", ".join(literals)
             self.sink.error(
                 "scale-literal",
                 f"`{clip(lit)}` is not in the scale of `{clip(m.name)}` ({clip(shown, 4 * QUOTE_LIMIT)})",
                 other.span,
-                hint=f"did you mean `{clip(close[0])}`?"
+                hint=f"did you mean `{clip(close)}`?"
                 if close
                 else f"compare `{clip(m.name)}` with one of its literals: {clip(shown, 4 * QUOTE_LIMIT)}",
             )
@@ -914,8 +915,8 @@ class Checker:
                 if among == "constants"
                 else [*t.measures, *t.constants]
             )
-            close = difflib.get_close_matches(name, pool, n=1, cutoff=0.75)
-            self._suggestions[key] = f"did you mean `{clip(close[0])}`?" if close else None
+            close = closest(name, pool, cutoff=0.75)
+            self._suggestions[key] = f"did you mean `{clip(close)}`?" if close else None
         return self._suggestions[key]
 
 

@@ -118,6 +118,11 @@ def collect(spec: A.Specification, text: str) -> DialectFacts:
     return DialectFacts(legos, tk, tuple(w.tk_rejects), extensions, tuple(w.legos_rejects), tuple(w.misreads))
 
 
+def legos_features(spec: A.Specification) -> tuple[Feature, ...]:
+    """The constructs of ``spec`` that only LEGOS-SLEEC has, each with where it is."""
+    return collect(spec, "").legos
+
+
 def legos_misreads(spec: A.Specification) -> tuple[Feature, ...]:
     """The names of ``spec`` that LEGOS-SLEEC's parser would cut in two (:data:`LEGOS_PREFIXES`),
     each as a complete message and where the name is: what ``cosleec fmt --dialect legos``

@@ -127,11 +127,45 @@ class Lexicon:
         # before tokens, where Lark tries all in its one order: the same, as long as no
         # ignored terminal starts like a token (`//` and `/*` comments, and no `/` mark).
         self._scan = re.compile(f"((?:{layout})*)({tokens}|\\Z|[\\s\\S])")
+        comments = "|".join(
+            t.pattern.to_regexp() for t in terminals if t.name in ignore and "COMMENT" in t.name
+        )
+        self._comment = re.compile(comments) if comments else None
         self._memo: tuple[dict[str, str], dict[str, str]] = ({}, {})
 
     def reserved(self, word: str) -> bool:
         """Is ``word`` a keyword everywhere (so that it can never be a name unescaped)?"""
         return (word in self._exact or word.lower() in self._folded) and word not in self.contextual
+
+    def comments(self, text: str) -> list[tuple[int, str]]:
+        """The comments of ``text`` as ``(offset, text)``, in order: what the scanner skips as
+        layout and a formatter must keep (the ignored terminals named ``*COMMENT``).
+
+        Scans as :meth:`tokens` does, so a ``//`` inside a block comment is no comment of
+        its own and an unterminated ``/*`` is none at all.
+        """
+        found: list[tuple[int, str]] = []
+        if self._comment is None:
+            return found
+        pos = 0
+        for layout, tok in self._scan.findall(text):
+            if layout:
+                if "/" in layout:  # every comment starts with one; most layout is spaces
+                    for m in self._comment.finditer(layout):
+                        found.append((pos + m.start(), m.group()))
+                pos += len(layout)
+            if not tok:
+                break
+            pos += len(tok)
+        return found
+
+    def without_comments(self, text: str) -> str:
+        """``text`` with each comment replaced by a space."""
+        cut, last = [], 0
+        for offset, comment in self.comments(text):
+            cut += [text[last:offset], " "]
+            last = offset + len(comment)
+        return "".join([*cut, text[last:]])
 
     # ------------------------------------------------------------------ the fast scanner
     def _classify(self, text: str, inside: bool) -> str:

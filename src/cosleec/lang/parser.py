@@ -92,8 +92,15 @@ _PAPER_MARK = re.compile(r"(?i)\bwhen\b")
 
 
 def looks_like_paper(text: str) -> bool:
-    """Is ``text`` in the paper notation (no ``def_start``/``rule_start``, but a ``when``)?"""
-    return _DSL_MARK.search(text) is None and _PAPER_MARK.search(text) is not None
+    """Is ``text`` in the paper notation (no ``def_start``/``rule_start``, but a ``when``)?
+
+    Words in comments do not count: a paper-notation file may keep an old rule block
+    commented out.
+    """
+    mark = _DSL_MARK.search(text)
+    if mark is not None and ("//" in text[: mark.start()] or "/*" in text[: mark.start()]):
+        mark = _DSL_MARK.search(SLEEC.lexicon.without_comments(text))
+    return mark is None and _PAPER_MARK.search(text) is not None
 
 
 def parse_blocks(text: str, sink: DiagnosticSink) -> list[Block] | None:
@@ -207,6 +214,10 @@ def _report(
         return
     expected = sorted({g.display.get(t, t) for t in p.expected if t != BAD_CHAR})
     expected_values = {g.display.get(t, t).strip("`") for t in p.expected}
+    if expected_values >= _UNITS and ttype not in ("NAME", BAD_CHAR):
+        unit_message, unit_hint, limit = _missing_unit(tok, text)
+        sink.error("missing-unit", unit_message, limit or span, hint=unit_hint)
+        return
     special = _special_message(g, tok, p.expected, expected_values, text)
     if special is not None:
         code, message, hint = special
@@ -293,6 +304,13 @@ def _special_message(
                 f"`{value}` is not allowed in a name: identifiers use ASCII letters, digits and `_`",
                 None,
             )
+        if value == "," and g.name == "paper":
+            return (
+                "paper-comma",
+                "`,` has no place in the paper notation",
+                "join responses with `AND`, and write an exception as `UNLESS c IN WHICH CASE B`, "
+                "without a comma",
+            )
         return ("bad-char", f"unexpected character `{value}`", None)
     if value == "or" and "then" in values and "and" in values and "or" not in values:
         return (
@@ -319,4 +337,50 @@ def _special_message(
         )
     if value == "{" and values == {"("}:
         return ("scale-braces", "scale literals are listed in parentheses: `scale(low, medium, high)`", None)
+    if g.name == "paper":
+        return _paper_message(tok, values, text)
+    return None
+
+
+_UNITS = frozenset({"seconds", "minutes", "hours", "days"})
+_WITHIN = re.compile(r"(?i)\b(within)[ \t]+([0-9][0-9. \t+*-]*?)\s*\Z")
+
+
+def _missing_unit(tok: Token, text: str) -> tuple[str, str, A.Span | None]:
+    """`within 5` and no unit (where the parser expects a unit, and meets no name): the
+    message quotes the limit as written and points at it, when it is a plain number."""
+    m = _WITHIN.search(text, 0, len(text) if tok.type == END else tok.start_pos)
+    if m is None or len(m.group(2)) > 20:
+        return (
+            "a time limit needs a unit after its number",
+            "write the unit after the number: `within 5 seconds` (or minutes, hours, days)",
+            None,
+        )
+    written = f"{m.group(1)} {m.group(2)}"
+    unit = "SECONDS" if m.group(1).isupper() else "seconds"
+    line = text.count("\n", 0, m.start()) + 1
+    col = m.start() - (text.rfind("\n", 0, m.start()) + 1) + 1
+    return (
+        f"`{written}` has no time unit",
+        f"write the unit: `{written} {unit}` (or minutes, hours, days)",
+        A.Span(line, col, line, col + m.end(2) - m.start()),
+    )
+
+
+def _paper_message(tok: Token, values: set[str], text: str) -> tuple[str, str, str | None] | None:
+    """The DSL's forms written in the paper notation, which says them otherwise."""
+    value = tok.value
+    if value.lower() == "then" and "in" in values:
+        upper = value.isupper()
+        in_which_case = "IN WHICH CASE" if upper else "in which case"
+        line = text.splitlines()[tok.line - 1] if tok.line <= len(text.splitlines()) else ""
+        col = tok.column - 1
+        fixed = (line[:col] + in_which_case + line[col + len(value) :]).strip()
+        example = f": `{fixed}`" if line[col : col + len(value)] == value and len(fixed) <= 100 else ""
+        return (
+            "paper-unless-then",
+            f"in the paper notation an exception's response follows `{in_which_case}`, not "
+            f"`{value}` (`unless c then B` is the DSL's form)",
+            f"write `{in_which_case}` for `{value}`{example}",
+        )
     return None

@@ -9,9 +9,16 @@ docs/reference/sleec-language.md §4.5, and in the LEGOS dialect it writes LEGOS
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from dataclasses import replace
+
 from cosleec.lang import ast as A
 from cosleec.lang.deep import deeply
-from cosleec.lang.parser import CONTEXTUAL_KEYWORDS, KEYWORDS
+from cosleec.lang.layout import Comment, Key, Layout
+from cosleec.lang.parser import CONTEXTUAL_KEYWORDS, KEYWORDS, PAPER
+
+WIDTH = 100
+"""The line width past which ``fmt`` prints a rule one clause per line."""
 
 # precedence levels of the unified grammar (higher binds tighter)
 _LEVEL = {"and": 1, "or": 1, "not": 2, "cmp": 3, "+": 4, "-": 4, "*": 5}
@@ -20,48 +27,82 @@ _ATOM = 6
 
 class Printer:
     """Prints one specification in one dialect; use :func:`format_spec` for a whole file,
-    the methods for one part of it (a rule, a response, an expression)."""
+    the methods for one part of it (a rule, a response, an expression).
 
-    def __init__(self, spec: A.Specification, dialect: A.Dialect) -> None:
+    With a :class:`~cosleec.lang.layout.Layout` (see :func:`cosleec.lang.formatter.format_source`), the whole file
+    keeps the source's comments and blank lines, and a rule longer than ``width`` (or with
+    comments between its clauses) is printed one clause per line.
+    """
+
+    def __init__(
+        self,
+        spec: A.Specification,
+        dialect: A.Dialect,
+        layout: Layout | None = None,
+        width: int = WIDTH,
+    ) -> None:
         self.legos = dialect is A.Dialect.LEGOS
         self.measures = {m.name for m in spec.measures}
         self.spec = spec
         self.reserved = KEYWORDS  # the words that need SLEEC-TK's `^` escape to be names
+        self.layout = layout if layout is not None else Layout()
+        self.width = width
 
     def name(self, n: str) -> str:
         """A name as the DSL reads it back: a keyword gets SLEEC-TK's ``^`` escape."""
         return "^" + n if n in self.reserved else n
+
+    def kw(self, word: str) -> str:
+        """A keyword of an expression (``and``, ``not``, ``true``...) as this notation writes it."""
+        return word
 
     # ------------------------------------------------------------------ whole file
     def specification(self) -> str:
         """The whole file: def and rule blocks (always), then non-empty concern, purpose,
         relation and priority blocks (the last one pair a line, chains written as pairs)."""
         spec = self.spec
-        out = ["def_start"]
-        for d in spec.definitions:
-            out.append("    " + self.definition(d))
-        out.append("def_end")
-        out.append("")
-        out.append("rule_start")
-        for r in spec.rules:
-            out.append("    " + self.rule(r))
-        out.append("rule_end")
-        for kind, items in (("concern", spec.concerns), ("purpose", spec.purposes)):
-            if items:
-                out += ["", f"{kind}_start"]
-                out += ["    " + f"{self.name(s.name)} {self.situation_body(s)}" for s in items]
-                out.append(f"{kind}_end")
-        if spec.relations:
-            out += ["", "relation_start"]
-            self.reserved = KEYWORDS | CONTEXTUAL_KEYWORDS
-            out += ["    " + self.relation(r) for r in spec.relations]
-            self.reserved = KEYWORDS
-            out.append("relation_end")
-        if spec.priorities:
-            out += ["", "priority_start"]
-            out += [f"    {self.name(p.higher)} > {self.name(p.lower)}" for p in spec.priorities]
-            out.append("priority_end")
-        return "\n".join(out) + "\n"
+        out = _Lines(self)
+        self.block(out, "def", [[self.definition(d)] for d in spec.definitions], always=True)
+        self.block(out, "rule", [self.rule_clauses(r) for r in spec.rules], always=True)
+        for kind, situations in (("concern", spec.concerns), ("purpose", spec.purposes)):
+            bodies = [[f"{self.name(s.name)} {self.situation_body(s)}"] for s in situations]
+            self.block(out, kind, bodies)
+        self.reserved = KEYWORDS | CONTEXTUAL_KEYWORDS
+        self.block(out, "relation", [[self.relation(r)] for r in spec.relations])
+        self.reserved = KEYWORDS
+        pairs = [[f"{self.name(p.higher)} > {self.name(p.lower)}"] for p in spec.priorities]
+        self.block(out, "priority", pairs)
+        out.closing()
+        return out.text()
+
+    def block(self, out: _Lines, kind: str, bodies: list[list[str]], always: bool = False) -> None:
+        """One block, ``kind_start`` to ``kind_end``, each item's text given as its clauses."""
+        if not bodies and not always:
+            return
+        out.blank()
+        out.item(("start", kind), "", [f"{kind}_start"], opens=True)
+        for i, clauses in enumerate(bodies):
+            out.item((kind, i), "    ", clauses)
+        out.item(("end", kind), "", [f"{kind}_end"], closes=True)
+
+    def comment_lines(self, text: str) -> list[str]:
+        """An own-line comment as lines: as written, except that LEGOS-SLEEC, which has no
+        ``/* */`` comments, gets a block comment as ``//`` lines."""
+        if not (self.legos and text.startswith("/*")):
+            return [text]
+        lines = [line.strip() for line in text[2:-2].split("\n")]
+        while lines and not lines[0]:
+            lines.pop(0)
+        while lines and not lines[-1]:
+            lines.pop()
+        return [f"// {line}" if line else "//" for line in lines] or ["//"]
+
+    def trailing_comment(self, text: str) -> str:
+        """A comment at the end of a line: a block comment for LEGOS-SLEEC becomes one ``//``."""
+        if not (self.legos and text.startswith("/*")):
+            return text
+        words = " ".join(line.strip() for line in text[2:-2].split("\n") if line.strip())
+        return f"// {words}" if words else "//"
 
     def definition(self, d: A.Definition) -> str:
         """One def-block line: ``event E``, ``measure m : type``, ``constant N = v`` or ``fluent F``."""
@@ -82,8 +123,13 @@ class Printer:
 
     def rule(self, r: A.Rule) -> str:
         """One rule line, ``R when trigger then response``, the top-level response unbraced."""
-        response = self.response(r.response, braced=False)
-        return f"{self.name(r.name)} when {self.trigger(r.trigger)} then {response}"
+        return " ".join(self.rule_clauses(r))
+
+    def rule_clauses(self, r: A.Rule) -> list[str]:
+        """A rule as its clauses: ``R when trigger then response``, then each ``unless``.
+        Joined by spaces they are the rule on one line; one a line, the wrapped form."""
+        head, clauses = self.response_parts(r.response)
+        return [f"{self.name(r.name)} when {self.trigger(r.trigger)} then {head}", *clauses]
 
     def trigger(self, t: A.Trigger) -> str:
         """A trigger: ``E`` or ``E and condition``."""
@@ -94,18 +140,26 @@ class Printer:
     # ------------------------------------------------------------------ responses
     def response(self, r: A.Response, braced: bool) -> str:
         """A response: its items joined by ``and``, then its ``unless`` clauses; in braces if ``braced``."""
+        text, clauses = self.response_parts(r)
+        text = " ".join([text, *clauses])
+        return f"{{{text}}}" if braced else text
+
+    def response_parts(self, r: A.Response) -> tuple[str, list[str]]:
+        """A response's items joined by ``and``, and its ``unless`` clauses, one text each."""
         parts = []
         n = len(r.items)
         for i, item in enumerate(r.items):
             # inside an item, what follows an inner response would be swallowed by it
             followed = i < n - 1
             parts.append(self.item(item, followed))
-        text = " and ".join(parts)
-        for d in r.defeaters:
-            text += f" unless {self.expr(d.condition)}"
-            if d.response is not None:
-                text += f" then {self.inner(d.response, followed=False)}"
-        return f"{{{text}}}" if braced else text
+        return " and ".join(parts), [self.defeater(d) for d in r.defeaters]
+
+    def defeater(self, d: A.Defeater) -> str:
+        """One hedge clause: ``unless condition [then response]``."""
+        text = f"unless {self.expr(d.condition)}"
+        if d.response is not None:
+            text += f" then {self.inner(d.response, followed=False)}"
+        return text
 
     def item(self, item: A.ResponseItem, followed: bool) -> str:
         """One response item with its ``otherwise``/``else``; ``followed``: more text comes after it."""
@@ -145,7 +199,7 @@ class Printer:
                 return f"{{{self.name(e.name)}}}"
             return self.name(e.name)
         if isinstance(e, A.BoolLit):
-            return "true" if e.value else "false"
+            return self.kw("true" if e.value else "false")
         if isinstance(e, A.IntLit):
             return str(e.value)
         if isinstance(e, A.DecimalLit):
@@ -153,7 +207,7 @@ class Printer:
         if isinstance(e, A.Not):
             if self.legos:
                 return f"(not {self.expr(e.operand, _ATOM)})"
-            text = f"not {self.expr(e.operand, _LEVEL['not'])}"
+            text = f"{self.kw('not')} {self.expr(e.operand, _LEVEL['not'])}"
             return f"({text})" if need > _LEVEL["not"] else text
         if isinstance(e, A.Compare):
             level = _LEVEL["cmp"]
@@ -161,7 +215,7 @@ class Printer:
         else:
             level = _LEVEL[e.op]
             # left-associative: the right operand needs a tighter binding than the operator
-            text = f"{self.expr(e.left, level)} {e.op} {self.expr(e.right, level + 1)}"
+            text = f"{self.expr(e.left, level)} {self.kw(e.op)} {self.expr(e.right, level + 1)}"
         if self.legos or need > level:
             return f"({text})"
         return text
@@ -196,10 +250,210 @@ class Printer:
         return f"when {self.trigger(r.trigger)} then {self.expr(r.condition)} for {self.duration(r.duration)}"
 
 
+class _Lines:
+    """The lines of a printed file, with the layout's comments and blank lines put back.
+
+    Blank lines are asked for, not written: one is written before the next line unless it
+    would open a block's body, close a block, or follow another blank (so a file never has
+    two blank lines in a row, nor one just inside a block).
+    """
+
+    def __init__(self, printer: Printer) -> None:
+        self.printer = printer
+        self.layout = printer.layout
+        self.lines: list[str] = []
+        self.pending = False
+        self.opened = True  # at the start of the file or of a block's body
+
+    def blank(self) -> None:
+        self.pending = True
+
+    def add(self, line: str, *, opens: bool = False, closes: bool = False) -> None:
+        if self.pending and not self.opened and not closes:
+            self.lines.append("")
+        self.pending = False
+        self.lines.append(line)
+        self.opened = opens
+
+    def comment(self, c: Comment, indent: str) -> None:
+        """An own-line comment (a blank line first if the source had one)."""
+        if c.blank_before:
+            self.blank()
+        for text in self.printer.comment_lines(c.text):
+            self.add(indent + text)
+
+    def trail(self, comments: list[Comment]) -> str:
+        """Trailing comments as the end of a line: ``""`` or ``" // ..."``."""
+        return "".join(" " + self.printer.trailing_comment(c.text) for c in comments)
+
+    def item(
+        self, key: Key, indent: str, clauses: list[str], opens: bool = False, closes: bool = False
+    ) -> None:
+        """One anchor: its leading comments, a blank line if it had one, then its text with
+        its trailing comments; a rule one clause per line when it is long or commented inside."""
+        layout = self.layout
+        inside = indent + "    " if closes else indent
+        for c in layout.leading.get(key, ()):
+            self.comment(c, inside)
+        if key in layout.blank:
+            self.blank()
+        one_line = " ".join(clauses)
+        wrap = len(clauses) > 1 and (
+            len(indent) + len(one_line) > self.printer.width
+            or layout.has_inner(key)
+            or len(layout.trailing_clauses(key)) > 1
+        )
+        if not wrap:
+            trailing = sorted(
+                (c for k in range(len(clauses)) for c in layout.trailing.get((key, k), ())),
+                key=lambda c: c.offset,
+            )
+            self.add(indent + one_line + self.trail(trailing), opens=opens, closes=closes)
+            return
+        for k, clause in enumerate(clauses):
+            at = indent if k == 0 else indent + "    "
+            for c in layout.inner.get((key, k), ()):
+                self.comment(c, at)
+            self.add(at + clause + self.trail(layout.trailing.get((key, k), [])))
+
+    def comments(self, comments: Iterable[Comment], indent: str = "") -> None:
+        for c in comments:
+            self.comment(c, indent)
+
+    def closing(self) -> None:
+        """The comments after the last token of the file."""
+        self.comments(self.layout.closing)
+
+    def text(self) -> str:
+        return "\n".join(self.lines) + "\n"
+
+
 def format_spec(spec: A.Specification, dialect: A.Dialect | str | None = None) -> str:
-    """Canonical text of ``spec``; by default in the dialect it was written in (paper -> TK)."""
+    """Canonical text of ``spec`` without comments; by default in the dialect it was written
+    in, the paper notation as TK (what a rule set's digest is computed from). For what
+    ``cosleec fmt`` prints, see :func:`cosleec.lang.formatter.format_source`."""
     d = A.Dialect(dialect) if dialect is not None else spec.dialect
     if d is A.Dialect.PAPER:
         d = A.Dialect.TK
     printer = Printer(spec, d)
     return deeply(printer.specification)  # recursive: a deep expression runs in a deep thread
+
+
+class PaperPrinter(Printer):
+    """Prints rules in the CO-SLEEC paper's notation::
+
+        R1: WHEN CurtainOpenRequest THEN OpenCurtains
+            UNLESS userUndressed IN WHICH CASE (Refuse AND ExplainWhy)
+
+    The notation has no def block (a reader infers the declarations from use), no constants,
+    no ``else``, ``eventually`` or intervals, no ``unless`` inside a response, and no
+    concern, purpose, relation or priority blocks. What it cannot say is collected in
+    :attr:`problems` (a message and where) instead of being printed wrong.
+    """
+
+    def __init__(self, spec: A.Specification, layout: Layout | None = None, width: int = WIDTH) -> None:
+        super().__init__(spec, A.Dialect.TK, layout, width)
+        self.lexicon = PAPER.lexicon  # the paper grammar's own reserved words
+        self.problems: list[tuple[str, A.Span]] = []
+
+    def name(self, n: str) -> str:
+        """A name the paper grammar reads back: a keyword (case-insensitive here) escaped."""
+        return "^" + n if self.lexicon.reserved(n) else n
+
+    def kw(self, word: str) -> str:
+        """Keywords in capitals, as the paper writes them (the notation is case-insensitive)."""
+        return word.upper()
+
+    def cannot(self, what: str, span: A.Span) -> None:
+        """Record one thing the notation cannot say, and where it is."""
+        self.problems.append((f"the paper notation has no {what}", span))
+
+    def specification(self) -> str:
+        """The rules, one after another; what has no place in the notation is refused
+        (see :attr:`problems`), except comments, which are kept at the top."""
+        spec = self.spec
+        out = _Lines(self)
+        for d in spec.definitions:
+            if isinstance(d, A.ConstantDecl):
+                self.cannot(f"constants: `{d.name}` would be read as a measure", d.span)
+            elif isinstance(d, A.FluentDecl):
+                self.cannot(f"fluents: `{d.name}`", d.span)
+        for kind, group in (
+            ("concern", spec.concerns),
+            ("purpose", spec.purposes),
+            ("relation", spec.relations),
+            ("priority", spec.priorities),
+        ):
+            for node in group[:1]:
+                self.cannot(f"{kind} block", node.span)
+        # what has no place in the notation keeps its comments, at the top
+        homeless = self.layout.comments_outside({("rule", i) for i in range(len(spec.rules))})
+        out.comments(replace(c, blank_before=False) for c in homeless)
+        if homeless:
+            out.blank()
+        for i, r in enumerate(spec.rules):
+            out.item(("rule", i), "", self.rule_clauses(r))
+        out.closing()
+        return out.text()
+
+    def rule_clauses(self, r: A.Rule) -> list[str]:
+        """``R1: WHEN trigger THEN response``, then each ``UNLESS`` clause."""
+        head, clauses = self.response_parts(r.response)
+        return [f"{self.name(r.name)}: WHEN {self.trigger(r.trigger)} THEN {head}", *clauses]
+
+    def trigger(self, t: A.Trigger) -> str:
+        """``E`` or ``E AND condition``."""
+        if t.condition is None:
+            return self.name(t.event)
+        return f"{self.name(t.event)} AND {self.expr(t.condition)}"
+
+    def response_parts(self, r: A.Response) -> tuple[str, list[str]]:
+        """The items and the ``UNLESS`` clauses of a rule's response."""
+        return self.items(r, followed=False), [self.defeater(d) for d in r.defeaters]
+
+    def items(self, r: A.Response, followed: bool) -> str:
+        """A response's items: ``A``, or ``(A AND B)``; parenthesised too when text follows."""
+        n = len(r.items)
+        text = " AND ".join(self.item(item, i < n - 1) for i, item in enumerate(r.items))
+        return f"({text})" if n > 1 or followed else text
+
+    def defeater(self, d: A.Defeater) -> str:
+        """``UNLESS condition [IN WHICH CASE response]``."""
+        text = f"UNLESS {self.expr(d.condition)}"
+        if d.response is not None:
+            text += f" IN WHICH CASE {self.inner(d.response, followed=False)}"
+        return text
+
+    def inner(self, r: A.Response, followed: bool) -> str:
+        """An inner response: its items only (the notation has no ``unless`` inside one)."""
+        for d in r.defeaters:
+            self.cannot("`unless` inside a response", d.span)
+        return self.items(r, followed)
+
+    def item(self, item: A.ResponseItem, followed: bool) -> str:
+        """``E [WITHIN d] [OTHERWISE response]``."""
+        text = self.occurrence(item.occurrence)
+        if item.otherwise is not None:
+            text += " OTHERWISE " + self.inner(item.otherwise, followed)
+        if item.alternative is not None:
+            self.cannot("`else`", item.alternative.span)
+        return text
+
+    def occurrence(self, o: A.Occurrence) -> str:
+        """``[NOT] E [WITHIN d]``."""
+        text = ("NOT " if o.negated else "") + self.name(o.event)
+        if o.limit is not None:
+            if o.limit.lo is not None:
+                self.cannot("interval deadlines (`within [lo, hi]`)", o.limit.span)
+            text += f" WITHIN {self.duration(o.limit.hi)}"
+        if o.eventually:
+            self.cannot("`eventually`", o.span)
+        return text
+
+    def comment_lines(self, text: str) -> list[str]:
+        """Comments as written: the paper notation has both kinds."""
+        return [text]
+
+    def trailing_comment(self, text: str) -> str:
+        """Comments as written: the paper notation has both kinds."""
+        return text

@@ -45,7 +45,6 @@ column, and the entry: ``mapping.yaml:7:3: events.Clean: ...``.
 from __future__ import annotations
 
 import contextlib
-import difflib
 import json
 import logging
 import math
@@ -57,7 +56,7 @@ from typing import Any
 
 import yaml
 
-from cosleec.errors import UserError, show
+from cosleec.errors import UserError, closest, show
 from cosleec.nodes.base import MessageError, Node
 from cosleec.nodes.qos import Qos, QosError
 from cosleec.runtime import MeasureSpec
@@ -87,8 +86,33 @@ class MappingError(UserError, ValueError):
 
 def _suggest(word: object, choices: Iterable[str]) -> str:
     """`` (did you mean 'fire'?)`` when ``word`` is a likely misspelling of one of ``choices``, else ``""``."""
-    close = difflib.get_close_matches(str(word), sorted(choices), n=1)
-    return f" (did you mean {close[0]!r}?)" if close else ""
+    close = closest(word, choices)
+    return f" (did you mean {close!r}?)" if close else ""
+
+
+def _near_each(words: list[str], choices: Iterable[str]) -> str:
+    """`` (did you mean 'mid' for 'meid', 'high' for 'hihg'?)``; one word: as :func:`_suggest`."""
+    if len(words) == 1:
+        return _suggest(words[0], choices)
+    pairs = [(w, c) for w in words for c in (closest(w, choices),) if c]
+    return f" (did you mean {', '.join(f'{c!r} for {w!r}' for w, c in pairs)}?)" if pairs else ""
+
+
+def _undeclared(name: str, kind: str, declared: Iterable[str], other: Iterable[str]) -> str:
+    """Why ``name`` is no ``kind`` of the rules, and what to write: the name it likely
+    misspells, the section it belongs in (a measure under ``events``), or the names there are."""
+    near = _suggest(name, declared)
+    if near:
+        return near
+    other_kind = "event" if kind == "measure" else "measure"
+    if name in other:
+        article = "an" if other_kind == "event" else "a"
+        return f"; it is {article} {other_kind} of the rules: list it under `{other_kind}s`"
+    names = sorted(declared)
+    if not names:
+        return f"; the rules declare no {kind}s"
+    shown = ", ".join(names[:12]) + (f", ... ({len(names) - 12} more)" if len(names) > 12 else "")
+    return f"; the rules declare the {kind}s {shown}"
 
 
 def _unknown(given: Iterable[object], allowed: Iterable[str]) -> str:
@@ -498,19 +522,26 @@ def _entry(
         e = replace(e, measure_kind=spec_of.kind, literals=tuple(spec_of.literals))
     if kind == "event":
         if events is not None and name not in events:
-            raise MappingError(f"{where}: the rules declare no event {name!r}{_suggest(name, events)}")
+            raise MappingError(
+                f"{where}: the rules declare no event {name!r}"
+                f"{_undeclared(name, 'event', events, measures or ())}"
+            )
         if comparison is None:
             raise MappingError(f"{where}: an event needs a condition (e.g. `equals: true`)")
     elif measures is not None:
         ms = measures.get(name)
         if ms is None:
-            raise MappingError(f"{where}: the rules declare no measure {name!r}{_suggest(name, measures)}")
+            raise MappingError(
+                f"{where}: the rules declare no measure {name!r}"
+                f"{_undeclared(name, 'measure', measures, events or ())}"
+            )
         if ms.kind == "scale":
             if bands is not None:
                 bad = [lit for _, lit in bands if lit not in ms.literals]
                 if bad:
                     raise MappingError(
                         f"{where}: {bad} not in the scale of {name} ({', '.join(ms.literals)})"
+                        + _near_each(bad, ms.literals)
                     )
         elif bands is not None:
             raise MappingError(f"{where}: `bands` give scale literals, but {name} is {ms.kind}")

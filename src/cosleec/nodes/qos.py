@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from cosleec.errors import UserError
+from cosleec.errors import UserError, closest
 
 RELIABILITIES = ("reliable", "best_effort")
 DURABILITIES = ("volatile", "transient_local")
@@ -48,9 +48,15 @@ class Qos:
 
     def __post_init__(self) -> None:
         if self.reliability not in RELIABILITIES:
-            raise QosError(f"reliability {self.reliability!r} is not one of {', '.join(RELIABILITIES)}")
+            raise QosError(
+                f"reliability {self.reliability!r} is not one of {', '.join(RELIABILITIES)}"
+                f"{_near(self.reliability, RELIABILITIES)}"
+            )
         if self.durability not in DURABILITIES:
-            raise QosError(f"durability {self.durability!r} is not one of {', '.join(DURABILITIES)}")
+            raise QosError(
+                f"durability {self.durability!r} is not one of {', '.join(DURABILITIES)}"
+                f"{_near(self.durability, DURABILITIES)}"
+            )
         if isinstance(self.depth, bool) or not isinstance(self.depth, int) or not 1 <= self.depth <= 100_000:
             raise QosError(f"depth must be a whole number from 1 to 100000, not {self.depth!r}")
 
@@ -74,7 +80,8 @@ class Qos:
             )
         extra = sorted(set(spec) - {"reliability", "durability", "depth"})
         if extra:
-            raise QosError(f"unknown qos key(s) {extra}; allowed: reliability, durability, depth")
+            near = "".join(_near(k, ("reliability", "durability", "depth")) for k in extra)
+            raise QosError(f"unknown qos key(s) {extra}{near}; allowed: reliability, durability, depth")
         return cls(
             reliability=spec.get("reliability", base.reliability),
             durability=spec.get("durability", base.durability),
@@ -84,6 +91,12 @@ class Qos:
     def describe(self) -> str:
         """``best_effort/volatile/depth 5``: how logs and status show it."""
         return f"{self.reliability}/{self.durability}/depth {self.depth}"
+
+
+def _near(word: object, choices: tuple[str, ...] | list[str]) -> str:
+    """`` (did you mean 'reliable'?)`` when ``word`` is close to one of ``choices``, else ``""``."""
+    close = closest(word, choices)
+    return f" (did you mean {close!r}?)" if close else ""
 
 
 # rclpy's qos_profile_sensor_data: best effort, volatile, keep last 5

@@ -57,6 +57,15 @@ class Decision:
             self._explanation.append(self.reason or _because(self))
         return self._explanation[0]
 
+    def explain(self, width: int | None = None) -> str:
+        """:attr:`explanation`, or with ``width`` a version for a screen: each condition
+        longer than ``width`` characters is cut at a word boundary and ends with `…` and the
+        number of terms left out, and at most :data:`SHOWN_VALUES` values are named. The
+        wire and audit forms keep the complete :attr:`explanation`."""
+        if width is None:
+            return self.explanation
+        return self.reason or _because(self, width)
+
     @property
     def undetermined(self) -> bool:
         """True when no clause could be chosen (a measure had no value)."""
@@ -120,8 +129,29 @@ def _fmt(v: Value | None) -> str:
     return str(v)
 
 
-def _because(d: Decision) -> str:
-    """Why this clause: the conditions that decided it, with the values they read."""
+SHOWN_VALUES = 8
+"""How many measure values a shortened explanation (:meth:`Decision.explain`) names per condition."""
+
+_WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_TERM = re.compile(r"[A-Za-z_][A-Za-z0-9_]*|[0-9]+(?:\.[0-9]+)?")
+_CONNECTIVES = frozenset({"and", "or", "not"})
+
+
+def shorten(text: str, width: int) -> str:
+    """``text`` if it has at most ``width`` characters, else its start up to a word boundary
+    followed by `… (N more terms)`: N counts the names and numbers left out."""
+    if len(text) <= width:
+        return text
+    cut = text.rfind(" ", 0, width + 1)
+    if cut <= 0:
+        cut = width
+    left = sum(1 for t in _TERM.findall(text, cut) if t not in _CONNECTIVES)
+    return f"{text[:cut].rstrip()} … ({left:,} more term{'s' if left != 1 else ''})"
+
+
+def _because(d: Decision, width: int | None = None) -> str:
+    """Why this clause: the conditions that decided it, with the values they read (shortened
+    to ``width`` as :meth:`Decision.explain` says)."""
     rule, clause = d.rule, d.clause
     if clause is None:
         held = " and ".join(o.describe() for o in d.obligations)
@@ -134,17 +164,29 @@ def _because(d: Decision) -> str:
         return f"{rule}: {what}"
     chosen = set(decisive([v for _, _, v in hedges], clause, d.semantics, d.unknowns))
 
+    def cond(t: str) -> str:
+        return t if width is None else shorten(t, width)
+
     def reason(t: str, v: bool | None) -> str:
         if t in d.values:  # a boolean measure: "userUndressed was true"
             return f"{t} was {_fmt(v)}"
-        shown = ", ".join(f"{n} = {_fmt(x)}" for n, x in d.values.items() if _mentions(t, n))
-        return f"{t} was {_fmt(v)}" + (f" ({shown})" if shown else "")
+        words = set(_WORD.findall(t))  # one pass over the text, not one per value
+        named = [
+            (n, x) for n, x in d.values.items() if (n in words if _WORD.fullmatch(n) else _mentions(t, n))
+        ]
+        more = ""
+        if width is not None and len(named) > SHOWN_VALUES:
+            more = f", … ({len(named) - SHOWN_VALUES:,} more)"
+            named = named[:SHOWN_VALUES]
+        shown = ", ".join(f"{n} = {_fmt(x)}" for n, x in named) + more
+        return f"{cond(t)} was {_fmt(v)}" + (f" ({shown})" if shown else "")
 
     because = "; ".join(reason(t, v) for c, t, v in hedges if c in chosen)
     head = (
         "default"
         if clause == 0
-        else f"clause {clause}" + (f" (unless {hedges[clause - 1][1]})" if clause <= len(hedges) else "")
+        else f"clause {clause}"
+        + (f" (unless {cond(hedges[clause - 1][1])})" if clause <= len(hedges) else "")
     )
     return f"{rule}: {what} [{head}], because {because}"
 

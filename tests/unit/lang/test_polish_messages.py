@@ -41,7 +41,7 @@ def test_paper_units_are_case_insensitive_and_otherwise_is_read(
     assert rc == 0
     assert "p.txt: ok (paper, 1 rules, 3 events, 0 measures)" in out
     path = tmp_path / "p.txt"
-    assert main(["fmt", str(path)]) == 0
+    assert main(["fmt", "--dialect", "tk", str(path)]) == 0
     assert (
         "R1 when CurtainOpenRequest then OpenCurtains within 1 minutes "
         "otherwise CallSupport within 10 seconds\n" in capsys.readouterr().out
@@ -223,4 +223,77 @@ def test_did_you_mean_for_events_and_measures(tmp_path: Path, capsys: pytest.Cap
         "                                                        ^~~~~~~~~~~~~\n"
         "    hint: did you mean `CurtainsOpened`?\n"
         "r.sleec: 3 errors\n"
+    )
+
+
+# ---------------------------------------------------------------- 5. the DSL's forms in the paper notation
+
+
+def test_paper_unless_then_says_in_which_case(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`UNLESS c THEN B` is the DSL's form; the paper writes `IN WHICH CASE`, in the case used."""
+    text = "WHEN CurtainOpenRequest THEN OpenCurtains\nUNLESS UserUndressed THEN (Refuse AND ExplainWhy)\n"
+    rc, err = check(tmp_path, capsys, text, "p.txt")
+    assert rc == 1
+    assert err == (
+        "p.txt:2:22: error: in the paper notation an exception's response follows `IN WHICH CASE`, "
+        "not `THEN` (`unless c then B` is the DSL's form)\n"
+        "    UNLESS UserUndressed THEN (Refuse AND ExplainWhy)\n"
+        "                         ^~~~\n"
+        "    hint: write `IN WHICH CASE` for `THEN`: `UNLESS UserUndressed IN WHICH CASE (Refuse AND ExplainWhy)`\n"
+        "p.txt: 1 error\n"
+    )
+    rc, err = check(tmp_path, capsys, text.lower().replace("unless userundressed", "unless a and b"), "p.txt")
+    assert rc == 1
+    assert err.startswith(
+        "p.txt:2:16: error: in the paper notation an exception's response follows `in which case`"
+    )
+    assert (
+        "    hint: write `in which case` for `then`: `unless a and b in which case (refuse and explainwhy)`\n"
+        in err
+    )
+
+
+@pytest.mark.parametrize(
+    ("text", "where", "written"),
+    [
+        ("WHEN A THEN B WITHIN 5\n", "1:15", "WITHIN 5"),
+        ("WHEN A THEN B WITHIN 5 AND C\n", "1:15", "WITHIN 5"),
+        ("WHEN A THEN B\nUNLESS c IN WHICH CASE (C within 2 * 3)\n", "2:27", "within 2 * 3"),
+        ("WHEN A THEN B within 2 OTHERWISE C\n", "1:15", "within 2"),
+    ],
+)
+def test_a_time_limit_without_unit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, where: str, written: str
+) -> None:
+    rc, err = check(tmp_path, capsys, text, "p.txt")
+    assert rc == 1
+    head, _, caret, hint, *_ = err.splitlines()
+    assert head == f"p.txt:{where}: error: `{written}` has no time unit"
+    assert caret.strip() == "^" + "~" * (len(written) - 1)  # under the limit, not what follows it
+    unit = "SECONDS" if written.isupper() else "seconds"
+    assert hint == f"    hint: write the unit: `{written} {unit}` (or minutes, hours, days)"
+
+
+def test_a_time_limit_without_unit_in_the_dsl(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    rc, err = check(tmp_path, capsys, DSL.replace("within 1 MINUTES", "within 1"), "r.sleec")
+    assert rc == 1
+    assert err == (
+        "r.sleec:7:35: error: `within 1` has no time unit\n"
+        "      R when A and ({m} > low) then B within 1\n"
+        "                                      ^~~~~~~~\n"
+        "    hint: write the unit: `within 1 seconds` (or minutes, hours, days)\n"
+        "r.sleec: 1 error\n"
+    )
+
+
+def test_a_comma_in_the_paper_notation(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    rc, err = check(tmp_path, capsys, "WHEN A THEN B\nUNLESS c, IN WHICH CASE C\n", "p.txt")
+    assert rc == 1
+    assert err == (
+        "p.txt:2:9: error: `,` has no place in the paper notation\n"
+        "    UNLESS c, IN WHICH CASE C\n"
+        "            ^\n"
+        "    hint: join responses with `AND`, and write an exception as `UNLESS c IN WHICH CASE B`, "
+        "without a comma\n"
+        "p.txt: 1 error\n"
     )

@@ -10,6 +10,7 @@ import pytest
 from cosleec.cli.main import main
 from cosleec.demo.assistive_care.scenario import EXPECTED, STEPS, outcomes
 from cosleec.demo.runner import rules_path, run
+from cosleec.runtime.decision import shorten
 
 from .test_manager import FIREFIGHTER
 
@@ -63,6 +64,8 @@ def test_decide_json_shape(capsys: pytest.CaptureFixture[str]) -> None:
                         "otherwise": None,
                     },
                 ],
+                "explanation": "R1: Refuse and ExplainWhy [clause 1 (unless userUndressed)], because "
+                "userUndressed was true; userDistressed >= high was false (userDistressed = low)",
             }
         ],
         "conflicts": [],
@@ -143,6 +146,53 @@ def test_decide_semantics_and_errors(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert main(["decide", str(rules), "--event", "CameraStart", "--set", "personNearby=maybe"]) == 2
     assert main(["decide", str(rules), "--event", "Nope"]) == 2
     assert main(["decide", str(rules), "--event", "CameraStart", "--set", "x=1"]) == 2
+
+
+HUGE = 10_000
+
+
+def test_decide_text_shortens_a_huge_condition_and_json_keeps_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A generated rule whose condition has 10,000 terms: one short line of text (the
+    condition cut at 100 characters, the count of terms left out, eight values named), and
+    JSON with the whole explanation. The values are found in one pass over the condition."""
+    measures = "\n".join(f"  measure m{i} : boolean" for i in range(HUGE))
+    condition = " or ".join(f"m{i}" for i in range(HUGE))
+    rules = tmp_path / "huge.sleec"
+    rules.write_text(
+        f"def_start\n  event A\n  event B\n  event C\n{measures}\ndef_end\n"
+        f"rule_start\n  R1 when A then B unless {condition} then C\nrule_end\n"
+    )
+    args = ["decide", str(rules), "--event", "A", "--set", "m5=true"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    shown = (
+        "m0 or m1 or m2 or m3 or m4 or m5 or m6 or m7 or m8 or m9 or m10 or m11 or m12 or m13 or m14 or m15"
+    )
+    values = ", ".join(f"m{i} = unknown" for i in ("0", "1", "10", "100", "1000", "1001", "1002", "1003"))
+    assert out == (
+        f"R1: C [clause 1 (unless {shown} … (9,984 more terms))], because {shown} … (9,984 more terms) "
+        f"was true ({values}, … (9,992 more))\n"
+    )
+    assert main([*args, "--json"]) == 0
+    (d,) = json.loads(capsys.readouterr().out)["decisions"]
+    assert d["explanation"].startswith(
+        f"R1: C [clause 1 (unless {condition})], because {condition} was true ("
+    )
+    assert d["explanation"].count(" = unknown") == HUGE - 1
+    assert main(args[:-2]) == 2  # no values: the names it needs, the first dozen
+    needed = ", ".join(f"m{i}" for i in ("0", "1", "10", "100", *(str(1000 + k) for k in range(8))))
+    assert capsys.readouterr().err == (
+        f"cosleec decide: no value for {needed}, ... (9,988 more) (needed by R1); give it with --set\n"
+    )
+
+
+def test_shorten_cuts_at_a_word_and_counts_the_terms_left_out() -> None:
+    assert shorten("a and b", 7) == "a and b"
+    assert shorten("speed + 2 > limit and not {x}", 10) == "speed + 2 … (2 more terms)"
+    assert shorten("alpha or beta", 3) == "alp … (2 more terms)"  # no space to cut at
+    assert shorten("a or bb", 5) == "a or … (1 more term)"
 
 
 def test_demo_scenario_exercises_every_clause_as_expected(tmp_path: Path) -> None:
