@@ -119,7 +119,9 @@ def _one(path: str, args: argparse.Namespace) -> int:
 
 def _replace(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` atomically, keeping its permissions: a crash leaves the
-    old file or the new one, never half of one."""
+    old file or the new one, never half of one. A symbolic link stays one: its target is
+    rewritten."""
+    path = path.resolve()
     mode = path.stat().st_mode & 0o7777
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:

@@ -342,7 +342,7 @@ def format_spec(spec: A.Specification, dialect: A.Dialect | str | None = None) -
 class PaperPrinter(Printer):
     """Prints rules in the CO-SLEEC paper's notation::
 
-        R1: WHEN CurtainOpenRequest THEN OpenCurtains
+        WHEN CurtainOpenRequest THEN OpenCurtains
             UNLESS userUndressed IN WHICH CASE (Refuse AND ExplainWhy)
 
     The notation has no def block (a reader infers the declarations from use), no constants,
@@ -354,6 +354,7 @@ class PaperPrinter(Printer):
     def __init__(self, spec: A.Specification, layout: Layout | None = None, width: int = WIDTH) -> None:
         super().__init__(spec, A.Dialect.TK, layout, width)
         self.lexicon = PAPER.lexicon  # the paper grammar's own reserved words
+        self.position = 0  # of the rule being printed (1-based): unnamed rules are R1, R2, ...
         self.problems: list[tuple[str, A.Span]] = []
 
     def name(self, n: str) -> str:
@@ -392,6 +393,7 @@ class PaperPrinter(Printer):
         if homeless:
             out.blank()
         for i, r in enumerate(spec.rules):
+            self.position = i + 1
             out.item(("rule", i), "", self.rule_clauses(r))
         out.closing()
         return out.text()
@@ -399,7 +401,9 @@ class PaperPrinter(Printer):
     def rule_clauses(self, r: A.Rule) -> list[str]:
         """``R1: WHEN trigger THEN response``, then each ``UNLESS`` clause."""
         head, clauses = self.response_parts(r.response)
-        return [f"{self.name(r.name)}: WHEN {self.trigger(r.trigger)} THEN {head}", *clauses]
+        # as the paper writes rules: unnamed, when the name is the one position gives
+        name = "" if r.name == f"R{self.position}" else f"{self.name(r.name)}: "
+        return [f"{name}WHEN {self.trigger(r.trigger)} THEN {head}", *clauses]
 
     def trigger(self, t: A.Trigger) -> str:
         """``E`` or ``E AND condition``."""

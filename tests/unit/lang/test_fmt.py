@@ -220,7 +220,7 @@ def test_the_papers_rule_prints_as_the_paper_writes_it() -> None:
     out = fmt(CURTAINS, "paper")
     assert out == (
         "// the paper's running example\n"
-        "R1: WHEN CurtainOpenRequest THEN OpenCurtains\n"
+        "WHEN CurtainOpenRequest THEN OpenCurtains\n"
         "    UNLESS userUndressed IN WHICH CASE (Refuse AND ExplainWhy)\n"
         "    UNLESS userDistressed IN WHICH CASE (WarnUser AND OpenCurtains)\n"
     )
@@ -445,5 +445,26 @@ def test_a_commented_out_rule_block_does_not_make_a_paper_file_a_dsl_file() -> N
     assert result.ok and result.spec is not None and result.spec.dialect is A.Dialect.PAPER
     assert (
         fmt(text)
-        == "// old version:\n// rule_start\n//   R1 when A then B\n// rule_end\nR1: WHEN A THEN B\n/* def_start */\n"
+        == "// old version:\n// rule_start\n//   R1 when A then B\n// rule_end\nWHEN A THEN B\n/* def_start */\n"
     )
+
+
+def test_in_place_through_a_symbolic_link_rewrites_its_target(tmp_path: Path) -> None:
+    target = _file(tmp_path, UGLY, "real.sleec")
+    link = tmp_path / "link.sleec"
+    link.symlink_to(target)
+    assert main(["fmt", "-i", str(link)]) == 0
+    assert link.is_symlink() and target.read_text() == PRETTY
+
+
+def test_every_example_that_checks_is_formatted(capsys: pytest.CaptureFixture[str]) -> None:
+    """Our own rule files model what `cosleec fmt` prints (as `ruff format --check` would);
+    the paper-notation examples (``.txt``) stay as the paper prints them, unindented."""
+    root = Path(__file__).resolve().parents[3]
+    files = [
+        str(p)
+        for p in sorted([*root.glob("examples/**/*.sleec"), *root.glob("src/**/*.sleec")])
+        if analyse(p.read_text(encoding="utf-8"), str(p)).ok
+    ]
+    assert len(files) >= 10
+    assert main(["fmt", "--check", *files]) == 0, capsys.readouterr().out
