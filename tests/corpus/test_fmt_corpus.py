@@ -53,5 +53,6 @@ def test_every_clean_corpus_file_formats_idempotently_without_changing_its_meani
             assert _comments(once, dialect) == _comments(result.source, spec.dialect), path
         assert format_source(once, back.spec, dialect) == once, f"{path}: not idempotent"
         outcomes["formatted"] += 1
-    # 152 files check clean; SLEEC-TK cannot write 30 of them, the paper notation 80 or so
-    assert outcomes["formatted"] >= {None: 152, "legos": 152, "tk": 122, "paper": 70}[target], outcomes
+    # 152 files check clean; SLEEC-TK cannot write 30 of them, LEGOS-SLEEC 4 (names its
+    # textX lookup finds twice), the paper notation 80 or so
+    assert outcomes["formatted"] >= {None: 152, "legos": 148, "tk": 122, "paper": 70}[target], outcomes

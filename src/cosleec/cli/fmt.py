@@ -8,12 +8,15 @@ pre-commit hooks) and ``--in-place`` (rewrite the files that change, atomically)
 from __future__ import annotations
 
 import argparse
+import contextlib
 import difflib
 import os
+import re
 import sys
 import tempfile
 from pathlib import Path
 
+from cosleec.errors import UserError
 from cosleec.lang import WIDTH, SleecError, analyse_file, format_source
 
 
@@ -83,7 +86,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _one(path: str, args: argparse.Namespace) -> int:
     result = analyse_file(path, infer_defs=args.infer_defs)
-    if result.spec is None or not result.ok:
+    # a file mixing the dialects is what `--dialect` is for: its conversion is checked below
+    mixed = args.dialect in ("tk", "legos") and all(d.code == "mixed-dialect" for d in result.errors)
+    if result.spec is None or not (result.ok or mixed):
         print(result.render(), file=sys.stderr)
         return 1
     try:
@@ -99,13 +104,9 @@ def _one(path: str, args: argparse.Namespace) -> int:
     if args.check:
         if text == source:
             return 0
-        diff = difflib.unified_diff(
-            source.splitlines(keepends=True),
-            text.splitlines(keepends=True),
-            fromfile=path,
-            tofile=f"{path} (formatted)",
-        )
-        sys.stdout.writelines(line if line.endswith("\n") else line + "\n" for line in diff)
+        diff = difflib.unified_diff(_lines(source), _lines(text), fromfile=path, tofile=f"{path} (formatted)")
+        for line in diff:  # as diff(1) writes it, so that patch(1) applies it
+            sys.stdout.write(line if line.endswith("\n") else line + "\n\\ No newline at end of file\n")
         print(f"{path}: would be reformatted (cosleec fmt --in-place {path})", file=sys.stderr)
         return 1
     if args.in_place:
@@ -117,12 +118,20 @@ def _one(path: str, args: argparse.Namespace) -> int:
     return 0
 
 
+def _lines(text: str) -> list[str]:
+    """Lines as SLEEC and diff(1) see them: ended by "\\n" only (not by U+2028, form feeds...)."""
+    return re.findall(r"[^\n]*\n|[^\n]+$", text)
+
+
 def _replace(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` atomically, keeping its permissions: a crash leaves the
     old file or the new one, never half of one. A symbolic link stays one: its target is
     rewritten."""
     path = path.resolve()
-    mode = path.stat().st_mode & 0o7777
+    if not os.access(path, os.W_OK):
+        raise UserError(f"{path}: the file is read-only", hint="make it writable, or print to stdout")
+    info = path.stat()
+    mode = info.st_mode & 0o7777
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
@@ -130,6 +139,9 @@ def _replace(path: Path, text: str) -> None:
             f.flush()
             os.fsync(f.fileno())
         os.chmod(tmp, mode)
+        if (info.st_uid, info.st_gid) != (os.getuid(), os.getgid()):
+            with contextlib.suppress(PermissionError):  # kept when allowed (root), as editors do
+                os.chown(tmp, info.st_uid, info.st_gid)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -35,6 +35,7 @@ Key = tuple[str, int | str]
 ``("start", "rule")`` / ``("end", "rule")`` (a block's start and end words)."""
 
 ITEM_KINDS = ("def", "rule", "concern", "purpose", "relation", "priority")
+_PREFIXES = frozenset({"EVENT", "MEASURE", "CONSTANT", "FLUENT", "WHEN"})  # keywords before a name
 
 
 def items(spec: A.Specification) -> Iterator[tuple[Key, object]]:
@@ -83,6 +84,10 @@ class Layout:
             found += [c for (k, _), cs in table.items() if k not in keys for c in cs]
         return sorted(found, key=lambda c: c.offset)
 
+    def has_comments(self, key: Key) -> bool:
+        """Whether any comment leads or trails ``key``."""
+        return key in self.leading or any(k == key for (k, _) in self.trailing)
+
     def trailing_clauses(self, key: Key) -> set[int]:
         """The clauses of ``key`` that have a trailing comment."""
         return {clause for (k, clause) in self.trailing if k == key}
@@ -111,7 +116,14 @@ class _Reader:
             if key[0] not in written:
                 continue
             span: A.Span = node.span  # type: ignore[attr-defined]
-            anchors.append((self.offset(span.line, span.col), order, key))
+            if isinstance(node, A.Priority) and node.lower_span.line:
+                span = node.lower_span  # in a chain `A > B > C`, B ends one pair and starts the next
+            at = self.offset(span.line, span.col)
+            if isinstance(node, A.Rule) and spec.dialect is A.Dialect.PAPER:
+                k = bisect.bisect_left(self.token_offsets, at)
+                if k > 0 and self.tokens[k - 1].type == "WHEN":
+                    at = self.tokens[k - 1].start_pos  # an unnamed paper rule starts at its WHEN
+            anchors.append((at, order, key))
         kinds = {b.kind for b in spec.blocks}
         for t in self.tokens:
             word = t.value.lower()
@@ -122,6 +134,7 @@ class _Reader:
         anchors.sort()
         self.anchors = anchors
         self.anchor_offsets = [a[0] for a in anchors]
+        self.anchor_at = {a[0]: a[2] for a in reversed(anchors)}
         self.clauses: dict[Key, list[int]] = {}
         for key, node in items(spec):
             if isinstance(node, A.Rule):
@@ -164,9 +177,16 @@ class _Reader:
             return self.anchors[i][2]
         return self.anchors[max(i - 1, 0)][2]
 
-    def owner_of_prev(self, offset: int) -> Key:
-        """The anchor a token at ``offset`` belongs to, when a comment follows it."""
-        i = bisect.bisect_right(self.anchor_offsets, offset)
+    def owner_of_prev(self, k: int) -> Key:
+        """The anchor the ``k``-th token belongs to, when a comment follows it: the last anchor
+        at or before it -- or, for the keyword that starts a declaration (``event /* c */ A``),
+        the anchor it starts."""
+        t = self.tokens[k]
+        if t.type in _PREFIXES and k + 1 < len(self.tokens):
+            after = self.tokens[k + 1]
+            if after.line == t.line and after.start_pos in self.anchor_at:
+                return self.anchor_at[after.start_pos]
+        i = bisect.bisect_right(self.anchor_offsets, t.start_pos)
         return self.anchors[max(i - 1, 0)][2]
 
     def clause(self, key: Key, offset: int) -> int:
@@ -185,7 +205,7 @@ class _Reader:
             nxt = self.tokens[i] if i < len(self.tokens) else None
             line = self.line(offset)
             if prev is not None and prev.line == line:
-                key = self.owner_of_prev(prev.start_pos)
+                key = self.owner_of_prev(i - 1)
                 at = (key, self.clause(key, prev.start_pos))
                 out.trailing.setdefault(at, []).append(self.comment(offset, text, own_line=False))
                 continue
@@ -194,7 +214,7 @@ class _Reader:
                 out.closing.append(comment)
                 continue
             key = self.owner_of_next(nxt.start_pos)
-            inside = prev is not None and self.owner_of_prev(prev.start_pos) == key
+            inside = prev is not None and self.owner_of_prev(i - 1) == key
             clause = self.clause(key, nxt.start_pos) if inside else 0
             if clause:
                 out.inner.setdefault((key, clause), []).append(comment)

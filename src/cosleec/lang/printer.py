@@ -62,6 +62,9 @@ class Printer:
         relation and priority blocks (the last one pair a line, chains written as pairs)."""
         spec = self.spec
         out = _Lines(self)
+        if not any(b.kind == "def" for b in spec.blocks):  # declarations inferred: printed first,
+            first = ("start", "rule") if ("start", "rule") in self.layout.leading else ("rule", 0)
+            out.comments(self.layout.leading.pop(first, []))  # under the file's header comments
         self.block(out, "def", [[self.definition(d)] for d in spec.definitions], always=True)
         self.block(out, "rule", [self.rule_clauses(r) for r in spec.rules], always=True)
         for kind, situations in (("concern", spec.concerns), ("purpose", spec.purposes)):
@@ -77,7 +80,8 @@ class Printer:
 
     def block(self, out: _Lines, kind: str, bodies: list[list[str]], always: bool = False) -> None:
         """One block, ``kind_start`` to ``kind_end``, each item's text given as its clauses."""
-        if not bodies and not always:
+        keep = self.layout.has_comments(("start", kind)) or self.layout.has_comments(("end", kind))
+        if not bodies and not always and not keep:  # an empty block goes, unless commented
             return
         out.blank()
         out.item(("start", kind), "", [f"{kind}_start"], opens=True)
@@ -303,18 +307,42 @@ class _Lines:
             or layout.has_inner(key)
             or len(layout.trailing_clauses(key)) > 1
         )
+        # after the item, what follows it is printed at this indentation
+        after = indent + "    " if opens else "" if closes else indent
         if not wrap:
             trailing = sorted(
                 (c for k in range(len(clauses)) for c in layout.trailing.get((key, k), ())),
                 key=lambda c: c.offset,
             )
-            self.add(indent + one_line + self.trail(trailing), opens=opens, closes=closes)
+            self.line(indent + one_line, trailing, after, opens=opens, closes=closes)
             return
         for k, clause in enumerate(clauses):
             at = indent if k == 0 else indent + "    "
             for c in layout.inner.get((key, k), ()):
                 self.comment(c, at)
-            self.add(at + clause + self.trail(layout.trailing.get((key, k), [])))
+            last = k == len(clauses) - 1
+            self.line(at + clause, layout.trailing.get((key, k), []), after if last else indent + "    ")
+
+    def line(
+        self, text: str, trailing: list[Comment], after: str, opens: bool = False, closes: bool = False
+    ) -> None:
+        """A line of code with its trailing comments. A comment may follow another on the line
+        only after a one-line block comment (after a ``//`` it would be part of it, after a
+        multi-line one it would share its last line with code); the others go on lines of
+        their own, after it, at the indentation of what follows (``after``)."""
+        on_line: list[Comment] = []
+        for c in trailing:
+            if on_line:
+                printed = self.printer.trailing_comment(on_line[-1].text)  # LEGOS: `/* */` is `//`
+                if not printed.startswith("/*") or "\n" in printed:
+                    break
+            on_line.append(c)
+        self.add(text + self.trail(on_line), opens=opens, closes=closes)
+        spilled = trailing[len(on_line) :]
+        if spilled and closes:
+            self.blank()  # they lead what comes next: the next block, or the file's end
+        for c in spilled:
+            self.comment(replace(c, blank_before=False), after)
 
     def comments(self, comments: Iterable[Comment], indent: str = "") -> None:
         for c in comments:
@@ -453,6 +481,11 @@ class PaperPrinter(Printer):
         if o.eventually:
             self.cannot("`eventually`", o.span)
         return text
+
+    def duration(self, d: A.Duration) -> str:
+        """``30 SECONDS``: units are keywords of the notation, in capitals as the others."""
+        unit = d.unit.upper() if d.unit in A.TIME_UNITS else self.name(d.unit)
+        return f"{self.expr(d.value)} {unit}"
 
     def comment_lines(self, text: str) -> list[str]:
         """Comments as written: the paper notation has both kinds."""

@@ -7,7 +7,11 @@ from __future__ import annotations
 import os
 import random
 import re
+import shutil
 import stat
+import subprocess
+import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -301,7 +305,8 @@ def _decorate(text: str, rng: random.Random, legos: bool) -> tuple[str, list[str
         end = tokens[i - 1].start_pos + len(tokens[i - 1].value)
         out.append(text[last:end])
         last = end
-        kind = rng.choice(["line", "own", "block", "blank"] if not legos else ["line", "own", "blank"])
+        kinds = ["line", "own", "blank"] if legos else ["line", "own", "block", "multi", "blank"]
+        kind = rng.choice(kinds)
         c = f"c{n}."
         if kind == "line":
             out.append(f" // {c}\n")
@@ -312,6 +317,9 @@ def _decorate(text: str, rng: random.Random, legos: bool) -> tuple[str, list[str
         elif kind == "block":
             out.append(f" /* {c} */ ")
             comments.append(f"/* {c} */")
+        elif kind == "multi":
+            out.append(f" /* {c}\n more */ ")
+            comments.append(f"/* {c}\n more */")
         else:
             out.append("\n\n")
     out.append(text[last:])
@@ -336,8 +344,14 @@ def test_fmt_keeps_meaning_and_comments_and_is_idempotent(
         once = format_source(source, result.spec, dialect, width)
     again = analyse(once, dialect=str(dialect))
     assert again.spec == spec, once
-    for c in comments:  # each exactly once (LEGOS-SLEEC gets a `/* c */` as `// c`)
-        assert once.count(f" {c[3:-3] if c.startswith('/*') else c[3:]}") == 1, (c, source, once)
+    # each comment is still a comment of its own (LEGOS-SLEEC gets `/* c */` as `// c`)
+    kept = [text for _, text in SLEEC.lexicon.comments(once)]
+    if dialect is A.Dialect.TK:
+        assert sorted(kept) == sorted(comments), (source, once)
+    else:
+        assert len(kept) >= len(comments) and all(f" {c[3:].split()[0]}" in once for c in comments)
+        for c in comments:
+            assert sum(k.startswith(f"// {c[3:].split()[0]}") for k in kept) == 1, (c, source, once)
     assert format_source(once, again.spec, dialect, width) == once, (source, once)
 
 
@@ -468,3 +482,163 @@ def test_every_example_that_checks_is_formatted(capsys: pytest.CaptureFixture[st
     ]
     assert len(files) >= 10
     assert main(["fmt", "--check", *files]) == 0, capsys.readouterr().out
+
+
+# ---------------------------------------------------------------------------- found by a hostile tester
+
+AB = "def_start\n    event A\n    event B\ndef_end\n\n"
+
+
+@pytest.mark.parametrize(
+    ("source", "expected"),
+    [
+        # a `//` ends its line: what trailed after it goes on a line of its own, after it
+        (
+            AB + "rule_start\n    R1 when A // x\n    then B /* y\n    z */\nrule_end\n",
+            "    R1 when A then B // x\n    /* y\n    z */\nrule_end\n",
+        ),
+        (
+            "def_start\n    event A\n    event B\n    measure s : scale(lo, // low\n hi) /* high */\ndef_end\n"
+            "\nrule_start\n    R1 when A and s = hi then B\nrule_end\n",
+            "    measure s : scale(lo, hi) // low\n    /* high */\ndef_end\n",
+        ),
+        # nor does code or another comment follow a multi-line one on its last line
+        (
+            AB + "rule_start\n    R1 /* one\n    two */ when A then B /* three */\nrule_end\n",
+            "    R1 when A then B /* one\n    two */\n    /* three */\nrule_end\n",
+        ),
+        # in a chain, each comment stays with its pair
+        (
+            AB + "rule_start\n    R1 when A then B\n    R2 when B then A\n    R3 when A then A\nrule_end\n\n"
+            "priority_start\n    R1 > R2 // safety first\n       > R3 // then comfort\npriority_end\n",
+            "    R1 > R2 // safety first\n    R2 > R3 // then comfort\n",
+        ),
+        # an empty block keeps its comments, and so itself
+        (
+            AB
+            + "rule_start\n    R1 when A then B\nrule_end\n\npriority_start\n    // TODO: R1 > R2\npriority_end\n",
+            "\npriority_start\n    // TODO: R1 > R2\npriority_end\n",
+        ),
+        # the keyword before a name belongs to it
+        (
+            "def_start\n    event /* first */ A\n    event B\ndef_end\n\nrule_start\n    R1 when A then B\nrule_end\n",
+            "    event A /* first */\n",
+        ),
+        # an unnamed paper rule starts at its WHEN
+        (
+            "WHEN A THEN B\n    UNLESS m\n// about the second\nWHEN\n    C THEN D\n",
+            "UNLESS m\n// about the second\nWHEN C",
+        ),
+        (
+            "WHEN A THEN B // first\nWHEN /* second */ C THEN D\n",
+            "WHEN A THEN B // first\nWHEN C THEN D /* second */\n",
+        ),
+    ],
+)
+def test_comments_stay_comments_of_their_own_and_in_their_place(source: str, expected: str) -> None:
+    out = fmt(source)
+    assert expected in out, out
+    assert analyse(out).ok and fmt(out) == out
+    kept = [c for _, c in SLEEC.lexicon.comments(out)]
+    assert len(kept) == len(SLEEC.lexicon.comments(source))
+
+
+@pytest.mark.parametrize(
+    ("source", "dialect", "says"),
+    [
+        ("WHEN A AND m THEN NOT B\n", "tk", "1:23: error: an untimed `not E` is LEGOS-SLEEC only"),
+        ("WHEN A AND n * 2 > -1 THEN B\n", "tk", "1:12: error: arithmetic is LEGOS-SLEEC only"),
+        (
+            "def_start\n    event ^when\n    event B\ndef_end\n\nrule_start\n    R1 when ^when then B\nrule_end\n",
+            "legos",
+            "2:11: error: `when` is a keyword: LEGOS-SLEEC has no way to use it as a name",
+        ),
+        (
+            "def_start\n    event A\n    event B\n    measure s : scale(low, high)\n    measure t : scale(low, high)\n"
+            "def_end\n\nrule_start\n    R1 when A and s = low then B\nrule_end\n",
+            "legos",
+            "9:23: error: LEGOS-SLEEC rejects this reference to `low`",
+        ),
+        (
+            AB.replace("event B", "event ^rule_start")
+            + "rule_start\n    R1 when A then ^rule_start\nrule_end\n",
+            "paper",
+            "3:11: error: `rule_start` would make the file read as a DSL file",
+        ),
+    ],
+)
+def test_a_conversion_the_target_tool_would_not_read_is_refused_at_its_place(
+    source: str, dialect: str, says: str
+) -> None:
+    assert any(says in h for h in refusal(source, dialect))
+
+
+def test_conversions_that_only_change_spelling_go_through() -> None:
+    legos = (
+        "def_start\n    event A\n    event B\n    measure m : boolean\n    constant K = 3\n    constant L = -> K\n"
+        "def_end\n\nrule_start\n    R1 when A and {m} then B within L seconds\n    R2 when B then A\nrule_end\n\n"
+        "priority_start\n    R1 > R2\npriority_end\n"
+    )
+    out = fmt(legos, "tk")
+    assert "R1 when A and m then B within L seconds" in out and "constant L = K" in out
+    assert analyse(out, dialect="auto").spec.dialect is A.Dialect.TK  # type: ignore[union-attr]
+
+
+def test_long_conditions_convert_without_a_false_too_deep() -> None:
+    cond = " and ".join(f"(m or n > {i})" for i in range(1500))
+    source = DEFS + f"rule_start\n    R1 when A and {cond} then B\nrule_end\n"
+    assert "WHEN A AND m OR n > 0 AND (m OR n > 1)" in fmt(source, "paper")
+    assert "({m} or ({n} > 0))" in fmt(source, "legos")
+
+
+def test_paper_units_are_keywords_in_capitals() -> None:
+    assert fmt("WHEN A THEN B WITHIN 30 seconds\n") == "WHEN A THEN B WITHIN 30 SECONDS\n"
+
+
+def test_inferred_declarations_come_after_the_files_header(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    f = _file(tmp_path, "// header\nrule_start\n    R1 when A then B\nrule_end\n")
+    assert main(["fmt", "--infer-defs", str(f)]) == 0
+    assert capsys.readouterr().out.startswith("// header\n\ndef_start\n    event A\n")
+
+
+def test_a_mixed_file_is_what_dialect_conversion_is_for(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    f = _file(tmp_path, DEFS + "rule_start\n    R1 when A then B unless {m} /* why */\nrule_end\n")
+    assert main(["fmt", str(f)]) == 1  # mixed: an error, as `check` says
+    assert "`cosleec fmt --dialect legos` converts it" in capsys.readouterr().err
+    assert main(["fmt", "--dialect", "legos", str(f)]) == 0
+    assert "R1 when A then B unless {m} // why\n" in capsys.readouterr().out
+
+
+def test_in_place_refuses_a_read_only_file(tmp_path: Path) -> None:
+    """Even where the directory would let the file be replaced (a world-writable one): a
+    read-only file is not rewritten. As root every file is writable, so the command runs as
+    `nobody` (setpriv) when the tests run as root."""
+    folder = Path(tempfile.mkdtemp(prefix="cosleec-ro-"))
+    try:
+        folder.chmod(0o777)
+        f = folder / "r.sleec"
+        f.write_text(UGLY, encoding="utf-8")
+        f.chmod(0o444)
+        command = [str(Path(sys.executable).with_name("cosleec")), "fmt", "-i", str(f)]
+        if os.geteuid() == 0:
+            if shutil.which("setpriv") is None:
+                pytest.skip("running as root without setpriv")
+            command = ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", *command]
+        done = subprocess.run(command, capture_output=True, text=True, timeout=60, cwd=folder)
+        assert done.returncode == 1, done.stderr
+        assert "read-only" in done.stderr and "Traceback" not in done.stderr
+        assert f.read_text(encoding="utf-8") == UGLY
+    finally:
+        shutil.rmtree(folder)
+
+
+def test_check_marks_a_missing_final_newline_as_diff_does(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    f = _file(tmp_path, PRETTY.rstrip("\n"))
+    assert main(["fmt", "--check", str(f)]) == 1
+    assert "-rule_end\n\\ No newline at end of file\n+rule_end\n" in capsys.readouterr().out
