@@ -20,10 +20,15 @@ ROOT = Path(__file__).resolve().parent.parent
 CORPUS = corpus_dir()
 
 
-def args(description: str) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=description)
+def args(
+    description: str, extend: Callable[[argparse.ArgumentParser], None] | None = None
+) -> argparse.Namespace:
+    """--quick and --json, and what ``extend`` adds to the parser."""
+    p = argparse.ArgumentParser(description=description, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--quick", action="store_true", help="finish within about 30 s")
     p.add_argument("--json", action="store_true", help="end with one JSON object on the last line")
+    if extend is not None:
+        extend(p)
     return p.parse_args()
 
 

@@ -64,9 +64,12 @@ class Path:
         for event, name in plan:
             self.current[name] = not self.current[name]
             m.update({name: self.current[name]})
+            ran = len(hits)
             t0 = time.perf_counter()
             m.event(event)
             t1 = time.perf_counter()
+            if len(hits) != ran + 1:
+                raise AssertionError(f"{event}: the capability ran {len(hits) - ran} times, not once")
             ours.append(hits[-1] - t0)
             back.append(t1 - t0)
             m.event(self.done)  # the robot did it: the obligation is fulfilled (not timed)
@@ -96,7 +99,7 @@ class Path:
 
 def main() -> int:
     a = args(__doc__ or "")
-    rounds, samples = (10, 300) if a.quick else (20, 1000)
+    rounds, samples = (20, 500) if a.quick else (50, 1000)
     rng = random.Random(7)
     path = Path()
     path.round(samples, rng)  # warm-up

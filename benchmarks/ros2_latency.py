@@ -5,7 +5,7 @@ End to end: the benchmark sends a context message that switches a layer, then th
 the Manager (own process) decides under the new layer and sends the obligation; the task
 node (own process) dispatches the layered implementation, which reports the response event;
 the benchmark stops the clock when that report arrives. Both are round trips measured in the
-same run, on the same machine; the ratio of their p99 is the figure (target <= 2). The
+same run, on the same machine; the ratio of their p99 is the figure (target <= 1.5, issue 16). The
 cosleec topics carry their ``cosleec_interfaces`` types, as deployed (the default wire).
 Runs inside a private network namespace (ros-setup.md §1): it re-executes itself there.
 """
@@ -183,14 +183,14 @@ def main() -> int:
         "e2e_p99_us": round(percentile(e2e, 99), 1),
         "ratio_p50": round(statistics.median(e2e) / statistics.median(raw), 2),
         "ratio_p99": round(percentile(e2e, 99) / percentile(raw, 99), 2),
-        "target_ratio_p99": 2.0,
+        "target_ratio_p99": 1.5,
         "sleec_at_runtime_mean_ms": 76,
         "quick": a.quick,
     }
     rows = [
         ("raw rclpy ping-pong", f"p50 {result['raw_p50_us']} us", f"p99 {result['raw_p99_us']} us"),
         ("CO-SLEEC end to end", f"p50 {result['e2e_p50_us']} us", f"p99 {result['e2e_p99_us']} us"),
-        ("ratio (e2e / raw)", f"p50 {result['ratio_p50']}x", f"p99 {result['ratio_p99']}x (target <= 2)"),
+        ("ratio (e2e / raw)", f"p50 {result['ratio_p50']}x", f"p99 {result['ratio_p99']}x (target <= 1.5)"),
     ]
     report("ros2_latency", rows, result, a.json)
     return 0

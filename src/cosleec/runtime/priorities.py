@@ -190,18 +190,23 @@ class PossibleConflict:
 def possible_conflicts(ruleset: RuleSet, priorities: Priorities) -> list[PossibleConflict]:
     """Every pair of response items that oblige and forbid the same event, across rules that
     no declared priority orders (within one rule, across its clauses and fallbacks)."""
-    items: dict[str, list[tuple[str, str, bool]]] = {}
+    owed: dict[str, list[tuple[str, str]]] = {}
+    forbidden: dict[str, list[tuple[str, str]]] = {}
+    order: dict[str, None] = {}  # events in the order items first name them (warnings list so)
     for rule in ruleset.rules:
         for spec in rule.responses():
             for it in spec.walk():
                 if "/e" not in it.key:  # an `else` alternative is accepted, never enacted or enforced
-                    items.setdefault(it.event, []).append((rule.name, it.key, it.negated))
+                    side = forbidden if it.negated else owed
+                    side.setdefault(it.event, []).append((rule.name, it.key))
+                    order.setdefault(it.event, None)
     out = []
-    for event, found in items.items():
-        for r1, k1, neg1 in found:
-            if neg1:
-                continue
-            for r2, k2, neg2 in found:
-                if neg2 and priorities.between(r1, r2) is None:
+    for event in order:
+        against = forbidden.get(event)
+        if not against:  # nothing forbids it: no pair to look at (linear when nothing does)
+            continue
+        for r1, k1 in owed.get(event, ()):
+            for r2, k2 in against:
+                if priorities.between(r1, r2) is None:
                     out.append(PossibleConflict(event, k1, k2, (r1, r2)))
     return out

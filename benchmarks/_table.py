@@ -1,0 +1,314 @@
+"""The README's benchmark table, made from the JSON document of ``bash benchmarks/run all``.
+
+``bash scripts/bench-table FILE.json`` rewrites the table in README.md between the markers
+``<!-- bench-table:start -->`` and ``<!-- bench-table:end -->``; ``--print`` writes it to
+stdout instead, ``--check`` exits 1 when README.md's table is not the one FILE makes.
+
+``ROWS`` lists what the table shows: one row per key, in this order, each with its
+benchmark, how to print it and the target issue 16 sets (if any). A key the document does
+not have (a benchmark skipped, failed or not run) is shown as "not measured". The output
+depends only on the document: the same JSON always makes the same table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+START = "<!-- bench-table:start -->"
+END = "<!-- bench-table:end -->"
+README = Path(__file__).resolve().parent.parent / "README.md"
+NOT_MEASURED = "not measured"
+PROG = "bash scripts/bench-table"
+
+
+@dataclass(frozen=True)
+class Row:
+    """One figure of the table: ``key`` of ``benchmark``'s result (``a.b`` reaches into a dict)."""
+
+    benchmark: str
+    key: str
+    label: str
+    unit: str  # us, ms, s, x, rate, count, exponent, bytes
+    target: tuple[str, float] | None = None  # ("<=" or ">=", value)
+    baseline: str = ""  # what the figure is measured against, in the same run
+
+
+ROWS = [
+    Row(
+        "parse_corpus",
+        "rules_per_s",
+        "parse + check the corpus",
+        "rate",
+        (">=", 20_000),
+        "LEGOS-SLEEC textX ≈ 230 rules/s",
+    ),
+    Row(
+        "parse_corpus",
+        "speedup_vs_plain_lark",
+        "parse + check vs a plain Lark LALR tree",
+        "x",
+        None,
+        "plain Lark, same run",
+    ),
+    Row(
+        "parse_corpus",
+        "driver_speedup_vs_lark_transformer",
+        "fast LALR driver vs Lark + Transformer",
+        "x",
+        (">=", 2),
+        "Lark + Transformer, same run",
+    ),
+    Row(
+        "cop_dispatch",
+        "ratio_no_layer",
+        "layered call, no layer active",
+        "x",
+        ("<=", 2),
+        "plain call, same run",
+    ),
+    Row(
+        "cop_dispatch",
+        "ratio_one_layer",
+        "layered call, one layer active",
+        "x",
+        ("<=", 4),
+        "plain call, same run",
+    ),
+    Row(
+        "cop_dispatch",
+        "ratio_ten_layers",
+        "layered call, ten layers active",
+        "x",
+        None,
+        "plain call, same run",
+    ),
+    Row(
+        "cop_dispatch", "ten_over_one_layer", "ten layers / one layer", "x", ("<=", 10), "linear growth: ≤ 10"
+    ),
+    Row(
+        "dispatch_path",
+        "median_us",
+        "trigger → decision → capability, median",
+        "us",
+        None,
+        "60 rules × 5 clauses",
+    ),
+    Row("dispatch_path", "p99_us", "trigger → decision → capability, p99", "us"),
+    Row(
+        "dispatch_path",
+        "ratio_mean",
+        "trigger → capability, mean / hand-coded",
+        "x",
+        None,
+        "hand-coded if/elif, same run",
+    ),
+    Row(
+        "scalability_grid",
+        "mean_us_at_60x20",
+        "update → implementation at 60 × 20, mean",
+        "us",
+        None,
+        "SLEEC@run.time: 6.9 s mean",
+    ),
+    Row(
+        "scalability_grid",
+        "mean_ratio_to_handcoded_at_60x20",
+        "the same, mean / hand-coded",
+        "x",
+        ("<=", 5),
+        "hand-coded if/elif, same run",
+    ),
+    Row("scalability_grid", "p99_us_at_60x20", "p99 at 60 × 20, bare", "us"),
+    Row("scalability_grid", "p99_us_at_60x20_observer", "p99 at 60 × 20, one observer", "us", ("<=", 100)),
+    Row("scalability_grid", "p99_us_at_60x20_audit", "p99 at 60 × 20, audit log on", "us", ("<=", 200)),
+    Row("scalability_grid", "p99_us_at_60x20_journal", "p99 at 60 × 20, audit log and journal", "us"),
+    Row(
+        "scalability_grid",
+        "update_flip_median_us_10k_rules",
+        "update flipping a value, 10,000 rules",
+        "us",
+        ("<=", 30),
+    ),
+    Row(
+        "scalability_grid",
+        "update_flip_ratio_10k_vs_100",
+        "the same, 10,000 rules / 100 rules",
+        "x",
+        None,
+        "100 rules, same run",
+    ),
+    Row("scalability_grid", "manager_build_s_10k_rules", "build a Manager, 10,000 rules", "s", ("<=", 1)),
+    Row("manager_build", "rules_per_s_10k_rules", "Manager build rate, 10,000 rules", "rate"),
+    Row(
+        "manager_build",
+        "build_over_parse_10k_rules",
+        "build / parse + check, 10,000 rules",
+        "x",
+        None,
+        "parse + check, same run",
+    ),
+    Row("manager_build", "bytes_per_rule_10k_rules", "memory per loaded rule, 10,000 rules", "bytes"),
+    Row("manager_build", "memory_exponent", "memory against rules (1: linear)", "exponent", ("<=", 1.2)),
+    Row("scaling", "exponent_update", "update cost against rules (promise 0)", "exponent", ("<=", 0.2)),
+    Row("scaling", "exponent_event", "event cost against rules (promise 0)", "exponent", ("<=", 0.2)),
+    Row(
+        "scaling",
+        "exponent_update_obl",
+        "update cost against obligations (promise 0)",
+        "exponent",
+        ("<=", 0.2),
+    ),
+    Row(
+        "scaling", "exponent_event_obl", "event cost against obligations (promise 0)", "exponent", ("<=", 0.2)
+    ),
+    Row("scaling", "exponent_build", "build time against rules (promise 1)", "exponent", ("<=", 1.2)),
+    Row("scaling", "exponent_start", "Manager.start() against rules (promise 1)", "exponent", ("<=", 1.2)),
+    Row("scaling", "exponent_memory", "memory against rules (promise 1)", "exponent", ("<=", 1.2)),
+    Row("scaling", "events_per_s_largest", "events per second, at the most rules loaded", "rate"),
+    Row("ros2_latency", "e2e_p99_us", "ROS 2 end to end, p99", "us", None, "SLEEC@run.time: 76 ms mean"),
+    Row(
+        "ros2_latency",
+        "ratio_p99",
+        "ROS 2 end to end / raw rclpy round trip, p99",
+        "x",
+        ("<=", 1.5),
+        "raw rclpy, same run",
+    ),
+    Row("analyse_case_studies", "total_s", "analyse the 18 case-study files", "s", ("<=", 45)),
+]
+
+
+def lookup(doc: dict[str, object], row: Row) -> object:
+    """The figure for ``row`` in the suite document, or None."""
+    benches = doc.get("benchmarks")
+    value: object = benches.get(row.benchmark) if isinstance(benches, dict) else None
+    for part in row.key.split("."):
+        value = value.get(part) if isinstance(value, dict) else None
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    return value
+
+
+def figure(value: float, unit: str) -> str:
+    if unit == "us":
+        return f"{value:,.1f} µs" if value < 1000 else f"{value / 1000:,.2f} ms"
+    if unit == "s":
+        return f"{value:.2f} s"
+    if unit == "x":
+        return f"{value:.0f}×" if value >= 100 else f"{value:.1f}×" if value >= 10 else f"{value:.2f}×"
+    if unit == "rate":
+        return f"{value:,.0f}/s"
+    if unit == "bytes":
+        return f"{value / 1024:,.1f} KiB"
+    if unit == "exponent":
+        return f"{round(value, 2) + 0.0:.2f}"  # + 0.0: no "-0.00"
+    return f"{value:g}"
+
+
+def target_text(row: Row, value: float | None) -> str:
+    if row.target is None:
+        return ""
+    op, bound = row.target
+    unit = {"us": " µs", "s": " s", "x": "×", "rate": "/s", "bytes": " B", "exponent": ""}.get(row.unit, "")
+    want = f"{'≤' if op == '<=' else '≥'} {bound:,g}{unit}"
+    if value is None:
+        return want
+    met = value <= bound if op == "<=" else value >= bound
+    return f"{want}: {'met' if met else '**missed**'}"
+
+
+def table(doc: dict[str, object]) -> str:
+    """The Markdown table (with the line that says where and when it was measured)."""
+    quick = " `--quick`," if doc.get("quick") else ""
+    cores = doc.get("cores")
+    where = (
+        f"Measured{quick} {doc.get('date', 'at an unknown date')}, commit `{doc.get('commit') or 'unknown'}`, "
+        f"on {doc.get('machine', 'an unknown machine')}"
+        + (f" ({cores} cores)" if cores and f"{cores} cores" not in str(doc.get("machine", "")) else "")
+        + "."
+    )
+    lines = [
+        where,
+        "",
+        "| benchmark | measure | figure | target | baseline or reference |",
+        "|---|---|---|---|---|",
+    ]
+    for row in ROWS:
+        value = lookup(doc, row)
+        shown = NOT_MEASURED if value is None else figure(float(value), row.unit)  # type: ignore[arg-type]
+        target = target_text(row, None if value is None else float(value))  # type: ignore[arg-type]
+        lines.append(f"| `{row.benchmark}` | {row.label} | {shown} | {target} | {row.baseline} |")
+    notes = []
+    for kind in ("skipped", "failed"):
+        entries = doc.get(kind)
+        if isinstance(entries, dict):
+            notes += [f"`{name}` {kind}: {why}" for name, why in sorted(entries.items())]
+    if notes:
+        lines += ["", *(f"- {n}" for n in notes)]
+    return "\n".join(lines) + "\n"
+
+
+def replace(readme: str, body: str) -> str:
+    """``readme`` with what is between the markers replaced by ``body``."""
+    if readme.count(START) != 1 or readme.count(END) != 1 or readme.index(START) > readme.index(END):
+        raise ValueError(f"README.md needs one {START} and, after it, one {END}")
+    head, rest = readme.split(START)
+    _, tail = rest.split(END)
+    return f"{head}{START}\n{body}{END}{tail}"
+
+
+def load(path: Path) -> object:
+    """The JSON document in ``path``: the whole file, or its last line (a captured run's output)."""
+    text = path.read_text(encoding="utf-8").strip()
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError:
+        return json.loads(text.splitlines()[-1] if text else "")
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(
+        prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    p.add_argument("results", help="the JSON document of `bash benchmarks/run all --json` (or -o FILE)")
+    p.add_argument("--readme", default=str(README), help="the file whose table to rewrite (README.md)")
+    how = p.add_mutually_exclusive_group()
+    how.add_argument("--print", action="store_true", help="write the table to stdout, change nothing")
+    how.add_argument("--check", action="store_true", help="exit 1 when the README's table is not this one")
+    a = p.parse_args(argv)
+    try:
+        doc = load(Path(a.results))
+    except (OSError, ValueError) as e:
+        print(f"bench-table: cannot read {a.results}: {e}", file=sys.stderr)
+        return 2
+    if not isinstance(doc, dict):
+        print(f"bench-table: {a.results} is not a JSON object", file=sys.stderr)
+        return 2
+    body = table(doc)
+    if a.print:
+        sys.stdout.write(body)
+        return 0
+    path = Path(a.readme)
+    old = path.read_text(encoding="utf-8")
+    try:
+        new = replace(old, body)
+    except ValueError as e:
+        print(f"bench-table: {path}: {e}", file=sys.stderr)
+        return 2
+    if a.check:
+        if new != old:
+            print(f"bench-table: the table in {path} is not the one {a.results} makes", file=sys.stderr)
+            return 1
+        return 0
+    if new != old:
+        path.write_text(new, encoding="utf-8")
+    print(f"bench-table: {path} {'updated' if new != old else 'already up to date'}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
