@@ -5,7 +5,7 @@ floor 4   cli                         the only place that prints and calls sys.e
 floor 3   ros  demo                   adapters and front ends (ros runs the demo over middleware)
 floor 2   nodes  testing              the paper's nodes; public test helpers
 floor 1   runtime                     on lang and cop
-floor 0   errors  lang  cop           cop imports nothing of ours
+floor 0   errors  bulk  lang  cop           cop imports nothing of ours
 """
 
 from __future__ import annotations
@@ -19,11 +19,12 @@ SRC = Path(__file__).resolve().parent.parent / "src" / "cosleec"
 ALLOWED: dict[str, set[str]] = {
     "": set(),  # the root package: a docstring and the version
     "errors": set(),
-    "lang": {"errors"},
+    "bulk": set(),
+    "lang": {"errors", "bulk"},
     "cop": set(),
-    "semantics": {"errors", "lang"},
-    "analysis": {"errors", "lang", "semantics"},
-    "runtime": {"errors", "lang", "cop"},
+    "semantics": {"errors", "bulk", "lang"},
+    "analysis": {"errors", "bulk", "lang", "semantics"},
+    "runtime": {"errors", "bulk", "lang", "cop"},
     "nodes": {"errors", "lang", "runtime"},
     "testing": {"errors", "lang", "cop", "runtime", "nodes"},
     "demo": {"errors", "lang", "runtime", "nodes", "testing"},

@@ -22,13 +22,21 @@ class ContextError(UserError, ValueError):
 class BindingError(UserError):
     """Tasks or capabilities do not cover the rules they are bound to (completeness check).
 
-    ``missing`` lists every clause or event without an implementation.
+    ``missing`` lists every clause or event without an implementation; the message names
+    the first :data:`SHOWN` of them and how many more there are (a 10,000-rule set with no
+    capability would otherwise print 20,000 lines).
     """
+
+    SHOWN = 20
 
     def __init__(self, missing: list[str]) -> None:
         self.missing = missing
+        shown = missing[: self.SHOWN]
+        more = len(missing) - len(shown)
         super().__init__(
-            "incomplete implementation:\n  - " + "\n  - ".join(missing),
+            "incomplete implementation:\n  - "
+            + "\n  - ".join(shown)
+            + (f"\n  ... and {more:,} more (BindingError.missing lists them all)" if more else ""),
             hint="implement each listed clause in its task (@hedge(i)) or register a capability for the event",
         )
 

@@ -62,6 +62,7 @@ from enum import StrEnum
 from pathlib import Path
 from typing import Any, TypeVar
 
+from cosleec.bulk import paused_gc
 from cosleec.cop import Snapshot
 from cosleec.errors import CosleecError, clip, show
 from cosleec.lang import (
@@ -280,6 +281,7 @@ class Manager:
     implementations (the ROS Manager node, ``cosleec decide``).
     """
 
+    @paused_gc()
     def __init__(
         self,
         rules: RuleSet,
@@ -368,6 +370,9 @@ class Manager:
         self._broken: JournalError | None = None
         self._closed = False
         self._check = False  # start() checked the bindings: a reload checks the new rules' too
+        # the obligations of each fixed response (ResponseSpec.fixed), made on first use:
+        # id(spec) -> (spec, obligations); the spec is kept, so its id is not reused meanwhile
+        self._fixed: dict[int, tuple[ResponseSpec, tuple[Obligation, ...]]] = {}
         self._allowed: dict[str, Permission] = {}  # permission's answer for an event nothing forbids
         # decisions a journal held that were decided but perhaps never published (dispatch=False):
         # the Manager node publishes them again after a restart (task nodes run each id once)
@@ -436,6 +441,7 @@ class Manager:
         self._observers.append(fn)
         return lambda: self._observers.remove(fn)
 
+    @paused_gc()
     def start(self, *, check: bool = True, timer: bool = False) -> Manager:
         """Check that every clause has an implementation; judge what happened while down; optionally
         run deadlines on a thread.
@@ -992,7 +998,7 @@ class Manager:
             if not issued.determined:
                 what = f"undetermined (no value for {', '.join(issued.missing)}); meanwhile {what}"
             why = f"{rule.name}: {ob.describe()} was violated at {start:g}; otherwise {what}"
-            d = Decision(
+            d = Decision.made(
                 id=self._count("decision"),
                 time=start,
                 event="otherwise",
@@ -1309,13 +1315,14 @@ class Manager:
         if clause is None:
             self.stats["undetermined"] += 1
         conds = ((0, rule.trigger_text, fired), *zip(rule.clause_ids, rule.clause_texts, status.values))
-        values = {
-            n: (lits[x] if lits is not None and x is not None else x)
-            for n, lits in rule.value_specs
-            for x in (v.get(n),)
-        }
+        names = rule.value_names
+        values = dict(zip(names, map(v.get, names)))
+        for n, lits in rule.scale_values:  # scale positions back to their literals
+            x = values[n]
+            if x is not None:
+                values[n] = lits[x]
         # the explanation is computed from these parts when first read (Decision.explanation)
-        return Decision(
+        return Decision.made(
             id=self._count("decision"),
             time=now,
             event=event,
@@ -1365,6 +1372,16 @@ class Manager:
         return _Issued(self._items(spec, rule))
 
     def _items(self, spec: ResponseSpec, rule: str) -> tuple[Obligation, ...]:
+        if spec.fixed:  # the same obligations every time: made once (immutable values, shared)
+            made = self._fixed.get(id(spec))
+            if made is not None and made[0] is spec:
+                return made[1]
+            obligations = self._make_items(spec, rule)
+            self._fixed[id(spec)] = (spec, obligations)
+            return obligations
+        return self._make_items(spec, rule)
+
+    def _make_items(self, spec: ResponseSpec, rule: str) -> tuple[Obligation, ...]:
         v = self.context.values
         out = []
         for it in spec.items:
@@ -1520,6 +1537,7 @@ class Manager:
         """
         return self.ruleset.digest
 
+    @paused_gc()
     def reload(
         self,
         rules: RuleSet,
@@ -1746,6 +1764,7 @@ class Manager:
         switches = _switches(old, self.layer_manager, rules, layers)
         newly = prio.above - self.priorities.above
         self.ruleset, self.spec = rules, rules.spec
+        self._fixed.clear()  # (the old rules' responses: what the memo keeps alive)
         self.context, self.layer_manager = context, layers
         self.implementations, self.priorities = impl, prio
         self.tracker.reindex(bool(prio.above), prio.semantics == CONFLICT_AWARE and bool(prio.above))

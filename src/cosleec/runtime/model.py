@@ -158,6 +158,9 @@ class ResponseSpec:
 
     items: tuple[ItemSpec, ...]
     clauses: tuple[Clause, ...] = ()  # defeaters of a braced inner response
+    # every item's window is a constant and none has an `else`: its obligations are the same
+    # every time it starts (the Manager makes them once)
+    fixed: bool = False
 
     def events(self) -> tuple[str, ...]:
         """The events its items name, in order."""
@@ -213,7 +216,8 @@ class CompiledRule:
     hedge_reads: frozenset[str]  # every measure a clause condition reads
     clause_ids: tuple[int, ...]  # 1..n, and each clause's condition text: zipped into decisions
     clause_texts: tuple[str, ...]
-    value_specs: tuple[tuple[str, tuple[str, ...] | None], ...]  # measures read, scale literals
+    value_names: tuple[str, ...]  # every measure it reads, sorted: the values a decision shows
+    scale_values: tuple[tuple[str, tuple[str, ...]], ...]  # those of a scale, with its literals
     evaluate_all: Callable[[Values], tuple[bool, ...]] | None  # every clause condition at once
 
     def response_of(self, clause: int) -> ResponseSpec | None:
@@ -251,7 +255,7 @@ def _duration(c: Compiler, d: A.Duration, where: str) -> Seconds:
     unit = A.TIME_UNITS[d.unit]
     reads: set[str] = set()
     src = c.source(d.value, reads)
-    raw: Seconds = eval(compile(f"lambda v: ({src}) * {unit}", "<sleec deadline>", "eval"))
+    raw: Seconds = c.lambda_(f"({src}) * {unit}", "<sleec deadline>")
 
     def seconds(v: Values) -> float:
         try:
@@ -271,12 +275,24 @@ def _duration(c: Compiler, d: A.Duration, where: str) -> Seconds:
                 where=f"{where}:{d.span}" if d.span.line else where,
                 hint=f"write a deadline of at most {MAX_WINDOW_S:.0e} seconds",
             ) from None
-        return lambda v: value
+        return Fixed(value)
     return seconds
 
 
-def _zero(v: Values) -> float:
-    return 0.0
+class Fixed:
+    """A deadline that reads no measure: the same seconds whatever the context."""
+
+    __slots__ = ("value",)
+
+    def __init__(self, value: float) -> None:
+        self.value = value
+
+    def __call__(self, v: Values) -> float:
+        """The seconds, whatever ``v`` holds."""
+        return self.value
+
+
+_zero = Fixed(0.0)
 
 
 def compile_response(c: Compiler, r: A.Response, key: str, where: str = "") -> ResponseSpec:
@@ -312,7 +328,11 @@ def compile_response(c: Compiler, r: A.Response, key: str, where: str = "") -> R
             )
         )
     clauses = tuple(_clause(c, d, f"{key}~{i}", i, where) for i, d in enumerate(r.defeaters, start=1))
-    return ResponseSpec(tuple(items), clauses)
+    fixed = not clauses and all(
+        it.alternative is None and isinstance(it.hi, Fixed | None) and isinstance(it.lo, Fixed | None)
+        for it in items
+    )
+    return ResponseSpec(tuple(items), clauses, fixed)
 
 
 def _clause(c: Compiler, d: A.Defeater, layer: str, index: int, where: str) -> Clause:
@@ -330,13 +350,10 @@ def _clause(c: Compiler, d: A.Defeater, layer: str, index: int, where: str) -> C
     )
 
 
-def _all_clauses(clauses: tuple[Clause, ...]) -> Callable[[Values], tuple[bool, ...]]:
+def _all_clauses(c: Compiler, clauses: tuple[Clause, ...]) -> Callable[[Values], tuple[bool, ...]]:
     """One function that evaluates every clause condition of a rule in a single call."""
     body = ", ".join(f"bool({cl.source})" for cl in clauses)
-    fn: Callable[[Values], tuple[bool, ...]] = eval(
-        compile(f"lambda v: ({body},)", "<sleec clauses>", "eval")
-    )
-    return fn
+    return c.lambda_(f"({body},)", "<sleec clauses>")
 
 
 def compile_rule(
@@ -369,6 +386,9 @@ def compile_rule(
         hedge_reads=hedge_reads,
         clause_ids=tuple(cl.index for cl in clauses),
         clause_texts=tuple(cl.text for cl in clauses),
-        value_specs=tuple((n, literals.get(n) or None) for n in sorted(trigger_reads | hedge_reads)),
-        evaluate_all=_all_clauses(clauses) if clauses else None,
+        value_names=tuple(sorted(trigger_reads | hedge_reads)),
+        scale_values=tuple(
+            (n, lits) for n in sorted(trigger_reads | hedge_reads) if (lits := literals.get(n))
+        ),
+        evaluate_all=_all_clauses(c, clauses) if clauses else None,
     )

@@ -19,6 +19,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from cosleec.bulk import paused_gc
 from cosleec.lang import (
     DiagnosticSink,
     Options,
@@ -54,6 +55,7 @@ class RuleSet:
     digest: str  # sha256 of the canonical text: which rules a journal or audit record belongs to
 
     @classmethod
+    @paused_gc()
     def from_file(cls, path: str | Path, *, infer_defs: bool = False) -> RuleSet:
         """Read, parse, check and compile a rule file (any dialect, or the paper notation)."""
         result = analyse_file(path, infer_defs=infer_defs)
@@ -62,6 +64,7 @@ class RuleSet:
         return cls._compile(result.spec, result.symbols)
 
     @classmethod
+    @paused_gc()
     def from_text(cls, text: str, path: str = "<string>", *, infer_defs: bool = False) -> RuleSet:
         """Parse, check and compile SLEEC text; ``path`` names it in diagnostics."""
         result = analyse(text, path, infer_defs=infer_defs)
@@ -70,6 +73,7 @@ class RuleSet:
         return cls._compile(result.spec, result.symbols)
 
     @classmethod
+    @paused_gc()
     def from_spec(cls, spec: Specification, *, infer_defs: bool = False) -> RuleSet:
         """Check and compile a Specification as it is; ``infer_defs`` fills in a missing def block."""
         sink = DiagnosticSink(spec.path)

@@ -514,3 +514,16 @@ def test_layer_switches_come_in_rule_order_whatever_the_hash_seed() -> None:
         for seed in ("1", "2", "3")
     }
     assert outs == {str([f"R{i}" for i in range(12)]) + "\n"}
+
+
+def test_a_binding_error_names_the_first_twenty_gaps_and_counts_the_rest() -> None:
+    events = " ".join(f"event E{i} event A{i}" for i in range(30))
+    rules = " ".join(f"R{i} when E{i} then A{i}" for i in range(30))
+    m = Manager.from_text(f"def_start {events} def_end rule_start {rules} rule_end", clock=VirtualClock())
+    with pytest.raises(BindingError) as info:
+        m.start()
+    assert len(info.value.missing) == 30
+    text = str(info.value)
+    assert "R19: no task and no capability for response event A19" in text
+    assert "R20:" not in text
+    assert "... and 10 more (BindingError.missing lists them all)" in text

@@ -1,0 +1,151 @@
+"""The runtime's hot-path shortcuts make exactly what the plain constructions make.
+
+Each shortcut (issue 16) trades a general construction for a cheaper one on the decision
+path; these tests pin the shortcut to the construction it replaces, so that a field added
+to one and not the other, a different default, or a memo served for the wrong response
+fails here rather than in a run.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+
+from hypothesis import given
+from hypothesis import strategies as st
+
+from cosleec.lang import HedgeSemantics, Unknowns
+from cosleec.runtime import Manager, VirtualClock
+from cosleec.runtime.decision import Decision
+from cosleec.runtime.model import Fixed, Obligation
+
+
+def test_decision_made_takes_exactly_the_fields_with_their_defaults() -> None:
+    made = inspect.signature(Decision.made).parameters
+    fields = [f for f in dataclasses.fields(Decision) if f.init]
+    assert list(made) == [f.name for f in fields]
+    for f in fields:
+        expected = inspect.Parameter.empty if f.default is dataclasses.MISSING else f.default
+        assert made[f.name].default == expected, f.name
+
+
+@given(
+    clause=st.none() | st.integers(0, 5),
+    values=st.dictionaries(st.sampled_from(["a", "b", "c"]), st.none() | st.booleans() | st.integers()),
+    missing=st.lists(st.sampled_from(["a", "b"])).map(tuple),
+    reason=st.text(max_size=5),
+    version=st.integers(0, 9),
+    violated=st.none() | st.integers(1, 9),
+    unknowns=st.sampled_from(list(Unknowns)),
+)
+def test_decision_made_equals_the_constructor(
+    clause: int | None,
+    values: dict[str, object],
+    missing: tuple[str, ...],
+    reason: str,
+    version: int,
+    violated: int | None,
+    unknowns: Unknowns,
+) -> None:
+    kw = dict(
+        id=3,
+        time=1.5,
+        event="E",
+        rule="R1",
+        clause=clause,
+        layer=None if not clause else f"R1.{clause}",
+        semantics=HedgeSemantics.NESTED,
+        values=values,
+        conditions=((0, "true", True), (1, "a", False)),
+        obligations=(Obligation(event="A", within_s=2.0, rule="R1"),),
+        missing=missing,
+        reason=reason,
+        context_version=version,
+        violated=violated,
+        unknowns=unknowns,
+    )
+    fast, plain = Decision.made(**kw), Decision(**kw)  # type: ignore[arg-type]
+    assert fast == plain
+    assert repr(fast) == repr(plain)
+    assert fast.to_json() == plain.to_json()
+    assert fast.explanation == plain.explanation
+    assert vars(fast).keys() == vars(plain).keys()
+    assert Decision.made(
+        id=1,
+        time=0.0,
+        event="E",
+        rule="R",
+        clause=0,
+        layer=None,
+        semantics=HedgeSemantics.LAST_WINS,
+        values={},
+        conditions=(),
+        obligations=(),
+    ) == Decision(
+        id=1,
+        time=0.0,
+        event="E",
+        rule="R",
+        clause=0,
+        layer=None,
+        semantics=HedgeSemantics.LAST_WINS,
+        values={},
+        conditions=(),
+        obligations=(),
+    )
+
+
+RULES = """def_start event E event A event B event C measure m : numeric measure s : scale(lo, hi)
+constant K = 4 def_end
+rule_start
+R1 when E then A within 3 seconds and not B within K seconds
+   unless (m > 2) then C within m seconds
+   unless (s = hi) then {A within 1 minutes otherwise C}
+R2 when E then B within [1 seconds, 2 seconds] else {C within 5 seconds}
+rule_end"""
+
+
+def test_fixed_responses_are_made_once_and_variable_ones_each_time() -> None:
+    m = Manager.from_text(RULES, clock=VirtualClock())
+    r1, r2 = m.ruleset.rule("R1"), m.ruleset.rule("R2")
+    assert r1.default.fixed  # constant windows: the same obligations every time
+    assert isinstance(r1.default.items[1].hi, Fixed)
+    assert r1.clauses[0].response is not None and not r1.clauses[0].response.fixed  # reads m
+    assert r1.clauses[1].response is not None and r1.clauses[1].response.fixed
+    assert not r2.default.fixed  # an else: its branches are windows from now
+    m.capability("A")(lambda o, d: None)
+    m.capability("B")(lambda o, d: None)
+    m.capability("C")(lambda o, d: None)
+    m.start()
+    m.update(m=1, s="lo")
+    first = m.event("E")
+    m.clock.advance(10)  # type: ignore[attr-defined]
+    m.tick()
+    second = m.event("E")
+    assert first[0].obligations == second[0].obligations
+    assert first[0].obligations[0] is second[0].obligations[0]  # made once, shared
+    assert first[1].obligations == second[1].obligations  # the else, made again, equal
+    m.update(m=3)
+    third, _ = m.event("E")
+    assert third.clause == 1 and third.obligations[0].within_s == 3.0
+    m.update(m=5)
+    fourth, _ = m.event("E")
+    assert fourth.obligations[0].within_s == 5.0  # a window that reads m is read each time
+    m.update(m=0, s="hi")
+    fifth, _ = m.event("E")
+    assert fifth.clause == 2 and fifth.obligations[0].within_s == 60.0
+    assert fifth.obligations[0].otherwise is not None
+
+
+def test_a_reload_forgets_the_old_rules_fixed_obligations() -> None:
+    m = Manager.from_text(RULES, clock=VirtualClock())
+    m.start(check=False)
+    m.update(m=0, s="lo")
+    before = m.event("E")[0].obligations
+    m.reload(
+        Manager.from_text(
+            RULES.replace("A within 3 seconds", "A within 7 seconds"), clock=VirtualClock()
+        ).ruleset
+    )
+    after = m.event("E")[0].obligations
+    assert before[0].within_s == 3.0 and after[0].within_s == 7.0
