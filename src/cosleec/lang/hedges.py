@@ -128,6 +128,19 @@ def decisive(
     """
     if clause is None:
         return tuple(i + 1 for i, v in enumerate(values) if v is None)
+    if semantics == HedgeSemantics.LAST_WINS and 0 <= clause <= len(values):
+        # what the search below finds, without its n choices of n steps each: the clause
+        # chosen and every later one (known false) decided it, the earlier ones did not;
+        # with none chosen, every value did (a test checks this against the search)
+        return tuple(range(clause or 1, len(values) + 1))
+    return _decisive_by_search(values, clause, semantics, unknowns)
+
+
+def _decisive_by_search(
+    values: Sequence[bool | None], clause: int, semantics: HedgeSemantics, unknowns: Unknowns
+) -> tuple[int, ...]:
+    """:func:`decisive` for any semantics: forget each value in turn, keep it forgotten
+    unless the choice changes."""
     known = list(_read(values, unknowns))  # decide on the values as the policy read them
     for i in range(len(known)):
         kept = known[i]

@@ -212,6 +212,7 @@ class CompiledRule:
     clauses: tuple[Clause, ...]
     ast: A.Rule
     layers: tuple[Layer, ...]  # clause i's COP layer is layers[i - 1]
+    layer_names: tuple[str | None, ...]  # [0]: None (the base); [i]: clause i's layer name
     compositions: tuple[Snapshot, ...]  # [0]: no layer (default); [i]: (layers[i - 1],)
     hedge_reads: frozenset[str]  # every measure a clause condition reads
     clause_ids: tuple[int, ...]  # 1..n, and each clause's condition text: zipped into decisions
@@ -233,7 +234,7 @@ class CompiledRule:
 
     def layer_of(self, clause: int) -> str | None:
         """The name of clause ``clause``'s layer; None for the default (the base)."""
-        return None if clause == 0 else self.clauses[clause - 1].layer
+        return self.layer_names[clause]
 
 
 # The longest window the runtime keeps (about 317 years): past it a clock time in seconds
@@ -382,6 +383,7 @@ def compile_rule(
         clauses=clauses,
         ast=r,
         layers=layers,
+        layer_names=(None, *(cl.layer for cl in clauses)),
         compositions=(Snapshot(()), *(Snapshot((la,)) for la in layers)),
         hedge_reads=hedge_reads,
         clause_ids=tuple(cl.index for cl in clauses),

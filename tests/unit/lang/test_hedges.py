@@ -89,6 +89,25 @@ def test_decisive_values_alone_decide(values: list[bool | None], semantics: Hedg
         assert choose(without, semantics) != clause
 
 
+@given(
+    st.lists(st.none() | st.booleans(), max_size=8),
+    st.sampled_from(list(HedgeSemantics)),
+    st.sampled_from(list(Unknowns)),
+)
+def test_decisive_shortcut_names_what_the_search_names(
+    values: list[bool | None], semantics: HedgeSemantics, unknowns: Unknowns
+) -> None:
+    """The last-wins shortcut (issue 16) against the search it replaces: the chosen clause
+    and every later one, never an earlier one, all of them when none holds."""
+    from cosleec.lang.hedges import _decisive_by_search
+
+    clause = choose(values, semantics, unknowns)
+    if clause is not None:
+        assert decisive(values, clause, semantics, unknowns) == _decisive_by_search(
+            values, clause, semantics, unknowns
+        )
+
+
 def test_decisive_names_the_clauses_an_explanation_needs() -> None:
     assert decisive([True, False], 1, LAST) == (1, 2)
     assert decisive([True, True, False], 2, NESTED) == (1, 2, 3)

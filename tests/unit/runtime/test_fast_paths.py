@@ -149,3 +149,34 @@ def test_a_reload_forgets_the_old_rules_fixed_obligations() -> None:
     )
     after = m.event("E")[0].obligations
     assert before[0].within_s == 3.0 and after[0].within_s == 7.0
+
+
+CLAUSES = 6
+CHAIN = (
+    "def_start event E event A "
+    + " ".join(f"measure c{j} : boolean" for j in range(CLAUSES))
+    + " def_end rule_start R when E then A "
+    + " ".join(f"unless c{j} then A within {j + 1} seconds" for j in range(CLAUSES))
+    + " rule_end"
+)
+
+
+@given(
+    values=st.lists(st.booleans(), min_size=CLAUSES, max_size=CLAUSES),
+    semantics=st.sampled_from(list(HedgeSemantics)),
+    unknowns=st.sampled_from(list(Unknowns)),
+)
+def test_the_layer_manager_chooses_as_choose_does(
+    values: list[bool], semantics: HedgeSemantics, unknowns: Unknowns
+) -> None:
+    """Every value known: the shortcut for last-wins picks what :func:`choose` picks (the
+    last clause that holds, not the first; 0 when none holds), whatever the policy."""
+    from cosleec.lang import choose
+
+    m = Manager.from_text(CHAIN, clock=VirtualClock(), semantics=semantics, unknown=unknowns)
+    m.update({f"c{j}": v for j, v in enumerate(values)})
+    status = m.layer_manager.status[0]
+    assert status.values == tuple(values)
+    assert status.clause == choose(values, semantics, unknowns)
+    expected = [f"R.{status.clause}"] if status.clause else []
+    assert m.active_layers() == expected

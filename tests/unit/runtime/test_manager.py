@@ -527,3 +527,13 @@ def test_a_binding_error_names_the_first_twenty_gaps_and_counts_the_rest() -> No
     assert "R19: no task and no capability for response event A19" in text
     assert "R20:" not in text
     assert "... and 10 more (BindingError.missing lists them all)" in text
+
+
+def test_a_policy_that_reads_unknown_as_true_has_its_layer_active_before_any_value() -> None:
+    text = (
+        "def_start event E event A event B measure c : boolean def_end "
+        "rule_start R when E then A unless c then B rule_end"
+    )
+    assert Manager.from_text(text, clock=VirtualClock(), unknown="true").active_layers() == ["R.1"]
+    assert Manager.from_text(text, clock=VirtualClock(), unknown="false").active_layers() == []
+    assert Manager.from_text(text, clock=VirtualClock()).active_layers() == []
