@@ -13,6 +13,8 @@ from cosleec.errors import show
 from cosleec.runtime.errors import ContextError
 from cosleec.runtime.values import MeasureSpec, Value
 
+_UNSET: Any = object()
+
 
 class Context:
     """Current measure values (stored form: scale values as positions).
@@ -38,32 +40,37 @@ class Context:
         self.stamps: dict[str, float] = {}
         self.version = 0
         self._aged = sorted(ages.items())
+        # for the hot path: a boolean value of a boolean measure is stored as it is, and only
+        # a scale value looks different to users (its literal) than stored (its position)
+        self._booleans = frozenset(n for n, m in self.measures.items() if m.kind == "boolean")
+        self._scales = {n: m.literals for n, m in self.measures.items() if m.kind == "scale"}
 
     def validate(self, updates: Mapping[str, object]) -> dict[str, Any]:
         """The stored form of every update, or ContextError naming the first bad one."""
         out: dict[str, Any] = {}
-        measures = self.measures
+        measures, booleans = self.measures, self._booleans
         for name, value in updates.items():
+            if (value is True or value is False) and name in booleans:
+                out[name] = value  # the common case, with no call
+                continue
             spec = measures.get(name) if isinstance(name, str) else None
             if spec is None and not isinstance(name, str):
                 raise ContextError(f"a measure is named by a string, not {type(name).__name__}")
             if spec is None:
                 raise ContextError(f"unknown measure {show(name)}")
-            if spec.kind == "boolean" and (value is True or value is False):
-                out[name] = value  # the common case, without a call
-            else:
-                out[name] = spec.coerce(value)
+            out[name] = spec.coerce(value)
         return out
 
     def apply(self, stored: Mapping[str, Any], now: float) -> set[str]:
         """Apply validated values; return the measures whose value changed (or became known)."""
         changed = set()
-        values = self.values
+        values, stamps = self.values, self.stamps
         for name, v in stored.items():
-            if name not in values or values[name] != v or type(values[name]) is not type(v):
+            old = values.get(name, _UNSET)
+            if old is _UNSET or old != v or type(old) is not type(v):
                 changed.add(name)
             values[name] = v
-            self.stamps[name] = now
+            stamps[name] = now
         if changed:
             self.version += 1
         return changed
@@ -90,8 +97,12 @@ class Context:
     def external(self, names: Any = None) -> dict[str, Value | None]:
         """Values as users see them; ``None`` for unknown."""
         keys = self.measures if names is None else names
-        out: dict[str, Value | None] = {}
-        for n in keys:
-            v = self.values.get(n)
-            out[n] = None if v is None else self.measures[n].external(v)
+        if not isinstance(keys, dict | list | tuple):  # read twice below: a one-shot iterable once
+            keys = list(keys)
+        values, scales = self.values, self._scales
+        out: dict[str, Value | None] = dict(zip(keys, map(values.get, keys)))
+        if scales:
+            for n, v in out.items():
+                if v is not None and n in scales:
+                    out[n] = scales[n][int(v)]
         return out
