@@ -131,14 +131,20 @@ class Selection(NamedTuple):
     failure: HedgeEvaluationError | None
 
 
-Chain = tuple[Callable[..., Any], tuple[Callable[..., Any], Callable[..., Any]] | None]
-"""A built chain, ``(call, head)``: ``call(*args, **kwargs)`` runs it; ``head`` is ``(around,
-next)`` when its outermost step is a lone ``around`` partial (the fast path calls it
-directly). A plain tuple: the interpreter indexes and unpacks those quickest."""
+Chain = tuple[Callable[..., Any], Callable[..., Any] | None, "Chain | None"]
+"""A built chain, ``(call, around, next)``: ``call(*args, **kwargs)`` runs it. When its
+outermost step is a lone ``around`` partial, ``around`` is that partial and ``next`` the
+chain of the steps after it, in the same form -- a linked list the fast path walks without
+calling the steps' closures; otherwise both are ``None``. A plain tuple: the interpreter
+indexes and unpacks those quickest."""
 
 
-Memo = tuple[GlobalState | None, Frame | None, Chain | None, View | None]
-_NO_MEMO: Memo = (None, None, None, None)
+Memo = tuple[
+    GlobalState | None, Frame | None, Callable[..., Any] | None, Callable[..., Any] | None, Chain | None
+]
+"""The last configuration seen and its chain, flat: ``(g, d, *chain)`` (one unpack in the fast path)."""
+_NO_MEMO: Memo = (None, None, None, None, None)
+_NO_VIEW: tuple[GlobalState | None, Frame | None, View | None] = (None, None, None)
 
 
 class LayeredFunction:
@@ -180,7 +186,8 @@ class LayeredFunction:
         self.max_chains = max_chains
         self.builds = 0
         self.generation = 0
-        self.memo: Memo = _NO_MEMO
+        self.memo: Memo = _NO_MEMO  # set only for a settled chain and no dispatch hook
+        self._view = _NO_VIEW  # the last configuration's view (step 1)
         # settled chains by dynamic frame (bounded like the cache): a function called under a
         # few recurring compositions -- one per rule clause, say -- finds its chain again
         # without recomputing its view when the one-slot memo held another
@@ -214,6 +221,7 @@ class LayeredFunction:
             self.generation += 1
             self.cache.clear()  # a registration invalidates every chain (A8)
             self.memo = _NO_MEMO
+            self._view = _NO_VIEW
             self._by_frame = {}
         bump_version()  # and every memo that may still be filled from an older view
 
@@ -231,13 +239,13 @@ class LayeredFunction:
         """Everything a dispatch does before running its chain, for global state ``g`` and frame ``d``."""
         hit = self._by_frame.get(d)
         if hit is not None and hit[0] is g:  # the same global state: the same settled chain
-            self.memo = (g, d, hit[1], hit[2])
+            self.memo = (g, d, *hit[1])
             return hit[1]
         view = self.view(g, d)
         hooks = g.dispatch_hooks
         if view.settled and not hooks:  # nothing to select, nobody to tell: remember the chain
             chain = self.chain_for(view, view.forced)
-            self.memo = (g, d, chain, view)
+            self.memo = (g, d, *chain)
             by_frame = self._by_frame
             if len(by_frame) >= self.max_chains:
                 # the oldest goes (bounded); another thread may be doing the same: then it went
@@ -254,9 +262,9 @@ class LayeredFunction:
 
     def view(self, g: GlobalState, d: Frame) -> View:
         """Step 1: the configuration ``(g, d)`` as this function sees it (memoised)."""
-        memo = self.memo
-        if memo[0] is g and memo[1] is d and memo[3] is not None:
-            return memo[3]
+        memo = self._view
+        if memo[0] is g and memo[1] is d and memo[2] is not None:
+            return memo[2]
         comp = composition(g, d)
         forced: list[Layer | None] = [None] * len(self.groups)
         explicit: list[Layer] = []
@@ -270,7 +278,7 @@ class LayeredFunction:
             elif forced[i] is None:
                 forced[i] = la  # explicitly activated: forced (SD6), at most one per group
         view = View(comp, tuple(explicit), tuple(forced), None not in forced, self.generation)
-        self.memo = (g, d, None, view)
+        self._view = (g, d, view)
         return view
 
     def context_snapshot(self) -> Any:
@@ -345,9 +353,14 @@ class LayeredFunction:
 
     def _build(self, layers: tuple[Layer, ...]) -> Chain:
         make = _async_step if self.is_async else _step
-        chain: Chain = (self.base, None)
+        chain: Chain = (self.base, None, None)
         for la in reversed(layers):
-            chain = make(self.partials[la], chain[0], self.receiver)
+            parts = self.partials[la]
+            step = make(parts, chain[0], self.receiver)
+            around = parts.get("around")
+            lone = around is not None and "before" not in parts and "after" not in parts
+            # a lone around keeps the chain after it linked (the fast path runs it step by step)
+            chain = (step, around, chain) if lone else (step, None, None)
         return chain
 
 
@@ -403,7 +416,7 @@ def proceed_body(
     return nxt(*args, **kwargs)
 
 
-def _step(parts: dict[str, Callable[..., Any]], nxt: Callable[..., Any], recv: int) -> Chain:
+def _step(parts: dict[str, Callable[..., Any]], nxt: Callable[..., Any], recv: int) -> Callable[..., Any]:
     """One layer's partials around the rest of the chain: before, around, after (A6)."""
     before, around, after = parts.get("before"), parts.get("around"), parts.get("after")
 
@@ -418,10 +431,12 @@ def _step(parts: dict[str, Callable[..., Any]], nxt: Callable[..., Any], recv: i
             result = after(*args, result=result, **kwargs)
         return result
 
-    return step, ((around, nxt) if around is not None and before is after is None else None)
+    return step
 
 
-def _async_step(parts: dict[str, Callable[..., Any]], nxt: Callable[..., Any], recv: int) -> Chain:
+def _async_step(
+    parts: dict[str, Callable[..., Any]], nxt: Callable[..., Any], recv: int
+) -> Callable[..., Any]:
     """:func:`_step` for ``async`` functions."""
     before, around, after = parts.get("before"), parts.get("around"), parts.get("after")
 
@@ -438,7 +453,7 @@ def _async_step(parts: dict[str, Callable[..., Any]], nxt: Callable[..., Any], r
             result = await after(*args, result=result, **kwargs)
         return result
 
-    return step, ((around, nxt) if around is not None and before is after is None else None)
+    return step
 
 
 # ---------------------------------------------------------------- the reference dispatcher
@@ -452,12 +467,12 @@ def reference_dispatcher(lf: LayeredFunction) -> Callable[..., Any]:
             try:
                 g, d = RT.state, dyn_get()
                 memo = lf.memo
-                chain = memo[2] if memo[0] is g and memo[1] is d else None
-                if chain is None:
-                    chain = lf.resolve(g, d)
-                return await chain[0](*args, **kwargs)
+                call = memo[2] if memo[0] is g and memo[1] is d else None
+                if call is None:
+                    call = lf.resolve(g, d)[0]
+                return await call(*args, **kwargs)
             finally:
-                if RT.queued:
+                if RT.pending:
                     flush_if_outermost()
 
         register_dispatch_code(dispatch_async.__code__)
@@ -467,12 +482,12 @@ def reference_dispatcher(lf: LayeredFunction) -> Callable[..., Any]:
         try:
             g, d = RT.state, dyn_get()
             memo = lf.memo
-            chain = memo[2] if memo[0] is g and memo[1] is d else None
-            if chain is None:
-                chain = lf.resolve(g, d)
-            return chain[0](*args, **kwargs)
+            call = memo[2] if memo[0] is g and memo[1] is d else None
+            if call is None:
+                call = lf.resolve(g, d)[0]
+            return call(*args, **kwargs)
         finally:
-            if RT.queued:
+            if RT.pending:
                 flush_if_outermost()
 
     register_dispatch_code(dispatch.__code__)

@@ -15,13 +15,29 @@ What is generated, and why it is the same:
   reference's route. Partials therefore see the caller's arguments as the caller passed
   them, as in the reference. Parameter names never appear in the generated code, so no
   name of the base can clash with it.
-- When the chain's outermost step is a lone ``around`` partial (its ``head``), the
-  usual call runs it here, saving the step's frame. Its ``proceed`` does what
-  ``dispatch.proceed_body`` does, specialised to *k* arguments and bound at C level
+- The dispatcher reads the memo as one flat tuple ``(g, d, call, around, next)``: two
+  identity checks say whether the configuration is the one last seen, and then the
+  chain is at hand without further lookups (``LayeredFunction.resolve`` otherwise).
+- A chain whose outer steps are lone ``around`` partials is a linked list
+  (``dispatch.Chain``): the usual call runs the outermost ``around`` here, and its
+  ``proceed`` -- called with no arguments -- runs the next one the same way, down to the
+  first step that is not a lone ``around`` (or the base), which it calls with the
+  call's arguments. Each step thus costs the partial's frame and its ``proceed``'s, not
+  the step closure's as well; n layers cost n times one (linear, small constant).
+  ``proceed`` with arguments calls the rest of the chain's closure (``node[0]``), exactly
+  as ``dispatch.proceed_body`` does with ``nxt``; so the partials see the same calls,
+  in the same order, as under the reference. ``proceed`` is bound at C level
   (``MethodType`` over a tuple: cheaper to make per call than a closure).
 
 Templates are compiled once per (k, sync/async, receiver) and shared by every layered
-function of that shape: one code object each, registered as a dispatch (SD9).
+function of that shape: one code object each, registered as a dispatch (SD9). What does
+not vary between functions (``RT``, the frame getter, the sentinel, ``proceed``) is a
+global of the template, so a dispatcher's frame carries one free variable (its
+:class:`LayeredFunction`); the end-of-dispatch test reads ``RT.pending``, a bool kept
+with ``RT.queued`` (SD9 flushes exactly when it did). The cost that remains with no layer
+active is the dispatcher's own frame: CPython 3.11 cannot specialise a call to a function
+with ``*args``/``**kwargs`` and builds the ``**kw`` dict on every call; with layers, each
+costs a call of its partial (keyword ``proceed``), of ``proceed`` and one bound method.
 
 Imports ``dispatch.py`` and ``state.py``.
 
@@ -33,35 +49,38 @@ from __future__ import annotations
 import inspect
 import threading
 from collections.abc import Callable
-from types import MethodType
+from types import FunctionType, MethodType
 from typing import Any
 
 from cosleec.cop.dispatch import LayeredFunction
 from cosleec.cop.state import RT, dyn_get, flush_if_outermost, register_dispatch_code
 
 _TEMPLATE = """
-def make(lf, RT, get, flush, M, MT):
-    def proceed(st, /, *a, **k):  # dispatch.proceed_body for st = (next, the call's arguments)
-        if a or k:
-            return st[0]({receiver}*a, **k)
-        return st[0]({st_args})
+# globals of every dispatcher of this shape: RT, get, flush, M, E, MT (set before exec),
+# so that a dispatcher's frame carries one free variable, its LayeredFunction
 
+def proceed(st, /, *a, **k):  # dispatch.proceed_body for st = (the chain after this step, the call's arguments)
+    node, {st_names}= st
+    if a or k:
+        return node[0]({receiver}*a, **k)
+    call, around, nxt = node
+    if around is None:
+        return call({args})
+    return around({args}{comma}proceed=MT(proceed, (nxt, {args})))
+
+def make(lf):
     {async_}def dispatch({slots}*_r, **_k):
         try:
-            g, d = RT.state, get()
-            memo = lf.memo
-            chain = memo[2] if memo[0] is g and memo[1] is d else None
-            if chain is None:
-                chain = lf.resolve(g, d)
-            call, head = chain
+            mg, md, call, around, nxt = lf.memo
+            if mg is not RT.state or md is not get():
+                call, around, nxt = lf.resolve(RT.state, get())
             if {usual}:
-                if head is None:
+                if around is None:
                     return {await_}call({args})
-                around, nxt = head
                 return {await_}around({args}{comma}proceed=MT(proceed, (nxt, {args})))
             return {await_}call(*[a for a in ({args}{tuple_comma}) if a is not M], *_r, **_k)
         finally:
-            if RT.queued:
+            if RT.pending:
                 flush()
 
     return dispatch
@@ -75,6 +94,9 @@ _lock = threading.Lock()
 def _factory(k: int, is_async: bool, receiver: bool) -> Callable[..., Callable[..., Any]]:
     """The compiled template for ``k`` slots (built on first use, then shared)."""
     key = (k, is_async, receiver)
+    make = _factories.get(key)
+    if make is not None:
+        return make
     with _lock:
         make = _factories.get(key)
         if make is None:
@@ -84,14 +106,23 @@ def _factory(k: int, is_async: bool, receiver: bool) -> Callable[..., Callable[.
                 async_="async " if is_async else "",
                 await_="await " if is_async else "",
                 slots="".join(f"{s}=M, " for s in slots) + ("/, " if k else ""),
-                usual=" and ".join([f"{s} is not M" for s in slots[-1:]] + ["not _r", "not _k"]),
+                # ``_r is E``: no extra positional (CPython passes its empty-tuple singleton; were
+                # it another empty tuple, the call would take the general route, just as right)
+                usual=" and ".join(["_r is E"] + [f"{s} is not M" for s in slots[-1:]] + ["not _k"]),
                 args=args,
                 comma=", " if k else "",
                 tuple_comma="," if k == 1 else "",
-                receiver="st[1], " if receiver and k else "",
-                st_args=", ".join(f"st[{i + 1}]" for i in range(k)),
+                receiver="_a0, " if receiver and k else "",
+                st_names="".join(f"{s}, " for s in slots),
             )
-            ns: dict[str, Any] = {}
+            ns: dict[str, Any] = {
+                "RT": RT,
+                "get": dyn_get,
+                "flush": flush_if_outermost,
+                "M": _MISSING,
+                "E": (),
+                "MT": MethodType,
+            }
             exec(compile(src, f"<cosleec.cop fast dispatcher, {k} slots>", "exec"), ns)
             make = ns["make"]
             register_dispatch_code(_inner_code(make))
@@ -105,7 +136,18 @@ def _inner_code(make: Callable[..., Any]) -> Any:
 
 
 def required_positionals(fn: Callable[..., Any]) -> int:
-    """How many positional arguments a call of ``fn`` must give (0 when its signature is unknown)."""
+    """How many positional arguments a call of ``fn`` must give (0 when its signature is unknown).
+
+    For a plain function -- no ``__wrapped__``, ``__signature__`` or ``_partialmethod`` that
+    ``inspect.signature`` would follow -- the answer is read from its code and defaults:
+    the positional parameters without a default, as ``inspect`` counts them, without
+    building a ``Signature`` (a SLEEC manager decorates one handler per rule). Anything
+    else asks ``inspect``.
+    """
+    if type(fn) is FunctionType and not (_FOLLOWED & fn.__dict__.keys()):
+        n = fn.__code__.co_argcount - len(fn.__defaults__ or ())
+        if n >= 0:
+            return n
     try:
         params = inspect.signature(fn).parameters.values()
     except (TypeError, ValueError):
@@ -118,7 +160,11 @@ def required_positionals(fn: Callable[..., Any]) -> int:
     return k
 
 
+_FOLLOWED = frozenset({"__wrapped__", "__signature__", "_partialmethod", "__partialmethod__"})
+"""Attributes through which ``inspect.signature`` reports another signature than the code's."""
+
+
 def fast_dispatcher(lf: LayeredFunction) -> Callable[..., Any]:
     """The generated dispatcher of ``lf``: same behaviour as ``reference_dispatcher(lf)``."""
     make = _factory(required_positionals(lf.base), lf.is_async, bool(lf.receiver))
-    return make(lf, RT, dyn_get, flush_if_outermost, _MISSING, MethodType)
+    return make(lf)

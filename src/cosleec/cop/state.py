@@ -82,11 +82,14 @@ class GlobalState:
 class _Runtime:
     """Mutable module state, read without locks (each field is replaced atomically)."""
 
-    __slots__ = ("queued", "state")
+    __slots__ = ("pending", "queued", "state")
 
     def __init__(self) -> None:
         self.state = GlobalState()
         self.queued = 0  # global requests waiting for a dispatch to end, in any thread
+        # ``queued > 0``, kept with it under the lock: what a dispatch tests as it ends (a
+        # bool: the interpreter tests one without a call)
+        self.pending = False
 
 
 RT = _Runtime()
@@ -173,6 +176,7 @@ def _defer(requests: list[tuple[str, Any]]) -> bool:
     q.extend(requests)
     with _lock:
         RT.queued += len(requests)
+        RT.pending = RT.queued > 0
     return True
 
 
@@ -304,6 +308,7 @@ def flush_if_outermost() -> None:
     _queue.set(None)
     with _lock:
         RT.queued -= len(q)
+        RT.pending = RT.queued > 0
     changes = [(op, x) for op, x in q if op != "call"]
     if changes:
         _apply(changes)
