@@ -105,10 +105,16 @@ def _transition(frame: Frame, mode: str, layer: Layer, g: GlobalState) -> Frame:
 
 
 def _conflicts(frame: Frame, layer: Layer, g: GlobalState) -> bool:
-    """A cached transition is stale if a global change made it violate exclusion."""
-    if layer.group is None:
+    """A cached transition is stale if a global change made it violate exclusion.
+
+    Only a globally active layer can make it so (the transition itself settled the
+    frame's own rivals, and a captured composition ignores global layers): with none, it
+    is not stale, and the common case -- a rule's clause layer entered for one dispatch --
+    costs nothing here.
+    """
+    if layer.group is None or not g.layers:
         return False
-    members = set(layer.group.members)
+    members = layer.group.members
     return sum(1 for la in composition(g, frame) if la in members) > 1
 
 

@@ -378,3 +378,33 @@ def test_d29_explain_needs_no_context_when_no_group_selects(f: Any) -> None:
     with activate(ADD):
         e = explain(f, 1)  # no using_context: f has no hedge group
     assert e.chain == ("ADD",) and e.selected == {} and str(e).endswith("f: ADD -> base")
+
+
+def test_e35_a_remembered_activation_meets_a_rival_activated_globally_since() -> None:
+    """Entering the same block again reuses its remembered transition (SD4), unless a
+    global change has since made a rival active: then exclusion is judged again -- strict
+    raises, weak replaces -- and the block never runs with both members active."""
+    x, y = Layer("x"), Layer("y")
+    LayerGroup("modes", [x, y])
+    with activate(x):  # remembered: no layer -> x
+        assert [la.name for la in current_layers()] == ["x"]
+    activate_globally(y)
+    try:
+        with pytest.raises(ExclusionError), activate(x):
+            pass
+        assert [la.name for la in current_layers()] == ["y"]
+    finally:
+        deactivate_globally(y)
+    with activate(x):  # no global rival any more: the remembered transition serves again
+        assert [la.name for la in current_layers()] == ["x"]
+    u, w = Layer("u"), Layer("w")
+    LayerGroup("weak modes", [u, w], exclusion="weak")
+    with activate(u):
+        pass
+    activate_globally(w)
+    try:
+        with activate(u):
+            assert [la.name for la in current_layers()] == ["u"]  # w replaced, not both
+        assert [la.name for la in current_layers()] == ["w"]
+    finally:
+        deactivate_globally(w)
