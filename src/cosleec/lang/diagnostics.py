@@ -8,8 +8,8 @@ the language front-end raises, and it carries the diagnostics.
 from __future__ import annotations
 
 import functools
-from collections.abc import Iterable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Iterable, Mapping, Sequence
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
@@ -225,6 +225,28 @@ class _Fold:
         return out
 
 
+class _Folding:
+    """The context manager :meth:`DiagnosticSink.folding` returns."""
+
+    __slots__ = ("fold", "outer", "sink")
+
+    def __init__(self, sink: DiagnosticSink, fold: _Fold) -> None:
+        self.sink = sink
+        self.fold = fold
+        self.outer: _Fold | None = None
+
+    def __enter__(self) -> None:
+        sink = self.sink
+        self.outer = sink._fold
+        sink._fold = self.fold
+
+    def __exit__(self, *exc: object) -> None:
+        sink = self.sink
+        sink._fold = self.outer
+        if self.fold.folded:
+            sink.items.extend(self.fold.summaries(sink.path))
+
+
 class DiagnosticSink:
     """Collects diagnostics for one file so that all of them are reported in one run."""
 
@@ -253,8 +275,7 @@ class DiagnosticSink:
         """Record a note: information that never makes the file fail."""
         self._add(Diagnostic(severity=Severity.NOTE, code=code, message=message, span=span, path=self.path))
 
-    @contextmanager
-    def folding(self, where: str, limit: int) -> Iterator[None]:
+    def folding(self, where: str, limit: int) -> AbstractContextManager[None]:
         """Inside the block, keep the first ``limit`` diagnostics of each code; fold the rest
         into one summary per code (``... and 19,980 more ...``), added when the block ends.
 
@@ -264,15 +285,8 @@ class DiagnosticSink:
         folds nothing. Blocks do not nest: an inner block takes over until it ends.
         """
         if limit <= 0:
-            yield
-            return
-        outer, fold = self._fold, _Fold(where, limit)
-        self._fold = fold
-        try:
-            yield
-        finally:
-            self._fold = outer
-            self.items.extend(fold.summaries(self.path))
+            return nullcontext()
+        return _Folding(self, _Fold(where, limit))  # one per rule: cheaper than @contextmanager
 
     def shown(self, code: str) -> bool:
         """Whether a diagnostic with ``code`` recorded now would be kept (not folded): lets a

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from cosleec.bulk import paused_gc
 from cosleec.errors import ConfigurationError
 from cosleec.lang import ast as A
 from cosleec.lang.checker import Options, SymbolTable, check_and_read
@@ -93,6 +94,20 @@ def analyse(
     """
     if dialect not in DIALECTS:
         raise ConfigurationError(f"unknown dialect {dialect!r}; expected one of {', '.join(DIALECTS)}")
+    with paused_gc():  # bulk construction: the collector would scan a growing heap for nothing
+        return _analyse(text, path, dialect, strict, infer_defs, options, legos_compat)
+
+
+def _analyse(
+    text: str,
+    path: str,
+    dialect: str,
+    strict: bool,
+    infer_defs: bool,
+    options: Options | None,
+    legos_compat: bool,
+) -> CheckResult:
+    """:func:`analyse` once its arguments are checked."""
     opts = options or Options()
     if strict:
         opts = replace(opts, strict_extensions=True)

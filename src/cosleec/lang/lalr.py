@@ -20,6 +20,7 @@ May import: lark (``Lark``; its internals only in :func:`read_lark_tables`), lex
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
@@ -135,6 +136,8 @@ def direct_callback(rule: RuleShape, transformer: Any) -> Callable[[list[Any]], 
     parts += ["None"] * rule.placeholders[len(rule.kept)]
     if rule.expand1 and not rule.aliased and len(parts) == 1:
         src = f"lambda s: {parts[0]}"  # a `?rule` with one child returns it unchanged
+    elif (inlined := _inline_callback(rule, transformer, parts)) is not None:
+        return inlined
     elif parts == [f"s[{i}]" for i in range(len(rule.symbols))]:
         as_is: Callable[[list[Any]], Any] = method  # the children as they are: no wrapper at all
         return as_is
@@ -143,6 +146,28 @@ def direct_callback(rule: RuleShape, transformer: Any) -> Callable[[list[Any]], 
     fn: Callable[[list[Any]], Any] = eval(
         compile(src, f"<cosleec callback {rule.name}>", "eval"), {"m": method}
     )
+    return fn
+
+
+def _inline_callback(
+    rule: RuleShape, transformer: Any, parts: list[str]
+) -> Callable[[list[Any]], Any] | None:
+    """The transformer's own inline body for ``rule``'s method, compiled with the children
+    bound to ``c0``, ``c1``, ... (``inline_body``: see transformer.INLINE_BODIES); None when
+    the transformer offers none, or the body reads a child the rule does not have."""
+    offer = getattr(transformer, "inline_body", None)
+    found = offer(rule.name) if offer is not None else None
+    if found is None:
+        return None
+    body, env = found
+    if any(int(k) >= len(parts) for k in re.findall(r"\bc(\d+)\b", body)):
+        return None
+    lines = [f"    c{k} = {part}" for k, part in enumerate(parts)]
+    lines += [f"    {line}" for line in body.splitlines()]
+    namespace = dict(env)
+    src = "def callback(s):\n" + "\n".join(lines) + "\n"
+    exec(compile(src, f"<cosleec callback {rule.name}>", "exec"), namespace)
+    fn: Callable[[list[Any]], Any] = namespace["callback"]
     return fn
 
 
@@ -184,6 +209,17 @@ class CompiledLALR:
                     triples[key] = (len(act.symbols), act.origin, cb)
                 row[term] = triples[key]  # a reduction: (size, origin, callback)
             self.states[state] = row
+        # The driver's own form of a reduction: (size, goto, callback), where goto maps the
+        # state below the reduced symbols to the state after it (one look-up, not two).
+        gotos: dict[str, dict[int, int]] = {}
+        for origin in {triple[1] for triple in triples.values()}:
+            gotos[origin] = {s: row[origin] for s, row in self.states.items() if origin in row}
+        by_triple = {id(triple): (triple[0], gotos[triple[1]], triple[2]) for triple in triples.values()}
+        self._rows: list[dict[str, Any]] = [{} for _ in range(max(self.states, default=-1) + 1)]
+        for state, row in self.states.items():
+            self._rows[state] = {
+                term: act if type(act) is int else by_triple[id(act)] for term, act in row.items()
+            }
         self.units: dict[tuple[int, int, str], int] = {}  # memo of unit-reduction chains
         self.terminals = frozenset(
             {END, *(sym for r in tables.rules for sym, term in zip(r.symbols, r.terminal) if term)}
@@ -201,7 +237,7 @@ class CompiledLALR:
         error, further errors are recorded only once three tokens have been accepted, so
         one mistake does not produce a cascade.
         """
-        states = self.states
+        states = self._rows
         units = self.units
         state = self.start_state  # always sstack[-1]
         sstack: list[int] = [state]
@@ -212,7 +248,10 @@ class CompiledLALR:
         for tok in tokens:
             t = tok[0]
             while True:
-                act = states[state].get(t)
+                try:  # (a subscript is quicker than .get; a miss is a syntax error, rare)
+                    act = states[state][t]
+                except KeyError:
+                    act = None
                 if act is None:
                     if quiet == 0:
                         problems.append(SyntaxProblem(tok, self.expected(state)))
@@ -238,7 +277,7 @@ class CompiledLALR:
                     if quiet:
                         quiet -= 1
                     break
-                size, origin, cb = act
+                size, goto, cb = act
                 if cb is None:
                     # Unit pass-through reductions keep the value and the state below, so a
                     # whole chain of them (primary -> term -> ... -> condition) ends in a state
@@ -247,12 +286,12 @@ class CompiledLALR:
                     key = (below, state, t)
                     top = units.get(key)
                     if top is None:
-                        top = states[below][origin]
+                        top = goto[below]
                         while True:
                             nxt = states[top].get(t)
                             if nxt is None or type(nxt) is int or nxt[2] is not None:
                                 break
-                            top = states[below][nxt[1]]
+                            top = nxt[1][below]
                         units[key] = top
                     sstack[-1] = state = top
                     continue
@@ -263,7 +302,7 @@ class CompiledLALR:
                 else:
                     s = []
                 vstack.append(cb(s))
-                state = states[sstack[-1]][origin]
+                state = goto[sstack[-1]]
                 sstack.append(state)
         if tok is not None:
             end = Token(END, "", 0, tok.line, tok.column + len(tok.value))
@@ -277,7 +316,7 @@ class CompiledLALR:
                 return None
             if type(act) is int:  # pragma: no cover - Lark never shifts $END
                 return None
-            size, origin, cb = act
+            size, goto, cb = act
             if size:
                 s = vstack[-size:]
                 del sstack[-size:]
@@ -285,7 +324,7 @@ class CompiledLALR:
             else:
                 s = []
             value = s[0] if cb is None else cb(s)
-            sstack.append(states[sstack[-1]][origin])
+            sstack.append(goto[sstack[-1]])
             vstack.append(value)
             if sstack[-1] == self.end_state:
                 return None if problems else value

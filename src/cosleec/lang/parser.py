@@ -24,6 +24,7 @@ from typing import Any
 
 from lark import Lark
 
+from cosleec.bulk import paused_gc
 from cosleec.lang import ast as A
 from cosleec.lang.diagnostics import DiagnosticSink
 from cosleec.lang.lalr import END, CompiledLALR, SyntaxProblem, read_lark_tables
@@ -113,13 +114,15 @@ def parse_blocks(text: str, sink: DiagnosticSink) -> list[Block] | None:
             hint="save it as plain text (UTF-8)",
         )
         return None
-    blocks: list[Block] | None = _parse(SLEEC, text, sink)
+    with paused_gc():  # bulk construction (see cosleec.bulk)
+        blocks: list[Block] | None = _parse(SLEEC, text, sink)
     return blocks
 
 
 def parse_paper_rules(text: str, sink: DiagnosticSink) -> list[A.Rule] | None:
     """Parse the paper notation into rules; syntax errors go to ``sink``."""
-    rules: list[A.Rule] | None = _parse(PAPER, text, sink)
+    with paused_gc():  # bulk construction (see cosleec.bulk)
+        rules: list[A.Rule] | None = _parse(PAPER, text, sink)
     return rules
 
 

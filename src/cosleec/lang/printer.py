@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import replace
 
+from cosleec.bulk import paused_gc
 from cosleec.lang import ast as A
 from cosleec.lang.deep import deeply
 from cosleec.lang.layout import Comment, Key, Layout
@@ -85,8 +86,11 @@ class Printer:
             return
         out.blank()
         out.item(("start", kind), "", [f"{kind}_start"], opens=True)
-        for i, clauses in enumerate(bodies):
-            out.item((kind, i), "    ", clauses)
+        if out.plain():
+            out.plain_items("    ", bodies)  # no comments or blank lines to put back
+        else:
+            for i, clauses in enumerate(bodies):
+                out.item((kind, i), "    ", clauses)
         out.item(("end", kind), "", [f"{kind}_end"], closes=True)
 
     def comment_lines(self, text: str) -> list[str]:
@@ -150,13 +154,15 @@ class Printer:
 
     def response_parts(self, r: A.Response) -> tuple[str, list[str]]:
         """A response's items joined by ``and``, and its ``unless`` clauses, one text each."""
-        parts = []
-        n = len(r.items)
-        for i, item in enumerate(r.items):
+        items = r.items
+        n = len(items)
+        if n == 1:  # the common case: nothing follows the one item
+            text = self.item(items[0], False)
+        else:
             # inside an item, what follows an inner response would be swallowed by it
-            followed = i < n - 1
-            parts.append(self.item(item, followed))
-        return " and ".join(parts), [self.defeater(d) for d in r.defeaters]
+            text = " and ".join([self.item(item, i < n - 1) for i, item in enumerate(items)])
+        defeaters = r.defeaters
+        return text, [self.defeater(d) for d in defeaters] if defeaters else []
 
     def defeater(self, d: A.Defeater) -> str:
         """One hedge clause: ``unless condition [then response]``."""
@@ -272,6 +278,34 @@ class _Lines:
     def blank(self) -> None:
         self.pending = True
 
+    def plain(self) -> bool:
+        """Whether the layout has nothing to put back (no comment, no blank line): the
+        canonical form, where :meth:`plain_items` prints a block's items the same way."""
+        layout = self.layout
+        return not (layout.leading or layout.trailing or layout.inner or layout.blank)
+
+    def plain_items(self, indent: str, bodies: list[list[str]]) -> None:
+        """What :meth:`item` prints for each of ``bodies`` when the layout is :meth:`plain`."""
+        if not bodies:
+            return
+        lines = self.lines
+        if self.pending and not self.opened:
+            lines.append("")
+        self.pending = False
+        self.opened = False
+        width = self.printer.width - len(indent)
+        more = indent + "    "
+        for clauses in bodies:
+            if len(clauses) == 1:
+                lines.append(indent + clauses[0])
+                continue
+            one_line = " ".join(clauses)
+            if len(one_line) > width:
+                lines.append(indent + clauses[0])
+                lines.extend([more + clause for clause in clauses[1:]])
+            else:
+                lines.append(indent + one_line)
+
     def add(self, line: str, *, opens: bool = False, closes: bool = False) -> None:
         if self.pending and not self.opened and not closes:
             self.lines.append("")
@@ -364,7 +398,8 @@ def format_spec(spec: A.Specification, dialect: A.Dialect | str | None = None) -
     if d is A.Dialect.PAPER:
         d = A.Dialect.TK
     printer = Printer(spec, d)
-    return deeply(printer.specification)  # recursive: a deep expression runs in a deep thread
+    with paused_gc():  # many small strings, no garbage cycles (see cosleec.bulk)
+        return deeply(printer.specification)  # recursive: a deep expression runs in a deep thread
 
 
 class PaperPrinter(Printer):

@@ -56,12 +56,90 @@ class Block:
         self.items = items
 
 
+# The hottest methods of ToAst again, as function bodies the fast driver compiles into its
+# reduction callbacks (lalr.direct_callback): there ``c0``, ``c1``, ... are the children
+# the method reads as ``c[0]``, ``c[1]``, ... (tokens or values, ``None`` for an absent
+# ``[part]``), with ``tok_span``/``ident`` written out, so that one reduction is one call
+# instead of four or five. Each must build exactly what its method builds:
+# tests/unit/lang/test_parser_crosscheck.py holds the driver equal to plain Lark, which
+# calls the methods.
+_TOKEN_SPAN = "_new(Span, ({t}.line, {t}.column, {t}.line, {t}.column + len({t}.value)))"
+_NAME_AND_SPAN = (
+    "v = c0.value\n"
+    "line = c0.line\n"
+    "col = c0.column\n"
+    "n = v[1:] if v[0] == '^' else v\n"
+    "span = _new(Span, (line, col, line, col + len(v)))\n"
+)
+_BINOP = "a = c0.span\nb = c1.span\nreturn BinOp({op!r}, c0, c1, span=_new(Span, (a[0], a[1], b[2], b[3])))"
+INLINE_BODIES: dict[str, str] = {
+    "event_decl": _NAME_AND_SPAN + "return EventDecl(n, span=span)",
+    "measure_decl": _NAME_AND_SPAN + "return MeasureDecl(n, c1, span=span)",
+    "boolean_type": "return _BOOLEAN",
+    "numeric_type": "return _NUMERIC",
+    "rule": _NAME_AND_SPAN + "return Rule(n, c1, c2, span=span)",
+    "trigger": _NAME_AND_SPAN + "return Trigger(n, c1, span=span)",
+    "response_body": "return Response(tuple(c0), tuple(c1) if c1 else (), span=c0[0].span)",
+    "inner_body": "return Response(tuple(c0), (), span=c0[0].span)",
+    "item": "return ResponseItem(c0, c1, c2, span=c0.span)",
+    "occurrence": (
+        "v = c1.value\n"
+        "line = c1.line\n"
+        "col = c1.column\n"
+        "if c0 is None:\n"
+        "    span = _new(Span, (line, col, line, col + len(v)))\n"
+        "else:\n"
+        "    span = _new(Span, (c0.line, c0.column, line, col + len(v)))\n"
+        "return Occurrence(v[1:] if v[0] == '^' else v, c0 is not None, c2, c3 is not None, span=span)"
+    ),
+    "name": _NAME_AND_SPAN + "return Name(n, span=span)",
+    "braced_name": _NAME_AND_SPAN + "return Name(n, braced=True, span=span)",
+    "int_lit": "return IntLit(int(c0.value), span=" + _TOKEN_SPAN.format(t="c0") + ")",
+    "and_": _BINOP.format(op="and"),
+    "or_": _BINOP.format(op="or"),
+    "add": _BINOP.format(op="+"),
+    "sub": _BINOP.format(op="-"),
+    "mul": _BINOP.format(op="*"),
+    "not_": ("b = c1.span\nreturn Not(c1, span=_new(Span, (c0.line, c0.column, b[2], b[3])))"),
+    "compare": "return Compare(c1.value, c0, c2, span=" + _TOKEN_SPAN.format(t="c1") + ")",
+    "rel_op": "return c0",
+    "time_unit": "return c0",
+    "sign": "return c0",
+    "duration": (
+        "a = c0.span\n"
+        "return Duration(c0, c1.value, span=_new(Span, (a[0], a[1], c1.line, c1.column + len(c1.value))))"
+    ),
+    "within": "return TimeLimit(c0, None, span=c0.span)",
+    "defeater": "return Defeater(c1, c2, span=" + _TOKEN_SPAN.format(t="c0") + ")",
+    "otherwise": "return c0",
+    "alternative": "return c0",
+}
+"""Method name -> the body the fast driver compiles for it (see the comment above)."""
+
+INLINE_ENV: dict[str, Any] = {
+    "_new": _new,
+    "_BOOLEAN": _BOOLEAN,
+    "_NUMERIC": _NUMERIC,
+    **{name: getattr(A, name) for name in dir(A) if isinstance(getattr(A, name), type)},
+}
+"""The names :data:`INLINE_BODIES` use."""
+
+
 class ToAst(Transformer[Token, Any]):
     """Builds :mod:`cosleec.lang.ast` nodes; ``start`` returns the list of blocks.
 
     Give an instance to ``Lark(..., transformer=...)`` (it keeps no state, so one instance
     serves every parse, in any thread).
     """
+
+    def inline_body(self, name: str) -> tuple[str, dict[str, Any]] | None:
+        """The body the fast driver may compile instead of calling method ``name`` (see
+        :data:`INLINE_BODIES`) and the names it uses; None where a subclass overrides the
+        method, or there is none."""
+        body = INLINE_BODIES.get(name)
+        if body is None or getattr(type(self), name) is not getattr(ToAst, name):
+            return None
+        return body, INLINE_ENV
 
     # -- lists (left-recursive list rules of the grammar)
     def list_first(self, c: list[Any]) -> list[Any]:
