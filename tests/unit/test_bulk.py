@@ -1,13 +1,17 @@
-"""paused_gc: the collector is off inside, back as it was outside, whatever happens."""
+"""paused_gc: the collector is off inside, back as it was outside, whatever happens;
+quick_init: the same records as the dataclass __init__ makes, sooner."""
 
 from __future__ import annotations
 
+import dataclasses
 import gc
+import inspect
 from collections.abc import Iterator
 
 import pytest
 
-from cosleec.bulk import paused_gc
+from cosleec.bulk import paused_gc, quick_init
+from cosleec.runtime import model as M
 
 
 @pytest.fixture(autouse=True)
@@ -92,3 +96,83 @@ def test_what_was_built_is_still_collectable_when_it_becomes_garbage() -> None:
     del a, b
     gc.collect()
     assert gone() is None
+
+
+# ---------------------------------------------------------------- quick_init
+
+
+def _signature(cls: type) -> list[tuple[str, object, object]]:
+    """What dataclasses' generated __init__ takes: (name, kind, default), in order."""
+    out = []
+    for kw_only in (False, True):
+        for f in dataclasses.fields(cls):
+            if f.kw_only is kw_only:
+                kind = inspect.Parameter.KEYWORD_ONLY if kw_only else inspect.Parameter.POSITIONAL_OR_KEYWORD
+                default = inspect.Parameter.empty if f.default is dataclasses.MISSING else f.default
+                out.append((f.name, kind, default))
+    return out
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class Point:
+    x: int
+    y: int = 2
+    label: str = dataclasses.field(default="p", kw_only=True)
+
+
+FastPoint = quick_init(
+    dataclasses.make_dataclass(
+        "FastPoint",
+        [
+            ("x", int),
+            ("y", int, dataclasses.field(default=2)),
+            ("label", str, dataclasses.field(default="p", kw_only=True)),
+        ],
+        frozen=True,
+        slots=True,
+    )
+)
+
+
+def test_quick_init_keeps_the_signature_the_values_and_frozenness() -> None:
+    got = inspect.signature(FastPoint.__init__).parameters.values()
+    assert [(p.name, p.kind, p.default) for p in got][1:] == _signature(Point)
+    a, b = FastPoint(1), Point(1)
+    assert (a.x, a.y, a.label) == (b.x, b.y, b.label) == (1, 2, "p")
+    assert FastPoint(3, 4, label="q").label == "q"
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        a.x = 5  # type: ignore[misc]
+    with pytest.raises(TypeError):
+        FastPoint(1, 2, "positional label")  # type: ignore[misc]
+    with pytest.raises(TypeError):
+        FastPoint()  # type: ignore[call-arg]
+
+
+def test_quick_init_refuses_what_it_cannot_make_and_leaves_a_post_init_alone() -> None:
+    @dataclasses.dataclass(frozen=True, slots=True)
+    class Listy:
+        xs: list[int] = dataclasses.field(default_factory=list)
+
+    with pytest.raises(TypeError, match="default factory"):
+        quick_init(Listy)
+
+    seen: list[int] = []
+
+    @dataclasses.dataclass(frozen=True, slots=True)
+    class Checked:
+        x: int
+
+        def __post_init__(self) -> None:
+            seen.append(self.x)
+
+    before = Checked.__init__
+    assert quick_init(Checked) is Checked and Checked.__init__ is before
+    Checked(7)
+    assert seen == [7]
+
+
+@pytest.mark.parametrize("cls", [M.Obligation, M.ItemSpec, M.Clause, M.ResponseSpec, M.CompiledRule])
+def test_the_runtime_records_built_quickly_keep_the_dataclass_signature(cls: type) -> None:
+    got = inspect.signature(cls.__init__).parameters.values()
+    assert [(p.name, p.kind, p.default) for p in got][1:] == _signature(cls)
+    assert cls.__init__.__qualname__ == f"{cls.__qualname__}.__init__"

@@ -11,7 +11,9 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Any, Literal, NamedTuple, TypeAlias
+from typing import Literal, NamedTuple, TypeAlias
+
+from cosleec.bulk import quick_init
 
 
 class Span(NamedTuple):
@@ -449,45 +451,8 @@ class Specification:
 
 # ---------------------------------------------------------------------------- construction speed
 
-
-def _fast_init(cls: type) -> None:
-    """Give the frozen, slotted dataclass ``cls`` an ``__init__`` with the same signature
-    and effect as the generated one, that sets each field through its slot directly.
-
-    The generated ``__init__`` of a frozen dataclass sets every field with
-    ``object.__setattr__(self, name, value)``, a generic attribute look-up per field; a
-    slot's own setter is a third of the cost. Parsing builds an AST node per grammar
-    reduction and the checker rebuilds some, so this is on the hot path of parsing.
-    Instances stay frozen: assignment still raises ``FrozenInstanceError``.
-    """
-    fields = dataclasses.fields(cls)
-    if not fields:
-        return
-    # the generated one would call it, this one does not: a node that needs one keeps its own
-    if hasattr(cls, "__post_init__"):
-        return
-    positional: list[str] = []
-    keywords: list[str] = []
-    env: dict[str, object] = {}
-    for f in fields:
-        assert f.init and f.default_factory is dataclasses.MISSING, f"{cls.__name__}.{f.name}"
-        env[f"_set_{f.name}"] = cls.__dict__[f.name].__set__
-        param = f.name
-        if f.default is not dataclasses.MISSING:
-            env[f"_default_{f.name}"] = f.default
-            param = f"{f.name}=_default_{f.name}"
-        (keywords if f.kw_only else positional).append(param)
-    params = ", ".join(["self", *positional, *(["*", *keywords] if keywords else [])])
-    body = "".join(f"\n    _set_{f.name}(self, {f.name})" for f in fields)
-    exec(f"def __init__({params}) -> None:{body}", env)
-    init: Any = env["__init__"]
-    original: Any = cls.__dict__["__init__"]
-    init.__qualname__ = original.__qualname__
-    init.__annotations__ = original.__annotations__
-    init.__module__ = cls.__module__
-    setattr(cls, "__init__", init)  # noqa: B010 - mypy refuses a plain assignment to a method
-
-
+# parsing builds a node per grammar reduction and the checker rebuilds some: every frozen,
+# slotted node class gets the quicker __init__ of :func:`cosleec.bulk.quick_init`
 for _cls in list(globals().values()):
     if (
         isinstance(_cls, type)
@@ -496,5 +461,5 @@ for _cls in list(globals().values()):
         and "__slots__" in _cls.__dict__
         and _cls.__dataclass_params__.frozen  # type: ignore[attr-defined]
     ):
-        _fast_init(_cls)
+        quick_init(_cls)
 del _cls

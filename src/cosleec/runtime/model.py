@@ -24,6 +24,7 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from cosleec.bulk import quick_init
 from cosleec.cop import Layer, LayerGroup, Snapshot
 from cosleec.errors import ConfigurationError, clip
 from cosleec.lang import ast as A
@@ -36,6 +37,7 @@ Window = tuple[str, float, float | None]  # (event, from_s, within_s): one item 
 Branch = tuple[Window, ...]
 
 
+@quick_init
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Obligation:
     """What one decision requires: produce (or, negated, do not produce) ``event``.
@@ -112,6 +114,7 @@ def _fmt_s(x: float) -> str:
     return f"{x:g} s"
 
 
+@quick_init
 @dataclass(frozen=True, slots=True, kw_only=True)
 class ItemSpec:
     """One compiled response item: the event, its window as functions of the context.
@@ -130,6 +133,7 @@ class ItemSpec:
     alternative: ResponseSpec | None
 
 
+@quick_init
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Clause:
     """A hedge clause: ``unless condition [then response]`` -- one COP layer."""
@@ -152,6 +156,7 @@ class Clause:
             return None if x is None else bool(x)
 
 
+@quick_init
 @dataclass(frozen=True, slots=True)
 class ResponseSpec:
     """A compiled response: its items and, for a braced inner response, its own clauses."""
@@ -197,6 +202,7 @@ def _const(fn: Seconds) -> float | None:
         return None  # depends on a measure: known only when the response starts
 
 
+@quick_init
 @dataclass(frozen=True, slots=True, kw_only=True)
 class CompiledRule:
     """One rule ready to run: trigger, default response, clauses and its COP layers."""
