@@ -28,6 +28,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
+from cosleec.bulk import quick_init
 from cosleec.cop import Snapshot, activate, layered
 from cosleec.errors import clip
 from cosleec.runtime.decision import Decision
@@ -42,6 +43,7 @@ Capability = Callable[[Obligation, Decision], Any]
 Handler = Callable[[Decision], Any]
 
 
+@quick_init
 @dataclass(frozen=True, slots=True)
 class Ran:
     """The outcome of one implementation run for a decision: a capability, a task method, a fallback.

@@ -135,6 +135,15 @@ class RuntimeEvent:
     data: dict[str, Any] = field(default_factory=dict)
     seq: int = 0
 
+    @classmethod
+    def made(cls, kind: str, time: float, data: dict[str, Any], seq: int) -> RuntimeEvent:
+        """The same as the constructor with every field given, for the Manager's hot path
+        (a frozen dataclass sets each field through ``object.__setattr__``; a decision with
+        observers makes several records)."""
+        ev = object.__new__(cls)
+        ev.__dict__.update(kind=kind, time=time, data=data, seq=seq)
+        return ev
+
 
 @dataclass(frozen=True)
 class Permission:
@@ -1463,7 +1472,7 @@ class Manager:
         values): the clock may have moved since the step read it.
         """
         t = self.clock.now() if at is None else at
-        step.events.append(RuntimeEvent(kind, t, data, self._count("record")))
+        step.events.append(RuntimeEvent.made(kind, t, data, self._count("record")))
 
     @property
     def _recording(self) -> bool:

@@ -180,3 +180,14 @@ def test_the_layer_manager_chooses_as_choose_does(
     assert status.clause == choose(values, semantics, unknowns)
     expected = [f"R.{status.clause}"] if status.clause else []
     assert m.active_layers() == expected
+
+
+def test_runtime_event_made_equals_the_constructor() -> None:
+    from cosleec.runtime import RuntimeEvent
+
+    fast, plain = RuntimeEvent.made("decision", 1.5, {"a": 1}, 7), RuntimeEvent("decision", 1.5, {"a": 1}, 7)
+    assert fast == plain and repr(fast) == repr(plain) and hash(fast.kind) == hash(plain.kind)
+    assert vars(fast) == vars(plain)
+    assert [f.name for f in dataclasses.fields(RuntimeEvent)] == list(
+        inspect.signature(RuntimeEvent.made).parameters
+    )
