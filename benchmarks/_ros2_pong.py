@@ -1,17 +1,29 @@
-"""Raw rclpy echo: /bench/ping -> /bench/pong (std_msgs/String), the transport floor."""
+"""Raw rclpy echo, the transport floor: a ``cosleec_interfaces/msg/Event`` Ping on /bench/ping
+is answered by a Pong Event (same seq) on /bench/pong.
+
+The same message type as the end-to-end path carries, and the same executor as the cosleec
+nodes spin (rclpy's SingleThreadedExecutor, :class:`cosleec.ros.ros2.Ros2Transport`), so the
+comparison measures what cosleec adds, not a different type or executor.
+"""
 
 import signal
 import threading
 
 import rclpy
+from cosleec_interfaces.msg import Event
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from std_msgs.msg import String
 
 rclpy.init()
 node = rclpy.create_node("bench_pong")
 qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-pub = node.create_publisher(String, "/bench/pong", qos)
-node.create_subscription(String, "/bench/ping", lambda m: pub.publish(m), qos)
+pub = node.create_publisher(Event, "/bench/pong", qos)
+
+
+def echo(m: Event) -> None:
+    pub.publish(Event(event="Pong", sender="bench_pong", seq=m.seq))
+
+
+node.create_subscription(Event, "/bench/ping", echo, qos)
 stop = threading.Event()
 signal.signal(signal.SIGTERM, lambda *_: stop.set())
 signal.signal(signal.SIGINT, lambda *_: stop.set())

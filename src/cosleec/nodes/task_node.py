@@ -30,6 +30,9 @@ from cosleec.runtime import Capability, Decision, Implementations, RuleSet, Task
 #: what :meth:`TaskNode.request` does when the Manager does not answer in time
 WHEN_MANAGER_DOWN = ("refuse", "raise")
 
+#: at most this long (s) the transport's thread waits for an idle worker to take an obligation
+HANDOFF_WAIT_S = 0.002
+
 
 class ManagerUnavailable(UserError):
     """The Manager did not answer a task node's request in time (``when_manager_down="raise"``).
@@ -128,6 +131,9 @@ class TaskNode(Node):
         self._ids = itertools.count(1)
         self._replies: dict[str, tuple[threading.Event, list[bool], str]] = {}
         self._work: queue.Queue[Decision | None] = queue.Queue()
+        # the hand-off (see _hand_over): the worker waits on an empty queue / has taken a decision
+        self._worker_waiting = False
+        self._taken = threading.Event()
         self.handled: deque[Decision] = deque(maxlen=keep_handled)  # the most recent decisions run
         self.handled_total = 0  # every decision run (status `handled`)
         self._seen = SeenDecisions(seen_window)
@@ -236,7 +242,24 @@ class TaskNode(Node):
             if self.status_each:
                 self.status()
             return
+        self._hand_over(d)
+
+    def _hand_over(self, d: Decision) -> None:
+        """Queue ``d`` for the worker; if the worker was idle, give it the CPU to take it.
+
+        Called on the transport's thread. Left to itself that thread would go on (rebuilding
+        the executor's wait set, holding the GIL) while the woken worker waits to run: the
+        obligation's latency would include that. Waiting here, at most ``HANDOFF_WAIT_S``,
+        for the worker to take the decision lets it start at once; the wait is bounded, so
+        the transport is never held longer (never deaf), and skipped when the worker is busy
+        (the decision then waits its turn in the queue anyway).
+        """
+        handoff = self._worker_waiting and self._work.empty()
+        if handoff:
+            self._taken.clear()
         self._work.put(d)
+        if handoff:
+            self._taken.wait(HANDOFF_WAIT_S)
 
     def _reply(self, msg: dict[str, Any]) -> None:
         entry = self._replies.get(str(msg.get("id")))
@@ -247,7 +270,10 @@ class TaskNode(Node):
 
     def _run(self) -> None:
         while True:
+            self._worker_waiting = True
             d = self._work.get()
+            self._worker_waiting = False
+            self._taken.set()
             if d is None:
                 return
             try:

@@ -375,6 +375,10 @@ class Manager:
         self._depth = threading.local()
         self._wake = threading.Condition()
         self._timer: threading.Thread | None = None
+        # the timer's sleep (under _wake): the clock time it wakes by (inf while awake, or when
+        # nothing is due), and whether a step asked it to look again before sleeping
+        self._timer_due = math.inf
+        self._poke = False
         self._stop = threading.Event()
         self._broken: JournalError | None = None
         self._closed = False
@@ -670,7 +674,8 @@ class Manager:
                 if composition is not None:
                     jobs.append(job)
             followups = self._ready(jobs + followups, now, step)
-        self._notify_timer()
+            due = self._due_for_timer()
+        self._notify_timer(due)
         self._dispatch(followups)
         return decisions
 
@@ -1512,10 +1517,31 @@ class Manager:
             if self.journal is not None and self.dispatch_locally:
                 step.change.outbox[d.id] = None
 
-    def _notify_timer(self) -> None:
-        if self._timer is not None:
-            with self._wake:
-                self._wake.notify_all()
+    def _due_for_timer(self) -> float | None:
+        """(Under the lock, at the end of a step.) The earliest clock time the deadline timer
+        must judge at because of what is in force now: the next deadline; -inf (wake it
+        whatever it sleeps until) while decisions are held or conflict-aware priorities may
+        cut; None when nothing is due and nothing waits."""
+        if self._timer is None:
+            return None
+        if self._held or (self.priorities.semantics == CONFLICT_AWARE and self.priorities.above):
+            return -math.inf
+        return self.tracker.next_deadline()
+
+    def _notify_timer(self, due: float | None = -math.inf) -> None:
+        """Wake the deadline timer when something is due before the time it sleeps until.
+
+        A step that left nothing due earlier than that does not wake it: on two cores, waking
+        a thread for nothing costs a trigger as much as publishing its decision. Safe
+        without the ``_wake`` lock: the timer commits to a wake-up time only after reading
+        what is in force (under the Manager's lock), so a deadline added since is either seen
+        by that reading, or earlier than the committed time and wakes it (``_run_timer``).
+        """
+        if self._timer is None or due is None or due >= self._timer_due:
+            return
+        with self._wake:
+            self._poke = True
+            self._wake.notify_all()
 
     def _run_timer(self) -> None:
         while not self._stop.is_set():
@@ -1527,7 +1553,12 @@ class Manager:
             times = [t for t in (nxt, exp, cut[0] if cut else None, opening) if t is not None]
             wait = None if not times else max(0.0, min(times) - self.clock.now() + 1e-3)
             with self._wake:
-                self._wake.wait(timeout=0.5 if wait is None else min(wait, 0.5))
+                # a step that changed what is due since the reading above has poked: read again
+                if not self._poke and not self._stop.is_set():
+                    self._timer_due = min(times) if times else math.inf
+                    self._wake.wait(timeout=0.5 if wait is None else min(wait, 0.5))
+                self._poke = False
+                self._timer_due = math.inf  # awake: every step that adds a deadline pokes
             if not self._stop.is_set():
                 try:
                     self.tick()

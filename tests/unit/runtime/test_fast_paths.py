@@ -191,3 +191,49 @@ def test_runtime_event_made_equals_the_constructor() -> None:
     assert [f.name for f in dataclasses.fields(RuntimeEvent)] == list(
         inspect.signature(RuntimeEvent.made).parameters
     )
+
+
+TIMED = """def_start event Short event Long event Done measure m : boolean def_end
+rule_start
+RS when Short then Done within 1 seconds
+RL when Long then Done within 30 seconds
+rule_end"""
+
+
+def test_the_deadline_timer_is_woken_only_for_a_deadline_earlier_than_its_sleep() -> None:
+    """A step wakes the timer when it leaves a deadline earlier than the one the timer
+    sleeps until -- so a short deadline is judged on time, not at the next half-second
+    poll -- and not when the new deadline is later (waking a thread for nothing costs a
+    trigger as much as publishing its decision)."""
+    import time as wall
+
+    from cosleec.runtime import MonotonicClock
+
+    m = Manager.from_text(TIMED, clock=MonotonicClock())
+    m.start(check=False, timer=True)
+    try:
+        pokes: list[float] = []
+        real = m._wake.notify_all
+
+        def counted() -> None:
+            pokes.append(wall.monotonic())
+            real()
+
+        m._wake.notify_all = counted  # type: ignore[method-assign]
+        m.event("Long")  # nothing was due: the timer sleeps with no deadline -> woken
+        deadline = wall.monotonic() + 2
+        while m._timer_due == float("inf") and wall.monotonic() < deadline:
+            wall.sleep(0.005)  # until the timer sleeps until RL's deadline
+        assert len(pokes) == 1 and m._timer_due < float("inf")
+        m.event("Long")  # 30 s later than what it sleeps until: not woken
+        assert len(pokes) == 1
+        started = wall.monotonic()
+        m.event("Short")  # 1 s: earlier -> woken, and judged at its deadline
+        assert len(pokes) == 2
+        while m.stats["violations"] == 0 and wall.monotonic() < started + 3:
+            wall.sleep(0.01)
+        took = wall.monotonic() - started
+        assert m.stats["violations"] == 1
+        assert took < 1.4, f"judged after {took:.2f} s: the timer slept through the short deadline"
+    finally:
+        m.close()
