@@ -153,3 +153,27 @@ def test_the_repository_readme_has_the_markers_inside_its_benchmark_section() ->
     section = text.split("--8<-- [start:benchmarks]", 1)[1].split("--8<-- [end:benchmarks]", 1)[0]
     assert section.count(bt.START) == 1 and section.count(bt.END) == 1
     assert text.count(bt.START) == 1 and text.count(bt.END) == 1
+
+
+def test_scaling_plot_draws_a_png_with_matplotlib(tmp_path: Path) -> None:
+    """``scaling --plot FILE.png``, on figures given here (no benchmark runs): real
+    matplotlib writes a real PNG (the `bench` extra is part of `dev`)."""
+    pytest.importorskip("matplotlib")
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        spec = importlib.util.spec_from_file_location("bench_scaling", ROOT / "benchmarks" / "scaling.py")
+        assert spec is not None and spec.loader is not None
+        scaling = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(scaling)
+    finally:
+        sys.path.remove(str(ROOT / "benchmarks"))
+    series = {
+        "update": {100: 28.0, 1000: 28.8, 10000: 31.9},
+        "event": {100: 32.0, 1000: 44.8, 10000: 60.1},
+        "build": {100: 0.017, 1000: 0.126, 10000: 1.61},
+        "memory": {100: 0.71, 1000: 6.92, 10000: 68.7},
+    }
+    out = tmp_path / "scaling.png"
+    scaling.plot(series, str(out))
+    data = out.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
