@@ -2,10 +2,10 @@
 against the floors of the architecture (README, "Architecture").
 
 floor 4   cli                         the only place that prints and calls sys.exit
-floor 3   ros  demo                   adapters and front ends (ros runs the demo over middleware)
+floor 3   ros  demo  views            adapters and front ends (ros runs the demo over middleware; views draw)
 floor 2   nodes  testing              the paper's nodes; public test helpers
 floor 1   runtime                     on lang and cop
-floor 0   errors  bulk  lang  cop           cop imports nothing of ours
+floor 0   errors  bulk  lang  cop     cop imports nothing of ours
 """
 
 from __future__ import annotations
@@ -27,9 +27,22 @@ ALLOWED: dict[str, set[str]] = {
     "runtime": {"errors", "bulk", "lang", "cop"},
     "nodes": {"errors", "lang", "runtime"},
     "testing": {"errors", "lang", "cop", "runtime", "nodes"},
+    "views": {"errors", "lang", "runtime"},
     "demo": {"errors", "lang", "runtime", "nodes", "testing"},
     "ros": {"errors", "lang", "runtime", "nodes", "testing", "demo"},
-    "cli": {"errors", "lang", "cop", "semantics", "analysis", "runtime", "nodes", "testing", "demo", "ros"},
+    "cli": {
+        "errors",
+        "lang",
+        "cop",
+        "semantics",
+        "analysis",
+        "runtime",
+        "nodes",
+        "testing",
+        "views",
+        "demo",
+        "ros",
+    },
 }
 NO_FUNCTION_IMPORTS = {"errors", "lang", "cop", "semantics", "analysis", "runtime"}
 

@@ -25,6 +25,7 @@ from cosleec.runtime.layers import LayerManager, LayerState, LayerSwitch
 from cosleec.runtime.manager import Manager, Permission, Reloaded, RuntimeEvent, UnknownEvents
 from cosleec.runtime.model import MAX_WINDOW_S, CompiledRule, DeadlineError, Obligation
 from cosleec.runtime.obligations import Tracked
+from cosleec.runtime.priorities import PossibleConflict, Priorities, possible_conflicts
 from cosleec.runtime.ruleset import RuleSet
 from cosleec.runtime.scaffold import STYLES as SCAFFOLD_STYLES
 from cosleec.runtime.scaffold import scaffold
@@ -56,6 +57,8 @@ __all__ = [
     "MonotonicClock",
     "Obligation",
     "Permission",
+    "PossibleConflict",
+    "Priorities",
     "Ran",
     "ReloadError",
     "Reloaded",
@@ -69,6 +72,7 @@ __all__ = [
     "Value",
     "VirtualClock",
     "hedge",
+    "possible_conflicts",
     "read_audit",
     "scaffold",
 ]

@@ -1,0 +1,287 @@
+"""A rule set as COP sees it, as a picture: Graphviz (DOT, SVG, PNG) or Mermaid text.
+
+Each rule is a cluster: its trigger and default response (the layered method's base),
+then one box per clause layer (``R1.1``, ...) with its condition and response. Events and
+measures are nodes shared between rules, so that dependencies show: an event points to
+the rules it triggers, a rule or layer to the events its response obliges (a dashed edge
+for one it forbids), a measure to the triggers and layers that read it. Declared
+priorities are blue edges from the higher rule to the lower; pairs of responses that
+oblige and forbid the same event across rules no priority orders (what the Manager warns
+of at start) are red edges. A legend says which is which.
+
+Reviewers read it next to the rules, so every label is the rule's own text (the
+canonical printer's), shortened past :data:`LABEL_WIDTH` characters a line.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import textwrap
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+from cosleec.errors import UserError
+from cosleec.lang import Printer, pairs, visit
+from cosleec.lang import ast as A
+from cosleec.runtime import Priorities, RuleSet, possible_conflicts
+
+LABEL_WIDTH = 48
+"""Characters a label line holds before it wraps (longer conditions wrap, never vanish)."""
+
+MAX_LINES = 6
+"""Lines a label keeps; the rest is cut, marked with an ellipsis."""
+
+FORMATS = ("svg", "png", "dot", "mmd")
+
+
+@dataclass(frozen=True)
+class Box:
+    """One node of the picture: ``id`` (stable, quoted where needed), its label lines, its kind."""
+
+    id: str
+    lines: tuple[str, ...]
+    kind: str  # rule | layer | event | measure
+
+
+@dataclass(frozen=True)
+class Edge:
+    """An arrow ``src -> dst`` of a kind: triggers, reads, obliges, forbids, priority, conflict, layer."""
+
+    src: str
+    dst: str
+    kind: str
+    label: str = ""
+
+
+@dataclass(frozen=True)
+class RuleGraph:
+    """What the picture shows, independent of the notation it is drawn in."""
+
+    clusters: tuple[tuple[str, tuple[Box, ...]], ...]  # rule name -> its base and layer boxes
+    shared: tuple[Box, ...]  # events and measures
+    edges: tuple[Edge, ...]
+
+
+def _wrap(text: str) -> tuple[str, ...]:
+    lines = textwrap.wrap(text, LABEL_WIDTH, break_long_words=True, break_on_hyphens=False) or [""]
+    if len(lines) > MAX_LINES:
+        lines = [*lines[: MAX_LINES - 1], lines[MAX_LINES - 1][: LABEL_WIDTH - 1] + "…"]
+    return tuple(lines)
+
+
+def _events(r: A.Response | None, out: list[tuple[str, bool]]) -> None:
+    """(event, negated) of every item of ``r``, its fallbacks and alternatives, in order."""
+    if r is None:
+        return
+    for it in r.items:
+        out.append((it.occurrence.event, it.occurrence.negated))
+        _events(it.otherwise, out)
+        _events(it.alternative, out)
+    for d in r.defeaters:
+        _events(d.response, out)
+
+
+def build(rules: RuleSet, only: Sequence[str] = ()) -> RuleGraph:
+    """The picture of ``rules`` (every rule, or those named in ``only``, with what they touch)."""
+    spec = rules.spec
+    printer = Printer(spec, A.Dialect.TK)
+    measures = {m.name: m for m in spec.measures}
+    chosen = [r for r in rules.rules if not only or r.name in only]
+    clusters: list[tuple[str, tuple[Box, ...]]] = []
+    edges: list[Edge] = []
+    used_events: dict[str, None] = {}
+    used_measures: dict[str, None] = {}
+
+    def reads(e: A.Expr | None, box: str) -> None:
+        found = {n.name for n in visit.names(e) if n.name in measures}
+        for m in sorted(found):
+            used_measures[m] = None
+            edges.append(Edge(f"m:{m}", box, "reads"))
+
+    def obliges(resp: A.Response | None, box: str, *, inner: bool) -> None:
+        found: list[tuple[str, bool]] = []
+        if resp is not None:
+            _events(resp if inner else A.Response(resp.items, ()), found)
+        for ev, negated in dict.fromkeys(found):
+            used_events[ev] = None
+            edges.append(Edge(box, f"e:{ev}", "forbids" if negated else "obliges"))
+
+    for r in chosen:
+        ast = r.ast
+        head, _ = printer.response_parts(A.Response(ast.response.items, ()))
+        trigger = printer.trigger(ast.trigger)
+        base = Box(r.name, (r.name, *_wrap(f"when {trigger}"), *_wrap(f"then {head}")), "rule")
+        boxes = [base]
+        used_events[ast.trigger.event] = None
+        edges.append(Edge(f"e:{ast.trigger.event}", r.name, "triggers"))
+        reads(ast.trigger.condition, r.name)
+        obliges(ast.response, r.name, inner=False)
+        for clause, d in zip(r.clauses, ast.response.defeaters):
+            text = printer.defeater(d)
+            boxes.append(Box(clause.layer, (f"layer {clause.layer}", *_wrap(text)), "layer"))
+            edges.append(Edge(r.name, clause.layer, "layer"))
+            reads(d.condition, clause.layer)
+            obliges(d.response, clause.layer, inner=True)
+        clusters.append((r.name, tuple(boxes)))
+    names = {r.name for r in chosen}
+    prio = Priorities.build((r.name for r in rules.rules), pairs(spec))
+    for high, low in prio.declared:
+        if high in names and low in names:
+            edges.append(Edge(high, low, "priority", "over"))
+    for c in possible_conflicts(rules, prio):
+        a, b = c.rules
+        if a in names and b in names and a != b:
+            edges.append(Edge(a, b, "conflict", c.event))
+    shared = [Box(f"e:{e}", (e,), "event") for e in used_events]
+    for m in used_measures:  # `measure m : type` without the keyword
+        shared.append(Box(f"m:{m}", (printer.definition(measures[m]).removeprefix("measure "),), "measure"))
+    return RuleGraph(tuple(clusters), tuple(shared), tuple(edges))
+
+
+# ---------------------------------------------------------------------------- Graphviz
+
+_NODE_STYLE = {
+    "rule": 'shape=box, style="filled", fillcolor="#fff7e0"',
+    "layer": 'shape=box, style="rounded,filled", fillcolor="#e8f4ea"',
+    "event": 'shape=ellipse, style="filled", fillcolor="#e8f0fe"',
+    "measure": 'shape=hexagon, style="filled", fillcolor="#f3e8fd"',
+}
+_EDGE_STYLE = {
+    "triggers": 'color="#1a73e8"',
+    "reads": 'color="#8e24aa", style=dotted, arrowhead=none',
+    "obliges": 'color="#188038"',
+    "forbids": 'color="#188038", style=dashed, arrowhead=tee',
+    "layer": 'color="#5f6368", style=dashed, label="unless"',
+    "priority": 'color="#1a73e8", penwidth=2, constraint=false',
+    "conflict": 'color="#d93025", penwidth=2, constraint=false, dir=both',
+}
+
+
+def _q(text: str) -> str:
+    """A DOT string literal (JSON's escaping is DOT's for quotes and backslashes)."""
+    return json.dumps(text, ensure_ascii=False)
+
+
+def _label(lines: Iterable[str]) -> str:
+    return _q("\n".join(lines))
+
+
+def to_dot(g: RuleGraph, title: str = "") -> str:
+    """The picture as Graphviz DOT: a cluster per rule, shared event and measure nodes, a legend."""
+    out = [
+        "digraph sleec {",
+        '  graph [rankdir=LR, fontname="Helvetica", fontsize=11, newrank=true'
+        + (f", label={_q(title)}, labelloc=t" if title else "")
+        + "];",
+        '  node [fontname="Helvetica", fontsize=10];',
+        '  edge [fontname="Helvetica", fontsize=9];',
+    ]
+    for i, (rule, boxes) in enumerate(g.clusters):
+        out.append(f"  subgraph cluster_{i} {{")
+        out.append(f'    label={_q(rule)}; style="rounded"; color="#bdc1c6";')
+        for b in boxes:
+            out.append(f"    {_q(b.id)} [label={_label(b.lines)}, {_NODE_STYLE[b.kind]}];")
+        out.append("  }")
+    for b in g.shared:
+        out.append(f"  {_q(b.id)} [label={_label(b.lines)}, {_NODE_STYLE[b.kind]}];")
+    for e in g.edges:
+        label = f", label={_q(e.label)}" if e.label else ""
+        out.append(f"  {_q(e.src)} -> {_q(e.dst)} [{_EDGE_STYLE[e.kind]}{label}];")
+    out += _legend()
+    out.append("}")
+    return "\n".join(out) + "\n"
+
+
+def _legend() -> list[str]:
+    rows = [
+        ("event", "event"),
+        ("measure", "measure"),
+        ("rule: trigger and default response (the base)", "rule"),
+        ("layer: an unless clause", "layer"),
+    ]
+    out = ["  subgraph cluster_legend {", '    label="legend"; style="dashed"; color="#bdc1c6";']
+    for i, (text, kind) in enumerate(rows):
+        out.append(f'    "legend:{i}" [label={_q(text)}, {_NODE_STYLE[kind]}];')
+    arrows = [
+        ("triggers", "triggers"),
+        ("obliges", "obliges"),
+        ("forbids", "forbids"),
+        ("reads", "reads"),
+        ("priority", "priority (higher to lower)"),
+        ("conflict", "can conflict (no priority)"),
+    ]
+    for i, (kind, text) in enumerate(arrows):
+        out.append(f'    "legend:a{i}" [label="", shape=point, width=0.05];')
+        out.append(f'    "legend:b{i}" [label={_q(text)}, shape=plaintext];')
+        out.append(f'    "legend:a{i}" -> "legend:b{i}" [{_EDGE_STYLE[kind]}];')
+    out.append("  }")
+    return out
+
+
+def render(dot: str, fmt: str) -> bytes:
+    """``dot`` drawn by Graphviz as ``svg`` or ``png``; UserError when Graphviz is missing or fails."""
+    exe = shutil.which("dot")
+    if exe is None:
+        raise UserError(
+            "drawing SVG or PNG needs Graphviz's `dot`, which is not installed",
+            hint="install it (`apt-get install graphviz`; `bash scripts/setup` does, as root), "
+            "or write `-o FILE.dot` or `-o FILE.mmd`",
+        )
+    try:
+        done = subprocess.run(
+            [exe, f"-T{fmt}"], input=dot.encode(), capture_output=True, timeout=300, check=False
+        )
+    except subprocess.TimeoutExpired:
+        raise UserError(
+            "Graphviz took over 5 minutes to lay the picture out", hint="draw fewer rules with --rule"
+        ) from None
+    if done.returncode != 0:
+        raise UserError(f"Graphviz failed: {done.stderr.decode(errors='replace').strip()[:500]}")
+    return done.stdout
+
+
+# ---------------------------------------------------------------------------- Mermaid
+
+_MERMAID_ARROW = {
+    "triggers": "-->|triggers|",
+    "reads": "-.-",
+    "obliges": "-->",
+    "forbids": "-.->|forbids|",
+    "layer": "-.->|unless|",
+    "priority": "==>|over|",
+    "conflict": "x--x",
+}
+
+
+def to_mermaid(g: RuleGraph) -> str:
+    """The picture as Mermaid ``flowchart`` text (for Markdown: GitHub, MkDocs)."""
+    ids: dict[str, str] = {}
+
+    def mid(x: str) -> str:
+        return ids.setdefault(x, f"n{len(ids)}")
+
+    def text(lines: Iterable[str]) -> str:
+        body = "<br/>".join(line.replace('"', "#quot;") for line in lines)
+        return f'"{body}"'
+
+    shape = {"rule": ("[", "]"), "layer": ("(", ")"), "event": ("([", "])"), "measure": ("{{", "}}")}
+    out = ["flowchart LR"]
+    for rule, boxes in g.clusters:
+        out.append(f"  subgraph {mid('cluster:' + rule)} [{text([rule])}]")
+        for b in boxes:
+            a, z = shape[b.kind]
+            out.append(f"    {mid(b.id)}{a}{text(b.lines)}{z}")
+        out.append("  end")
+    for b in g.shared:
+        a, z = shape[b.kind]
+        out.append(f"  {mid(b.id)}{a}{text(b.lines)}{z}")
+    styles: list[str] = []
+    for i, e in enumerate(g.edges):
+        arrow = _MERMAID_ARROW[e.kind]
+        if e.kind == "conflict":
+            arrow = f"x--x|{e.label}|" if e.label else arrow
+            styles.append(f"  linkStyle {i} stroke:#d93025,stroke-width:2px")
+        out.append(f"  {mid(e.src)} {arrow} {mid(e.dst)}")
+    return "\n".join(out + styles) + "\n"
