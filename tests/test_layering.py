@@ -27,7 +27,7 @@ ALLOWED: dict[str, set[str]] = {
     "runtime": {"errors", "bulk", "lang", "cop"},
     "nodes": {"errors", "lang", "runtime"},
     "testing": {"errors", "lang", "cop", "runtime", "nodes"},
-    "views": {"errors", "lang", "runtime"},
+    "views": {"errors", "lang", "semantics", "analysis", "runtime"},
     "demo": {"errors", "lang", "runtime", "nodes", "testing"},
     "ros": {"errors", "lang", "runtime", "nodes", "testing", "demo"},
     "cli": {

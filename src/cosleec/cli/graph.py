@@ -9,7 +9,7 @@ from pathlib import Path
 
 from cosleec.errors import UserError
 from cosleec.runtime import RuleSet
-from cosleec.views import FORMATS, build, render, to_dot, to_mermaid
+from cosleec.views import FORMATS, analysed_conflicts, build, render, to_dot, to_mermaid
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -32,6 +32,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         action="append",
         metavar="R",
         help="draw only this rule (repeatable), with the events and measures it touches",
+    )
+    p.add_argument(
+        "--analyse",
+        action="store_true",
+        help="draw as red edges the conflicts `cosleec analyse` finds (z3: proved, or up to its bound) "
+        "instead of the quick pairwise check",
     )
     p.set_defaults(run=run)
 
@@ -58,7 +64,8 @@ def run(args: argparse.Namespace) -> int:
                 f"no rule {name!r} in {args.rules}",
                 hint=f"did you mean {close[0]!r}?" if close else f"rules: {', '.join(names)}",
             )
-    graph = build(rules, args.rule or ())
+    conflicts = analysed_conflicts(args.rules) if args.analyse else None
+    graph = build(rules, args.rule or (), conflicts)
     if fmt == "mmd":
         data = to_mermaid(graph).encode()
     else:

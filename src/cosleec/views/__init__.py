@@ -2,6 +2,6 @@
 (:mod:`cosleec.views.graph`). On top of ``lang``, ``runtime`` and ``analysis``; nothing
 below imports it."""
 
-from cosleec.views.graph import FORMATS, RuleGraph, build, render, to_dot, to_mermaid
+from cosleec.views.graph import FORMATS, RuleGraph, analysed_conflicts, build, render, to_dot, to_mermaid
 
-__all__ = ["FORMATS", "RuleGraph", "build", "render", "to_dot", "to_mermaid"]
+__all__ = ["FORMATS", "RuleGraph", "analysed_conflicts", "build", "render", "to_dot", "to_mermaid"]

@@ -7,7 +7,8 @@ the rules it triggers, a rule or layer to the events its response obliges (a das
 for one it forbids), a measure to the triggers and layers that read it. Declared
 priorities are blue edges from the higher rule to the lower; pairs of responses that
 oblige and forbid the same event across rules no priority orders (what the Manager warns
-of at start) are red edges. A legend says which is which.
+of at start, or with ``--analyse`` what ``cosleec analyse`` proves) are red edges. A legend
+says which is which.
 
 Reviewers read it next to the rules, so every label is the rule's own text (the
 canonical printer's), shortened past :data:`LABEL_WIDTH` characters a line.
@@ -22,6 +23,7 @@ import textwrap
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
+from cosleec.analysis import Settings, analyse_file
 from cosleec.errors import UserError
 from cosleec.lang import Printer, pairs, visit
 from cosleec.lang import ast as A
@@ -83,8 +85,15 @@ def _events(r: A.Response | None, out: list[tuple[str, bool]]) -> None:
         _events(d.response, out)
 
 
-def build(rules: RuleSet, only: Sequence[str] = ()) -> RuleGraph:
-    """The picture of ``rules`` (every rule, or those named in ``only``, with what they touch)."""
+def build(
+    rules: RuleSet, only: Sequence[str] = (), conflicts: Iterable[tuple[str, str, str]] | None = None
+) -> RuleGraph:
+    """The picture of ``rules`` (every rule, or those named in ``only``, with what they touch).
+
+    ``conflicts`` are the red edges, ``(rule, rule, label)``: by default the quick pairwise
+    check the Manager warns with at start (a response obliges an event another forbids, no
+    priority between them); :func:`analysed_conflicts` gives those ``cosleec analyse``
+    finds, proved or up to its bound."""
     spec = rules.spec
     printer = Printer(spec, A.Dialect.TK)
     measures = {m.name: m for m in spec.measures}
@@ -130,14 +139,36 @@ def build(rules: RuleSet, only: Sequence[str] = ()) -> RuleGraph:
     for high, low in prio.declared:
         if high in names and low in names:
             edges.append(Edge(high, low, "priority", "over"))
-    for c in possible_conflicts(rules, prio):
-        a, b = c.rules
-        if a in names and b in names and a != b:
-            edges.append(Edge(a, b, "conflict", c.event))
+    if conflicts is None:
+        conflicts = [(*c.rules, c.event) for c in possible_conflicts(rules, prio)]
+    seen: set[tuple[str, str, str]] = set()
+    for a, b, label in conflicts:
+        if a in names and b in names and a != b and (a, b, label) not in seen:
+            seen.add((a, b, label))
+            edges.append(Edge(a, b, "conflict", label))
     shared = [Box(f"e:{e}", (e,), "event") for e in used_events]
     for m in used_measures:  # `measure m : type` without the keyword
         shared.append(Box(f"m:{m}", (printer.definition(measures[m]).removeprefix("measure "),), "measure"))
     return RuleGraph(tuple(clusters), tuple(shared), tuple(edges))
+
+
+CONFLICT_CHECKS = ("runtime-conflict", "situational-conflict", "vacuous-conflict")
+"""The ``cosleec analyse`` checks whose findings :func:`analysed_conflicts` draws."""
+
+
+def analysed_conflicts(path: str, settings: Settings | None = None) -> list[tuple[str, str, str]]:
+    """The conflicts ``cosleec analyse`` finds in the rule file ``path`` (z3; seconds per
+    file), as red edges: each pair of rules a finding involves, labelled with its check and
+    proof (``runtime-conflict, proved``)."""
+    report = analyse_file(path, settings or Settings(), CONFLICT_CHECKS)
+    out = []
+    for f in report.findings:
+        involved = [r for r in f.rules if not r.startswith("relation ")]
+        label = f"{f.code}, {f.proof}"
+        for i, a in enumerate(involved):
+            for b in involved[i + 1 :]:
+                out.append((a, b, label))
+    return out
 
 
 # ---------------------------------------------------------------------------- Graphviz

@@ -147,3 +147,16 @@ def test_the_command_writes_each_format_and_refuses_clearly(tmp_path: Path) -> N
     assert not (tmp_path / "out.jpg").exists()
     gone = cosleec("graph", "nope.sleec", cwd=tmp_path)
     assert gone.returncode == 1 and "Traceback" not in gone.stderr
+
+
+def test_with_analyse_the_red_edges_are_what_cosleec_analyse_proves() -> None:
+    from cosleec.views import analysed_conflicts
+
+    found = analysed_conflicts(str(CARE))
+    assert ("R6", "R10", "runtime-conflict, proved") in found
+    rules = RuleSet.from_file(CARE)
+    red = {(e.src, e.dst, e.label) for e in build(rules, (), found).edges if e.kind == "conflict"}
+    assert red == set(found)
+    quick = {(e.src, e.dst) for e in build(rules).edges if e.kind == "conflict"}
+    assert quick == {("R10", "R6")} or quick == {("R6", "R10")}  # the pairwise check: the same pair
+    assert not {e for e in build(rules, ("R1",), found).edges if e.kind == "conflict"}  # R6 not drawn
