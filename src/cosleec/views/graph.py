@@ -73,18 +73,6 @@ def _wrap(text: str) -> tuple[str, ...]:
     return tuple(lines)
 
 
-def _events(r: A.Response | None, out: list[tuple[str, bool]]) -> None:
-    """(event, negated) of every item of ``r``, its fallbacks and alternatives, in order."""
-    if r is None:
-        return
-    for it in r.items:
-        out.append((it.occurrence.event, it.occurrence.negated))
-        _events(it.otherwise, out)
-        _events(it.alternative, out)
-    for d in r.defeaters:
-        _events(d.response, out)
-
-
 def build(
     rules: RuleSet, only: Sequence[str] = (), conflicts: Iterable[tuple[str, str, str]] | None = None
 ) -> RuleGraph:
@@ -111,8 +99,10 @@ def build(
 
     def obliges(resp: A.Response | None, box: str, *, inner: bool) -> None:
         found: list[tuple[str, bool]] = []
-        if resp is not None:
-            _events(resp if inner else A.Response(resp.items, ()), found)
+        if resp is not None:  # the base's own items only: its clauses are the layers' boxes
+            found = [
+                (o.event, o.negated) for o in visit.occurrences(resp if inner else A.Response(resp.items, ()))
+            ]
         for ev, negated in dict.fromkeys(found):
             used_events[ev] = None
             edges.append(Edge(box, f"e:{ev}", "forbids" if negated else "obliges"))
