@@ -2,7 +2,8 @@
 against the floors of the architecture (README, "Architecture").
 
 floor 4   cli                         the only place that prints and calls sys.exit
-floor 3   ros  demo  views            adapters and front ends (ros runs the demo over middleware; views draw)
+floor 3   ros  demo  views  lsp       adapters and front ends (ros runs the demo over middleware; views draw;
+                                      lsp serves editors)
 floor 2   nodes  testing              the paper's nodes; public test helpers
 floor 1   runtime                     on lang and cop
 floor 0   errors  bulk  lang  cop     cop imports nothing of ours
@@ -27,7 +28,8 @@ ALLOWED: dict[str, set[str]] = {
     "runtime": {"errors", "bulk", "lang", "cop"},
     "nodes": {"errors", "lang", "runtime"},
     "testing": {"errors", "lang", "cop", "runtime", "nodes"},
-    "views": {"errors", "lang", "semantics", "analysis", "runtime"},
+    "views": {"errors", "lang", "semantics", "analysis", "runtime", "nodes"},
+    "lsp": {"errors", "lang", "semantics", "analysis"},
     "demo": {"errors", "lang", "runtime", "nodes", "testing"},
     "ros": {"errors", "lang", "runtime", "nodes", "testing", "demo"},
     "cli": {
@@ -40,6 +42,7 @@ ALLOWED: dict[str, set[str]] = {
         "nodes",
         "testing",
         "views",
+        "lsp",
         "demo",
         "ros",
     },
