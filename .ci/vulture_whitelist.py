@@ -96,3 +96,4 @@ _.on_deactivate  #
 _.on_cleanup  #
 _.on_shutdown  #
 _.potherwise  # a Lark transformer callback of the paper notation (lang/paper.py)
+_.should_exit  # uvicorn.Server.should_exit: uvicorn's main loop reads it (the web view stops its server so)

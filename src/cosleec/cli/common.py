@@ -144,3 +144,14 @@ def add_priority_options(p: argparse.ArgumentParser, *, lead: bool = False) -> N
             metavar="SECONDS",
             help="conflict-aware: cancel L this long before H's deadline, so the robot has time to act",
         )
+
+
+def port(text: str) -> int:
+    """An argparse type: a TCP port from 0 to 65535 (0 picks a free one), for ``--web``."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a port number") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"{text!r}: a port is a number from 0 to 65535 (0: a free one)")
+    return value

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from cosleec import demo
-from cosleec.cli.common import add_clause_options, output_file
+from cosleec.cli.common import add_clause_options, output_file, port
 from cosleec.errors import UserError
 
 
@@ -30,7 +30,34 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         metavar="FILE",
         help="keep the Manager's state in this SQLite journal (restored by the next run, even after a crash)",
     )
+    p.add_argument(
+        "--web",
+        nargs="?",
+        const=0,
+        type=port,
+        metavar="PORT",
+        help="serve the live web view on 127.0.0.1:PORT (default: a free port), pace the day for a "
+        "watcher, then serve on until Ctrl-C",
+    )
+    p.add_argument(
+        "--pace",
+        type=pace,
+        default=None,
+        metavar="SECONDS",
+        help="with --web: seconds between two steps of the day (default 1; 0: no pause)",
+    )
     p.set_defaults(run=run)
+
+
+def pace(text: str) -> float:
+    """An argparse type: seconds between two steps, 0 or more (at most an hour)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not 0 <= value <= 3600:
+        raise argparse.ArgumentTypeError(f"{text!r}: give 0 to 3600 seconds")
+    return value
 
 
 def run(args: argparse.Namespace) -> int:
@@ -53,4 +80,13 @@ def run(args: argparse.Namespace) -> int:
             )
     if args.journal:
         output_file(args.journal, "the journal", "--journal")
-    return demo.main(as_json=args.json, semantics=args.semantics, audit=args.audit, journal=args.journal)
+    if args.pace is not None and args.web is None:
+        raise UserError("--pace needs --web", hint="the day is paced for someone watching the live web view")
+    web = (
+        {"web": args.web, "pace": demo.PACE_S if args.pace is None else args.pace}
+        if args.web is not None
+        else {}
+    )
+    return demo.main(
+        as_json=args.json, semantics=args.semantics, audit=args.audit, journal=args.journal, **web
+    )

@@ -18,7 +18,7 @@ import sys
 from typing import Any
 
 from cosleec import ros
-from cosleec.cli.common import add_clause_options, add_priority_options, input_file, output_file
+from cosleec.cli.common import add_clause_options, add_priority_options, input_file, output_file, port
 from cosleec.errors import UserError
 from cosleec.nodes import (
     GuardNode,
@@ -34,7 +34,8 @@ from cosleec.runtime import RuleSet, Unknowns
 
 #: the options of each node kind that are also ROS parameters (argparse dests). Not the
 #: namespace: it names the node, which exists before its parameters can be read (ROS 2 has
-#: its own `-r __ns:=/robot1`)
+#: its own `-r __ns:=/robot1`); nor the Manager's --web: it opens a port, which is asked for
+#: where the node is started, not by a parameter file shared between robots
 PARAMETERS = {
     "manager": (
         "rules",
@@ -136,6 +137,12 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     m.add_argument("--record", metavar="FILE.mcap", help="record the decision stream (Foxglove opens it)")
     m.add_argument(
         "--status-each", action="store_true", help="publish status after every message (harnesses)"
+    )
+    m.add_argument(
+        "--web",
+        type=port,
+        metavar="PORT",
+        help="serve the live web view on 127.0.0.1:PORT (0: a free port; its address is printed on stderr)",
     )
     m.add_argument(
         "--no-autostart",
@@ -319,7 +326,7 @@ def run(args: argparse.Namespace) -> int:
             sim = bool(o.sim_time) or bool(getattr(t, "use_sim_time", lambda: False)())
 
             def build(active: bool) -> ManagerNode:
-                return ManagerNode(
+                node = ManagerNode(
                     t,
                     RuleSet.from_file(path),  # a lifecycle node reads it when configured
                     namespace=o.namespace,
@@ -335,7 +342,11 @@ def run(args: argparse.Namespace) -> int:
                     priority_lead=o.priority_lead,
                     rules_path=o.rules,
                     active=active,
+                    web=args.web,
                 )
+                if node.manager.web_url:
+                    print(f"cosleec: live web view at {node.manager.web_url}", file=sys.stderr, flush=True)
+                return node
 
             if not lifecycle:
                 return build(True)

@@ -7,12 +7,15 @@ from cosleec.demo.assistive_care import scenario
 from cosleec.demo.compare import Outcome, expected, first_difference, outcomes, summary
 from cosleec.demo.player import Step, play
 from cosleec.demo.runner import Display, Run, main, rules_path, run
+from cosleec.demo.watch import PACE_S, Watch
 
 __all__ = [
+    "PACE_S",
     "Display",
     "Outcome",
     "Run",
     "Step",
+    "Watch",
     "expected",
     "first_difference",
     "main",

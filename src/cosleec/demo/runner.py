@@ -7,7 +7,8 @@ the end-to-end tests, which check every decision against ``scenario.EXPECTED``.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+import sys
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from typing import Any
@@ -17,6 +18,7 @@ from rich.text import Text
 
 from cosleec.demo.assistive_care import scenario, tasks
 from cosleec.demo.player import Step, play
+from cosleec.demo.watch import PACE_S, Watch
 from cosleec.runtime import AuditLog, Manager, RuntimeEvent, VirtualClock
 
 
@@ -57,6 +59,9 @@ def run(
     journal: str | None = None,
     on_step: Callable[[float, Step], None] | None = None,
     on_event: Callable[[RuntimeEvent], None] | None = None,
+    web: int | Mapping[str, Any] | None = None,
+    on_start: Callable[[Manager], None] | None = None,
+    before_close: Callable[[Manager], None] | None = None,
 ) -> Run:
     """Play ``steps`` (the scripted day by default) against an embedded Manager on a virtual clock.
 
@@ -65,7 +70,10 @@ def run(
     fail or work again. ``on_step(now, step)`` runs before each step, ``on_event`` for
     every runtime event; ``audit`` names a JSON Lines audit trail and ``journal`` the
     Manager's SQLite journal (state kept across runs and crashes: a journal a previous run
-    left is restored first). The Manager is closed before returning.
+    left is restored first). ``web`` serves the live web view (``Manager(web=...)``);
+    ``on_start(manager)`` runs once it is started (the view's URL is known then) and
+    ``before_close(manager)`` after the last step (the web demo serves on there). The Manager
+    is closed before returning, even when a step or a hook raises (Ctrl-C).
     """
     clock = VirtualClock()
     manager = Manager.from_file(
@@ -74,9 +82,14 @@ def run(
         semantics=semantics,
         audit=AuditLog(audit) if audit else None,
         journal=journal,
+        web=web,
     )
     robot = tasks.install(manager)
-    manager.start()
+    try:
+        manager.start()
+    except BaseException:
+        manager.close()  # a view that started is stopped, its port freed
+        raise
     result = Run(manager, robot)
 
     def observe(ev: RuntimeEvent) -> None:
@@ -90,20 +103,26 @@ def run(
         clock.advance(seconds)
         manager.tick()
 
-    play(
-        steps if steps is not None else scenario.STEPS,
-        {
-            "set": manager.update,
-            "event": manager.event,
-            "advance": advance,
-            "request": manager.request,
-            "fail": robot.failing.add,
-            "recover": robot.failing.discard,
-        },
-        clock.now,
-        on_step,
-    )
-    manager.close()
+    try:
+        if on_start is not None:
+            on_start(manager)
+        play(
+            steps if steps is not None else scenario.STEPS,
+            {
+                "set": manager.update,
+                "event": manager.event,
+                "advance": advance,
+                "request": manager.request,
+                "fail": robot.failing.add,
+                "recover": robot.failing.discard,
+            },
+            clock.now,
+            on_step,
+        )
+        if before_close is not None:
+            before_close(manager)
+    finally:
+        manager.close()
     return result
 
 
@@ -186,18 +205,30 @@ class Display:
 
 
 def main(
-    as_json: bool = False, semantics: str = "last-wins", audit: str | None = None, journal: str | None = None
+    as_json: bool = False,
+    semantics: str = "last-wins",
+    audit: str | None = None,
+    journal: str | None = None,
+    web: int | None = None,
+    pace: float = PACE_S,
 ) -> int:
     """``cosleec demo``: play the scripted day and show it (``as_json``: one JSON line per runtime event).
 
+    ``web`` serves the live web view on that port (0: a free one) and paces the day (a step
+    every ``pace`` seconds), then serves on until Ctrl-C (:mod:`cosleec.demo.watch`).
     Returns 0: checking the decisions against ``scenario.EXPECTED`` is the tests' job.
     """
+    watch = Watch(pace, lambda line: print(line, file=sys.stderr if as_json else sys.stdout, flush=True))
+    hooks: dict[str, Any] = {}
+    if web is not None:
+        hooks = {"web": web, "on_start": watch.started, "before_close": watch.linger}
     if as_json:
 
         def emit(ev: RuntimeEvent) -> None:
-            print(json.dumps({"kind": ev.kind, "time": ev.time, **ev.data}, default=str))
+            print(json.dumps({"kind": ev.kind, "time": ev.time, **ev.data}, default=str), flush=True)
 
-        run(semantics=semantics, audit=audit, journal=journal, on_event=emit)
+        paced = watch.step if web is not None else None
+        run(semantics=semantics, audit=audit, journal=journal, on_step=paced, on_event=emit, **hooks)
         return 0
     console = Console(highlight=False)
     console.print(
@@ -205,8 +236,14 @@ def main(
     )
     console.print(Text(f"rules: {rules_path()}   semantics: {semantics}", style="dim"))
     display = Display(console)
+
+    def step(t: float, s: Step) -> None:
+        display.step(t, s)
+        if web is not None:
+            watch.step(t, s)
+
     result = run(
-        semantics=semantics, audit=audit, journal=journal, on_step=display.step, on_event=display.event
+        semantics=semantics, audit=audit, journal=journal, on_step=step, on_event=display.event, **hooks
     )
     m = result.manager
     console.print()

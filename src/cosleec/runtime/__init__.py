@@ -31,6 +31,7 @@ from cosleec.runtime.scaffold import STYLES as SCAFFOLD_STYLES
 from cosleec.runtime.scaffold import scaffold
 from cosleec.runtime.tasks import Reporter, Task, hedge
 from cosleec.runtime.values import MeasureSpec, Value
+from cosleec.runtime.views import View, ViewFactory, load_view
 
 __all__ = [
     "MAX_WINDOW_S",
@@ -70,8 +71,11 @@ __all__ = [
     "UnknownEvents",
     "Unknowns",
     "Value",
+    "View",
+    "ViewFactory",
     "VirtualClock",
     "hedge",
+    "load_view",
     "possible_conflicts",
     "read_audit",
     "scaffold",

@@ -203,6 +203,14 @@ class LayerManager:
         """The active layers, in rule order (a rule at its default or undetermined has none)."""
         return [self._active[i] for i in sorted(self._active)]
 
+    def by_rule(self) -> dict[str, str | None]:
+        """Every rule's layer, in rule order: its active layer, None at its default, ``"?"``
+        undetermined (the names of a :class:`LayerSwitch`)."""
+        return {
+            r.name: "?" if st.clause is None else r.layer_names[st.clause]
+            for r, st in zip(self.ruleset.rules, self.status)
+        }
+
     def composition(self) -> Snapshot:
         """Every rule's active layer as one COP composition (for introspection with ``cosleec.cop``)."""
         rules = self.ruleset.rules

@@ -96,6 +96,7 @@ from cosleec.runtime.priorities import (
 )
 from cosleec.runtime.ruleset import RuleSet
 from cosleec.runtime.tasks import Task
+from cosleec.runtime.views import View, ViewFactory, load_view
 
 E = TypeVar("E", bound=StrEnum)
 log = logging.getLogger("cosleec.runtime")
@@ -287,7 +288,13 @@ class Manager:
     keeps; ``max_depth`` -- how deeply implementations may trigger rules whose
     implementations trigger rules (a capability that triggers its own rule is stopped
     there, with a ``task-failed`` record); ``dispatch=False`` decides without running
-    implementations (the ROS Manager node, ``cosleec decide``).
+    implementations (the ROS Manager node, ``cosleec decide``); ``web`` -- serve the live
+    web view while the Manager runs (from :meth:`start` to :meth:`close`): a port (0 picks a
+    free one; :attr:`web_url` says where it is) or options such as ``{"port": 8765,
+    "host": "127.0.0.1", "allow_remote": False, "controls": False}``; read-only and for
+    this machine only by default (``docs/runtime.md``, "The live web view"). It needs
+    the ``web`` extra (``pip install 'cosleec[web]'``): without it the constructor raises
+    ConfigurationError.
     """
 
     @paused_gc()
@@ -309,6 +316,7 @@ class Manager:
         priorities: Iterable[str | tuple[str, str]] | None = (),
         priority_semantics: str = CANCEL,
         priority_lead: float = 0.0,
+        web: int | Mapping[str, Any] | None = None,
     ) -> None:
         if not isinstance(rules, RuleSet):
             raise TypeError(
@@ -397,6 +405,11 @@ class Manager:
         self.journal = journal if isinstance(journal, Journal) else Journal(journal) if journal else None
         if self.journal is not None:
             self._open_journal(self.journal)
+        # the live web view: found now (a missing extra is said at once), served from start()
+        self._web: tuple[ViewFactory, int | Mapping[str, Any]] | None = (
+            None if web is None else (load_view("web"), web)
+        )
+        self.view: View | None = None
 
     @classmethod
     def from_file(cls, path: str | Path, *, infer_defs: bool = False, **options: Any) -> Manager:
@@ -467,12 +480,16 @@ class Manager:
         that passed while the Manager was down are judged now (their ``otherwise`` runs
         once). With ``timer=True`` a daemon thread judges deadlines and stale values as time
         passes; without it, call :meth:`tick` yourself (as tests with a VirtualClock do).
-        Returns ``self``.
+        With ``web``, the live web view starts serving here (after the check), and
+        :attr:`web_url` says where. Returns ``self``.
         """
         self._warn_conflicts()
         if check and self.dispatch_locally:
             self.implementations.check()
             self._check = True
+        if self._web is not None and self.view is None and not self._closed:
+            factory, options = self._web
+            self.view = factory(self, options)  # it subscribes: it hears this start's records
         if self._recording:  # what the run's verdicts depend on: `cosleec conforms` reads it back
             with self._step() as step:
                 self._emit(
@@ -520,11 +537,22 @@ class Manager:
                 f"; and {more} more" if more > 0 else "",
             )
 
+    @property
+    def web_url(self) -> str | None:
+        """Where the live web view serves (``http://127.0.0.1:PORT/``), once started; None
+        without ``web``, before :meth:`start` and after :meth:`close`. The view itself is
+        :attr:`view` (a :class:`~cosleec.runtime.View`)."""
+        return None if self.view is None else self.view.url
+
     def close(self) -> None:
-        """Stop the timer thread (waiting up to 5 s), then close the journal and the audit log.
+        """Stop the web view (its port is free again), then the timer thread (waiting up to
+        5 s), then close the journal and the audit log.
 
         Call it once, when done: a Manager used after closing fails on its next record.
         """
+        view, self.view = self.view, None
+        if view is not None:
+            view.close()
         self._stop.set()
         with self._wake:
             self._wake.notify_all()
@@ -608,6 +636,14 @@ class Manager:
         """The active clause layers in rule order (``["R1.1", ...]``); a rule at its default has none."""
         with self._lock:
             return self.layer_manager.active_layers()
+
+    def rule_layers(self) -> dict[str, str | None]:
+        """Every rule's layer now, in rule order, as a :class:`LayerSwitch` names it: the active
+        layer (``"R1.1"``), None at the rule's default, ``"?"`` when undetermined (a measure
+        its clauses read has no value). A copy, safe to take from any thread: a view's table of
+        rules, where :meth:`active_layers` cannot tell a default from an undetermined rule."""
+        with self._lock:
+            return self.layer_manager.by_rule()
 
     def set_semantics(self, semantics: HedgeSemantics | str) -> None:
         """Switch clause semantics at run time; every rule's layer is re-evaluated."""
@@ -809,13 +845,14 @@ class Manager:
         if self.tracker.backlog(self.clock.now()) > 1000:
             self.tick()
 
-    def outstanding(self) -> list[Tracked]:
+    def outstanding(self, *, prohibitions: bool = False) -> list[Tracked]:
         """Pending obligations that require an event (prohibitions left out): what the robot still owes.
 
-        The records are live: read them, do not change them.
+        With ``prohibitions=True``, the prohibitions in force too (a view shows both). The
+        records are live: read them, do not change them.
         """
         with self._lock:
-            return self.tracker.outstanding()
+            return self.tracker.active if prohibitions else self.tracker.outstanding()
 
     # ------------------------------------------------------------------ steps
     def _step(self) -> _Scope:
