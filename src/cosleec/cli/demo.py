@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from cosleec import demo
+from cosleec.cli import timeline
 from cosleec.cli.common import add_clause_options, output_file, port
 from cosleec.errors import UserError
+from cosleec.views import Timeline
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -29,6 +33,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "--journal",
         metavar="FILE",
         help="keep the Manager's state in this SQLite journal (restored by the next run, even after a crash)",
+    )
+    p.add_argument(
+        "--plot",
+        metavar="FILE",
+        help="draw the run's timeline to FILE once the day is over: .png, .svg or .html (see cosleec timeline)",
     )
     p.add_argument(
         "--web",
@@ -80,6 +89,15 @@ def run(args: argparse.Namespace) -> int:
             )
     if args.journal:
         output_file(args.journal, "the journal", "--journal")
+    plot: Callable[[demo.Run], None] | None = None
+    if args.plot:
+        out, fmt = Path(args.plot), timeline.check_output(Path(args.plot), "--plot")
+
+        def draw(done: demo.Run) -> None:  # the run drawn, as `cosleec timeline` draws an audit log
+            timeline.write(Timeline.from_records(done.records(), "cosleec demo"), out, fmt)
+            print(f"timeline: {out}", file=sys.stderr if args.json else sys.stdout)
+
+        plot = draw
     if args.pace is not None and args.web is None:
         raise UserError("--pace needs --web", hint="the day is paced for someone watching the live web view")
     web = (
@@ -88,5 +106,10 @@ def run(args: argparse.Namespace) -> int:
         else {}
     )
     return demo.main(
-        as_json=args.json, semantics=args.semantics, audit=args.audit, journal=args.journal, **web
+        as_json=args.json,
+        semantics=args.semantics,
+        audit=args.audit,
+        journal=args.journal,
+        on_done=plot,
+        **web,
     )

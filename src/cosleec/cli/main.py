@@ -18,7 +18,7 @@ import sys
 from collections.abc import Sequence
 from importlib import metadata
 
-from cosleec.cli import analyse, check, conforms, decide, demo, fmt, graph, ros, scaffold
+from cosleec.cli import analyse, check, conforms, decide, demo, fmt, graph, ros, scaffold, timeline
 from cosleec.errors import UserError
 from cosleec.lang import SleecError
 
@@ -103,6 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_parser(sub)
     scaffold.add_parser(sub)
     graph.add_parser(sub)
+    timeline.add_parser(sub)
     ros.add_parser(sub, "ros2")
     ros.add_parser(sub, "ros1")
     return p

@@ -211,8 +211,11 @@ def main(
     journal: str | None = None,
     web: int | None = None,
     pace: float = PACE_S,
+    on_done: Callable[[Run], None] | None = None,
 ) -> int:
     """``cosleec demo``: play the scripted day and show it (``as_json``: one JSON line per runtime event).
+
+    ``on_done`` is called with the finished :class:`Run` (``cosleec demo --plot`` draws it).
 
     ``web`` serves the live web view on that port (0: a free one) and paces the day (a step
     every ``pace`` seconds), then serves on until Ctrl-C (:mod:`cosleec.demo.watch`).
@@ -228,7 +231,9 @@ def main(
             print(json.dumps({"kind": ev.kind, "time": ev.time, **ev.data}, default=str), flush=True)
 
         paced = watch.step if web is not None else None
-        run(semantics=semantics, audit=audit, journal=journal, on_step=paced, on_event=emit, **hooks)
+        done = run(semantics=semantics, audit=audit, journal=journal, on_step=paced, on_event=emit, **hooks)
+        if on_done is not None:
+            on_done(done)
         return 0
     console = Console(highlight=False)
     console.print(
@@ -257,4 +262,6 @@ def main(
     )
     if audit:
         console.print(Text(f"audit trail: {audit}", style="dim"))
+    if on_done is not None:
+        on_done(result)
     return 0

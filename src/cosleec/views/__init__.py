@@ -1,7 +1,35 @@
 """Pictures of rule sets and runs for the people who review them: rule diagrams
-(:mod:`cosleec.views.graph`). On top of ``lang``, ``runtime`` and ``analysis``; nothing
+(:mod:`cosleec.views.graph`) and a run over time (:mod:`cosleec.views.timeline`, drawn by
+:mod:`cosleec.views.timeline_mpl` and :mod:`cosleec.views.timeline_plotly`). On top of
+``lang``, ``runtime``, ``analysis`` and ``nodes`` (an MCAP recording's reader); nothing
 below imports it."""
 
 from cosleec.views.graph import FORMATS, RuleGraph, analysed_conflicts, build, render, to_dot, to_mermaid
+from cosleec.views.timeline import Timeline
+from cosleec.views.timeline_layout import TIMELINE_FORMATS, Layout, layout
+from cosleec.views.timeline_marks import Band, Bar, Link, Marker, MarkerKind, Outcome, Series
+from cosleec.views.timeline_mpl import timeline_image
+from cosleec.views.timeline_plotly import timeline_html
 
-__all__ = ["FORMATS", "RuleGraph", "analysed_conflicts", "build", "render", "to_dot", "to_mermaid"]
+__all__ = [
+    "FORMATS",
+    "TIMELINE_FORMATS",
+    "Band",
+    "Bar",
+    "Layout",
+    "Link",
+    "Marker",
+    "MarkerKind",
+    "Outcome",
+    "RuleGraph",
+    "Series",
+    "Timeline",
+    "analysed_conflicts",
+    "build",
+    "layout",
+    "render",
+    "timeline_html",
+    "timeline_image",
+    "to_dot",
+    "to_mermaid",
+]
