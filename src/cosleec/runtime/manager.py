@@ -481,7 +481,8 @@ class Manager:
         once). With ``timer=True`` a daemon thread judges deadlines and stale values as time
         passes; without it, call :meth:`tick` yourself (as tests with a VirtualClock do).
         With ``web``, the live web view starts serving here (after the check), and
-        :attr:`web_url` says where. Returns ``self``.
+        :attr:`web_url` says where; a start that fails after it (the audit log cannot be
+        written, say) stops it again. Returns ``self``.
         """
         self._warn_conflicts()
         if check and self.dispatch_locally:
@@ -490,37 +491,43 @@ class Manager:
         if self._web is not None and self.view is None and not self._closed:
             factory, options = self._web
             self.view = factory(self, options)  # it subscribes: it hears this start's records
-        if self._recording:  # what the run's verdicts depend on: `cosleec conforms` reads it back
-            with self._step() as step:
-                self._emit(
-                    step,
-                    "options",
-                    {
-                        "semantics": str(self.semantics),
-                        "unknown": str(self.layer_manager.unknowns),
-                        "untimed": self.tracker.untimed,
-                        "priorities": sorted([h, lo] for h, lo in self.priorities.declared),
-                        "priority_semantics": self.priorities.semantics,
-                        "priority_lead": self.priorities.lead,
-                    },
+        try:
+            if self._recording:  # what the run's verdicts depend on: `cosleec conforms` reads it back
+                with self._step() as step:
+                    self._emit(
+                        step,
+                        "options",
+                        {
+                            "semantics": str(self.semantics),
+                            "unknown": str(self.layer_manager.unknowns),
+                            "untimed": self.tracker.untimed,
+                            "priorities": sorted([h, lo] for h, lo in self.priorities.declared),
+                            "priority_semantics": self.priorities.semantics,
+                            "priority_lead": self.priorities.lead,
+                        },
+                    )
+            if (
+                self.priorities.semantics == CONFLICT_AWARE
+                and self.priorities.above
+                and not self.priorities.lead
+                and not isinstance(self.clock, VirtualClock)
+            ):
+                log.warning(
+                    "conflict-aware priorities with priority_lead=0 on a real clock: the lower rule is cancelled "
+                    "at the higher rule's deadline, too late for the robot to act in time; give priority_lead "
+                    "(seconds the robot needs)"
                 )
-        if (
-            self.priorities.semantics == CONFLICT_AWARE
-            and self.priorities.above
-            and not self.priorities.lead
-            and not isinstance(self.clock, VirtualClock)
-        ):
-            log.warning(
-                "conflict-aware priorities with priority_lead=0 on a real clock: the lower rule is cancelled "
-                "at the higher rule's deadline, too late for the robot to act in time; give priority_lead "
-                "(seconds the robot needs)"
-            )
-        if self.dispatch_locally:
-            self.implementations.prepare()  # start-up work, not the first trigger's latency
-        self.tick()
-        if timer and self._timer is None:
-            self._timer = threading.Thread(target=self._run_timer, name="cosleec-deadlines", daemon=True)
-            self._timer.start()
+            if self.dispatch_locally:
+                self.implementations.prepare()  # start-up work, not the first trigger's latency
+            self.tick()
+            if timer and self._timer is None:
+                self._timer = threading.Thread(target=self._run_timer, name="cosleec-deadlines", daemon=True)
+                self._timer.start()
+        except BaseException:
+            view, self.view = self.view, None  # a start that failed serves nothing
+            if view is not None:
+                view.close()
+            raise
         return self
 
     def _warn_conflicts(self, known: Iterable[PossibleConflict] = ()) -> None:

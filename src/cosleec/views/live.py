@@ -56,8 +56,9 @@ class Live:
         self.resync(first=True)
 
     def close(self) -> None:
-        """Stop following the Manager."""
-        self._unsubscribe()
+        """Stop following the Manager (again: nothing more)."""
+        unsubscribe, self._unsubscribe = self._unsubscribe, _nothing
+        unsubscribe()
 
     # ------------------------------------------------------------------ following the records
     def resync(self, first: bool = False) -> None:
@@ -68,8 +69,8 @@ class Live:
         now = m.clock.now()
         with self._lock:
             for name, v in values.items():  # a value that did not change keeps its age
-                if first and v is None:
-                    continue  # never known yet: no age
+                if v is None and name not in self.since:
+                    continue  # never known yet (at the start, or a measure a reload added): no age
                 if name not in self.since or self.values.get(name) != v:
                     self.since[name] = now
                     if first:
@@ -115,8 +116,16 @@ class Live:
             self.in_force[d["id"]] = _obligation(d)
             return
         self.in_force.pop(d["id"], None)
-        if d["status"] == "violated":  # a late report of it comes again: one entry, updated
-            self.violations[d["id"]] = {**_obligation(d), "at": d["at"], "by": d["by"], "late": d["late"]}
+        # a violation: missed, forbidden and done, or refused (a prohibition forbade its whole
+        # window: the Manager counts it so); a late report of it comes again: one entry, updated
+        if d["status"] in ("violated", "refused"):
+            self.violations[d["id"]] = {
+                **_obligation(d),
+                "status": d["status"],
+                "at": d["at"],
+                "by": d["by"],
+                "late": d["late"],
+            }
             self.violations.move_to_end(d["id"])
             while len(self.violations) > HISTORY:
                 self.violations.popitem(last=False)
@@ -173,6 +182,10 @@ class Live:
         if self.controls:
             state["events"] = sorted(rules.events)
         return state
+
+
+def _nothing() -> None:
+    """What :meth:`Live.close` leaves to call once it has unsubscribed."""
 
 
 def _decision(d: dict[str, Any]) -> dict[str, Any]:

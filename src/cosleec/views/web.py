@@ -25,7 +25,8 @@ Safe by default: bound to 127.0.0.1; a client that is not on this machine is ref
 (403) unless ``allow_remote``, even when bound to every interface; a ``Host`` header that
 is neither an IP address nor ``localhost`` (nor this machine's name, with ``allow_remote``)
 is refused, against DNS rebinding; no CORS; read-only unless ``controls`` (then ``POST
-/control/event`` and ``POST /control/advance`` take JSON from the page's own origin).
+/control/event`` and ``POST /control/advance`` take JSON of at most :data:`MAX_BODY` bytes
+from the page's own origin).
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ import difflib
 import ipaddress
 import json
 import math
+import re
 import socket
 import threading
 import time
@@ -69,6 +71,8 @@ SHUTDOWN_S = 1
 START_S = 10.0
 #: the most seconds ``POST /control/advance`` moves a virtual clock at once
 MAX_ADVANCE_S = 86_400.0
+#: the largest body a control request may have (bytes): a bigger one is refused unread (413)
+MAX_BODY = 64 * 1024
 
 _FILES = {  # path -> (package file, media type)
     "/": ("index.html", "text/html; charset=utf-8"),
@@ -238,7 +242,10 @@ def serve(manager: Manager, options: object) -> WebView:
 
 class _Hub:
     """Between the Manager's threads and the server's loop: wake every browser's stream, at
-    most one wake-up pending at a time (a burst of records costs one)."""
+    most one wake-up pending at a time (a burst of records costs one), and none while no
+    stream waits for a change (with no browser, or while each is sending or pausing, a
+    record costs the Manager no wake-up at all). Every stream is sent the same state,
+    made once per version (:meth:`state`)."""
 
     def __init__(self) -> None:
         self.ready = threading.Event()
@@ -246,8 +253,10 @@ class _Hub:
         self.changed: asyncio.Event | None = None
         self.stopping: anyio.Event | None = None
         self.closing = False
+        self.waiting = 0  # streams waiting for a change (changed under the lock)
         self._lock = threading.Lock()
         self._pending = False
+        self._state: tuple[int, str] | None = None  # the newest state's version, and its JSON without now
 
     def started(self) -> None:
         """(On the loop, at startup.) The loop is running: wake-ups can be delivered."""
@@ -259,11 +268,33 @@ class _Hub:
     def wake(self) -> None:
         """(Any thread; never waits.) Something shown changed: let the streams look."""
         with self._lock:
-            if self._pending or self.loop is None or self.closing:
+            if self._pending or self.loop is None or self.closing or not self.waiting:
                 return
             self._pending = True
         with contextlib.suppress(RuntimeError):  # the loop has closed meanwhile
             self.loop.call_soon_threadsafe(self._fire)
+
+    async def wait(self, live: Live, sent: int) -> None:
+        """(On the loop.) Until the state has moved past version ``sent``, or :data:`HEARTBEAT_S`."""
+        changed = self.changed
+        with self._lock:  # counted before the version is read: a change after it wakes us
+            self.waiting += 1
+        try:
+            if changed is not None and live.version == sent:
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(changed.wait(), HEARTBEAT_S)
+        finally:
+            with self._lock:
+                self.waiting -= 1
+
+    def state(self, live: Live) -> tuple[int, str]:
+        """(On the loop.) The newest state's version and JSON without ``now``: made once per
+        version, whatever the number of browsers (each is sent it with its own ``now``)."""
+        if self._state is None or self._state[0] != live.version:
+            state = live.snapshot()
+            del state["now"]
+            self._state = (state["version"], _json(state))
+        return self._state
 
     def _fire(self) -> None:
         with self._lock:
@@ -368,24 +399,23 @@ async def _stream(hub: _Hub, live: Live) -> AsyncIterator[dict[str, str]]:
     """One browser's server-sent events: the newest state when it changed, the clock between."""
     sent = -1
     while not hub.closing:
-        changed = hub.changed
         if live.version != sent:
-            state = live.snapshot()
-            sent = state["version"]
-            yield {"event": "state", "data": _json(state)}
+            sent, state = hub.state(live)
+            now = _json(live.manager.clock.now())
+            yield {"event": "state", "data": '{"now":' + now + "," + state[1:]}
             await asyncio.sleep(MIN_INTERVAL_S)  # what changes meanwhile goes in the next one
         else:
             yield {"event": "clock", "data": _json({"now": live.manager.clock.now()})}
-        if changed is not None and live.version == sent:
-            with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(changed.wait(), HEARTBEAT_S)
+        await hub.wait(live, sent)
 
 
 async def _control(request: Request, enabled: bool) -> dict[str, Any] | Response:
     """The JSON body of a control request, or the response that refuses it.
 
     403 while controls are off, or when the request comes from another origin; 415 unless
-    it is JSON (a form posted by another site's page cannot be).
+    it is JSON (a form posted by another site's page cannot be); 413 when its body is
+    larger than :data:`MAX_BODY` (refused unread when it says so, else once it passes it:
+    the robot's memory is not the client's to fill).
     """
     if not enabled:
         return _error(403, "this view is read-only: controls are off (web={'controls': True} turns them on)")
@@ -394,8 +424,17 @@ async def _control(request: Request, enabled: bool) -> dict[str, Any] | Response
         return _error(403, "a control request must come from this view's own page")
     if request.headers.get("content-type", "").split(";")[0].strip() != "application/json":
         return _error(415, "a control request is JSON (content-type: application/json)")
+    length = request.headers.get("content-length", "0")
+    too_big = _error(413, f"a control request is at most {MAX_BODY} bytes")
+    if not length.isascii() or not length.isdigit() or int(length) > MAX_BODY:
+        return too_big
+    data = b""
+    async for chunk in request.stream():
+        data += chunk
+        if len(data) > MAX_BODY:
+            return too_big
     try:
-        body = json.loads(await request.body())
+        body = json.loads(data)
     except ValueError:
         return _error(400, "a control request is a JSON object")
     if not isinstance(body, dict):
@@ -429,6 +468,10 @@ def _loopback(host: str) -> bool:
     return address is not None and address.is_loopback
 
 
+#: a Host header: a name or an address, ``[an IPv6 address]``, then at most a port
+_HOST = re.compile(r"(?:\[(?P<v6>[0-9a-f:.]+)\]|(?P<name>[^:\[\]]+))(?::[0-9]{0,5})?")
+
+
 class _Guard:
     """Who may look: clients on this machine (unless ``allow_remote``), through a ``Host``
     this server can be (an IP address, ``localhost``, with ``allow_remote`` this machine's
@@ -447,11 +490,8 @@ class _Guard:
         if not self.allow_remote and (client is None or not _loopback(str(client[0]))):
             await _refuse(send, "this view serves this machine only (allow_remote is off)")
             return
-        host = dict(scope["headers"]).get(b"host", b"").decode("latin-1").lower()
-        if host.startswith("["):  # [::1]:8765
-            name = host[1 : host.find("]")] if "]" in host else ""
-        else:
-            name = host.rsplit(":", 1)[0]
+        host = _HOST.fullmatch(dict(scope["headers"]).get(b"host", b"").decode("latin-1").lower())
+        name = (host.group("v6") or host.group("name")) if host is not None else ""
         if not name or not (name in self.names or _address(name) is not None):
             await _refuse(send, "this view answers only to its address (an IP address or localhost)")
             return

@@ -515,10 +515,11 @@ def test_a_stalled_browser_or_a_busy_server_does_not_hold_up_the_manager() -> No
             m.update(m=bool(i % 2))
             m.event("F")
         assert not free.is_set(), "the Manager waited for the web server"
-        # and it left one wake-up for the loop, not one per record (in asyncio's queue of callbacks)
+        # and it left at most one wake-up for the loop, not one per record (in asyncio's queue of
+        # callbacks): none when the stream was not waiting for a change (stalled in a send)
         hub = view(m)._hub
         wakeups = [h for h in loop._ready if getattr(h, "_callback", None) == hub._fire]  # type: ignore[attr-defined]
-        assert len(wakeups) == 1, len(wakeups)
+        assert len(wakeups) <= 1, len(wakeups)
         s = state(m)  # answered once the loop is free, with the newest state
         assert free.is_set()
         stalled.close()

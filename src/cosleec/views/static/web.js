@@ -161,8 +161,9 @@ function violations(list) {
   for (const v of list) {
     const li = el("li", "violation");
     const head = el("div", "head");
-    head.append(el("span", "badge violated", v.negated ? "happened" : "missed"), el("strong", null, v.what), el("span", "time", at(v.at)));
-    const missed = v.negated ? "forbidden, and it happened" : "the deadline passed without it";
+    const refused = v.status === "refused";
+    head.append(el("span", "badge violated", refused ? "refused" : v.negated ? "happened" : "missed"), el("strong", null, v.what), el("span", "time", at(v.at)));
+    const missed = refused ? "refused, " + v.by + " forbids it" : v.negated ? "forbidden, and it happened" : "the deadline passed without it";
     li.append(head, el("div", "who", v.rule + ", decision #" + v.decision + ": " + missed));
     if (v.late && v.late.length) li.append(el("div", "late", "it came late, at " + at(v.late[v.late.length - 1])));
     box.append(li);
