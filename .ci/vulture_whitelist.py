@@ -97,3 +97,11 @@ _.on_cleanup  #
 _.on_shutdown  #
 _.potherwise  # a Lark transformer callback of the paper notation (lang/paper.py)
 _.should_exit  # uvicorn.Server.should_exit: uvicorn's main loop reads it (the web view stops its server so)
+_.reuse  # IncrementalAnalyser.reuse: what the last check parsed again, for callers (tests, benchmarks/lsp_incremental)
+pieces  # Reuse.pieces: how many pieces the text was cut into (with `reuse`)
+# the language server's handlers: pygls calls them by the LSP method they are registered for
+initialize  #
+did_open  #
+did_change  #
+did_save  #
+did_close  #

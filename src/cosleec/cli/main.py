@@ -18,7 +18,7 @@ import sys
 from collections.abc import Sequence
 from importlib import metadata
 
-from cosleec.cli import analyse, check, conforms, decide, demo, fmt, graph, ros, scaffold, timeline
+from cosleec.cli import analyse, check, conforms, decide, demo, fmt, graph, lsp, ros, scaffold, timeline
 from cosleec.errors import UserError
 from cosleec.lang import SleecError
 
@@ -104,6 +104,7 @@ def build_parser() -> argparse.ArgumentParser:
     scaffold.add_parser(sub)
     graph.add_parser(sub)
     timeline.add_parser(sub)
+    lsp.add_parser(sub)
     ros.add_parser(sub, "ros2")
     ros.add_parser(sub, "ros1")
     return p

@@ -26,7 +26,9 @@ from cosleec.lang.dialect import legos_features, legos_misreads
 from cosleec.lang.formatter import format_source
 from cosleec.lang.frontend import DIALECTS, CheckResult, analyse, analyse_file, load, parse, read_source
 from cosleec.lang.hedges import HedgeSemantics, Unknowns, candidates, choose, decisive
+from cosleec.lang.incremental import IncrementalAnalyser, Reuse
 from cosleec.lang.infer import infer_definitions
+from cosleec.lang.parser import CONTEXTUAL_KEYWORDS, KEYWORDS, PAPER_KEYWORDS
 from cosleec.lang.printer import WIDTH, PaperPrinter, Printer, format_spec
 from cosleec.lang.priorities import (
     CANCEL,
@@ -41,7 +43,10 @@ from cosleec.lang.priorities import (
 __all__ = [
     "CANCEL",
     "CONFLICT_AWARE",
+    "CONTEXTUAL_KEYWORDS",
     "DIALECTS",
+    "KEYWORDS",
+    "PAPER_KEYWORDS",
     "PRIORITY_SEMANTICS",
     "WIDTH",
     "CheckResult",
@@ -49,9 +54,11 @@ __all__ = [
     "DiagnosticSink",
     "Dialect",
     "HedgeSemantics",
+    "IncrementalAnalyser",
     "Options",
     "PaperPrinter",
     "Printer",
+    "Reuse",
     "Severity",
     "SleecError",
     "Specification",

@@ -8,6 +8,7 @@ once for everything dialect detection and the dialect checks need, the checker w
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -92,13 +93,45 @@ def analyse(
     names -- with a warning each, and the result's ``spec`` carries LEGOS-SLEEC's reading of
     them (docs/reference/sleec-language.md §11 item 18).
     """
+    return analyse_with(
+        parse_blocks,
+        text,
+        path,
+        dialect=dialect,
+        strict=strict,
+        infer_defs=infer_defs,
+        options=options,
+        legos_compat=legos_compat,
+    )
+
+
+BlockParser = Callable[[str, DiagnosticSink], "list[Block] | None"]
+"""How DSL text becomes blocks: :func:`~cosleec.lang.parser.parse_blocks`, or a reading that
+returns exactly what it returns (lang/incremental.py's, which parses only what changed)."""
+
+
+def analyse_with(
+    parse_dsl: BlockParser,
+    text: str,
+    path: str = "<string>",
+    *,
+    dialect: str = "auto",
+    strict: bool = False,
+    infer_defs: bool = False,
+    options: Options | None = None,
+    legos_compat: bool = False,
+) -> CheckResult:
+    """:func:`analyse`, reading DSL text into blocks with ``parse_dsl``: everything after
+    parsing is the same pass, so the result is :func:`analyse`'s whenever ``parse_dsl``
+    returns what ``parse_blocks`` returns."""
     if dialect not in DIALECTS:
         raise ConfigurationError(f"unknown dialect {dialect!r}; expected one of {', '.join(DIALECTS)}")
     with paused_gc():  # bulk construction: the collector would scan a growing heap for nothing
-        return _analyse(text, path, dialect, strict, infer_defs, options, legos_compat)
+        return _analyse(parse_dsl, text, path, dialect, strict, infer_defs, options, legos_compat)
 
 
 def _analyse(
+    parse_dsl: BlockParser,
     text: str,
     path: str,
     dialect: str,
@@ -107,7 +140,7 @@ def _analyse(
     options: Options | None,
     legos_compat: bool,
 ) -> CheckResult:
-    """:func:`analyse` once its arguments are checked."""
+    """:func:`analyse_with` once its arguments are checked."""
     opts = options or Options()
     if strict:
         opts = replace(opts, strict_extensions=True)
@@ -118,7 +151,7 @@ def _analyse(
     sink = DiagnosticSink(path)
     paper = dialect == "paper" or (dialect == "auto" and looks_like_paper(text))
     parsed: list[A.Rule] | list[Block] | None
-    parsed = parse_paper_rules(text, sink) if paper else parse_blocks(text, sink)
+    parsed = parse_paper_rules(text, sink) if paper else parse_dsl(text, sink)
     if parsed is None:
         return CheckResult(
             path=path,

@@ -87,6 +87,8 @@ KEYWORDS = frozenset(SLEEC.lexicon.keywords)
 """The DSL's reserved words (docs/reference/sleec-language.md §3), read from ``grammar/sleec.lark``."""
 CONTEXTUAL_KEYWORDS = frozenset(SLEEC.lexicon.contextual)
 """The DSL's words reserved only inside a relation block, read from ``grammar/sleec.lark``."""
+PAPER_KEYWORDS = frozenset(PAPER.lexicon.keywords)
+"""The paper notation's keywords, lower case (they are case-insensitive), read from ``grammar/paper.lark``."""
 
 _DSL_MARK = re.compile(r"\b(?:def_start|rule_start)\b")
 _PAPER_MARK = re.compile(r"(?i)\bwhen\b")
