@@ -16,17 +16,9 @@ from playwright.sync_api import sync_playwright
 from cosleec.demo import run
 from cosleec.demo.assistive_care.scenario import STEPS
 from cosleec.runtime import Manager, VirtualClock
+from cosleec.testing import CHROMIUM, CHROMIUM_ARGS
 
-CHROMIUM = "/usr/bin/chromium"
-ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
+ARGS = list(CHROMIUM_ARGS)
 FALL = next(i for i, (kind, arg, _) in enumerate(STEPS) if kind == "event" and arg == "UserFallen")
 SECOND_FALL = next(i for i in range(FALL + 1, len(STEPS)) if STEPS[i][1] == "UserFallen")
 DAY = [

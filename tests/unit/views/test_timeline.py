@@ -31,23 +31,14 @@ from cosleec.demo import run as run_demo
 from cosleec.errors import UserError
 from cosleec.nodes import McapRecorder
 from cosleec.runtime import AuditLog, Manager, RuleSet, VirtualClock
-from cosleec.testing import corpus_dir
+from cosleec.testing import CHROMIUM, CHROMIUM_ARGS, corpus_dir
 from cosleec.views import Band, Link, MarkerKind, Outcome, Timeline, layout, timeline_html, timeline_image
 from cosleec.views.timeline_layout import steps
 
 LARGEST = (
     "a-l-partis__SLEEC-ADAPT__AgentAdaption__agentAdaptionCode__scalability__sleecRules__rulestest625.sleec"
 )
-CHROMIUM = "/usr/bin/chromium"
-ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
+ARGS = list(CHROMIUM_ARGS)
 
 
 def need(module: str) -> None:

@@ -35,6 +35,7 @@ from cosleec.cli.main import main
 from cosleec.demo import rules_path
 from cosleec.errors import UserError
 from cosleec.runtime import ConfigurationError, Manager, RuleSet, VirtualClock, load_view
+from cosleec.testing import CHROMIUM, CHROMIUM_ARGS
 from cosleec.testing.corpus import corpus_dir
 from cosleec.views.live import HISTORY
 from cosleec.views.web import MIN_INTERVAL_S, WebView
@@ -42,16 +43,7 @@ from cosleec.views.web import MIN_INTERVAL_S, WebView
 LARGEST = (
     "a-l-partis__SLEEC-ADAPT__AgentAdaption__agentAdaptionCode__scalability__sleecRules__rulestest625.sleec"
 )
-CHROMIUM = "/usr/bin/chromium"
-ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
+ARGS = list(CHROMIUM_ARGS)
 DEMO = Path(rules_path())
 TEXT = """def_start event E event F event A event B measure m : boolean def_end
 rule_start

@@ -38,19 +38,11 @@ import pytest
 from cosleec.demo import rules_path
 from cosleec.errors import UserError
 from cosleec.runtime import Manager, RuleSet, VirtualClock
+from cosleec.testing import CHROMIUM, CHROMIUM_ARGS
 from cosleec.views import live as live_module
 from cosleec.views.web import MAX_BODY, SHUTDOWN_S, WebView
 
-CHROMIUM = "/usr/bin/chromium"
-ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
+ARGS = list(CHROMIUM_ARGS)
 TEXT = """def_start event E event F event A event B measure m : boolean def_end
 rule_start
 R1 when E then A within 10 seconds
