@@ -17,11 +17,13 @@ from cosleec.lsp.features import Refusal
 from cosleec.lsp.index import Index, Kind, Role, Use
 from cosleec.lsp.positions import LineIndex
 from cosleec.lsp.server import SleecServer, build, serve_stdio
+from cosleec.lsp.wire import Limits
 
 __all__ = [
     "Document",
     "Index",
     "Kind",
+    "Limits",
     "LineIndex",
     "Refusal",
     "Role",

@@ -4,7 +4,9 @@ Diagnostics follow edits: an edit marks its document changed and schedules a che
 ``debounce`` seconds later (edits in between coalesce into one check); a request that needs
 the current state (hover, definition, ...) checks at once if the check has not run yet. A
 save runs ``cosleec analyse`` in another process (onsave.py) and publishes its findings with
-the check's diagnostics while the text stays the one analysed.
+the check's diagnostics while the text stays the one analysed. Messages are read by wire.py,
+not pygls's reader: bounded in size and depth, and each one it cannot use answered by the
+protocol (:class:`~cosleec.lsp.wire.Limits`).
 """
 
 from __future__ import annotations
@@ -13,12 +15,14 @@ import asyncio
 import logging
 import os
 import sys
+import threading
 from collections.abc import Callable
 from importlib import metadata
-from typing import Any, TypeVar
+from typing import Any, BinaryIO, TypeVar
 
 from lsprotocol import types as T
 from pygls.exceptions import JsonRpcException, JsonRpcInvalidParams
+from pygls.io_ import StdoutWriter
 from pygls.lsp.server import LanguageServer
 
 from cosleec.lang import Diagnostic, Severity
@@ -26,6 +30,7 @@ from cosleec.lang import ast as A
 from cosleec.lsp import features
 from cosleec.lsp.document import Document, Settings
 from cosleec.lsp.onsave import OnSave, Outcome, timeout_note
+from cosleec.lsp.wire import Limits, StdinReader, serve
 
 log = logging.getLogger("cosleec.lsp")
 
@@ -42,13 +47,32 @@ def _version() -> str:
 class SleecServer(LanguageServer):
     """cosleec's language server; :func:`build` registers its features."""
 
-    def __init__(self) -> None:
+    def __init__(self, limits: Limits | None = None) -> None:
         super().__init__("cosleec", _version())
+        self.limits = limits or Limits()
         self.settings = Settings()
         self.documents: dict[str, Document] = {}
         self._pending: dict[str, asyncio.TimerHandle] = {}
         self._loop: asyncio.AbstractEventLoop | None = None
         self.onsave = OnSave(self._analysed)
+
+    def start_io(self, stdin: BinaryIO | None = None, stdout: BinaryIO | None = None) -> None:
+        """Serve over ``stdin`` and ``stdout`` until the client exits or closes stdin.
+
+        pygls's own ``start_io``, with its reader replaced by wire.py's, which bounds what it
+        reads by :attr:`limits` and answers every message it cannot use.
+        """
+        self._stop_event = threading.Event()
+        reader = StdinReader(stdin or sys.stdin.buffer, self.thread_pool)
+        self.protocol.set_writer(StdoutWriter(stdout or sys.stdout.buffer))
+        try:
+            asyncio.run(serve(reader, self.protocol, self._stop_event, self.limits))
+        except BrokenPipeError:
+            log.error("the client closed the connection: the server stops")
+        except (KeyboardInterrupt, SystemExit):
+            pass
+        finally:
+            self.shutdown()  # type: ignore[no-untyped-call]
 
     # ------------------------------------------------------------ documents
     def document(self, uri: str) -> Document:
@@ -136,9 +160,9 @@ class SleecServer(LanguageServer):
             raise JsonRpcException(message, code=int(T.LSPErrorCodes.RequestFailed)) from None
 
 
-def build() -> SleecServer:
-    """A server with every feature registered (not started)."""
-    server = SleecServer()
+def build(limits: Limits | None = None) -> SleecServer:
+    """A server with every feature registered (not started), reading within ``limits``."""
+    server = SleecServer(limits)
 
     @server.feature(T.INITIALIZE)
     def initialize(ls: SleecServer, params: T.InitializeParams) -> None:
@@ -229,8 +253,8 @@ def build() -> SleecServer:
     return server
 
 
-def serve_stdio() -> None:
-    """Serve one client over stdin and stdout until it exits.
+def serve_stdio(limits: Limits | None = None) -> None:
+    """Serve one client over stdin and stdout until it exits, reading within ``limits``.
 
     Only the protocol may write to stdout: the protocol keeps the real stdout (a copy of
     file descriptor 1), and descriptor 1 and ``sys.stdout`` then point at stderr, so that
@@ -239,13 +263,20 @@ def serve_stdio() -> None:
     logging.basicConfig(
         level=logging.WARNING, stream=sys.stderr, format="cosleec lsp: %(levelname)s: %(message)s"
     )
+    # pygls logs a traceback for params of the wrong shape; wire.py answers and logs one line
+    logging.getLogger("pygls.protocol.json_rpc").addFilter(_no_deserialize_traceback)
     sys.stdout.flush()
     protocol_fd = os.dup(1)
     os.dup2(2, 1)
     sys.stdout = sys.stderr
     with os.fdopen(protocol_fd, "wb") as out:
-        server = build()
+        server = build(limits)
         try:
             server.start_io(sys.stdin.buffer, out)
         finally:
             server.onsave.close()
+
+
+def _no_deserialize_traceback(record: logging.LogRecord) -> bool:
+    """A logging filter: drop pygls's "Unable to deserialize message" and its traceback."""
+    return not str(record.msg).startswith("Unable to deserialize message")

@@ -21,6 +21,14 @@ and at most one wake-up waits in the loop at any time; every browser is sent the
 state, never a backlog, so a slow or stalled one costs no memory (and one that does not read
 for :data:`SEND_TIMEOUT_S` is disconnected).
 
+Bounded under abuse (web_server.py): a request must begin within ``idle_timeout`` and
+arrive whole within ``request_timeout`` of the moment it may begin, whatever it sends
+meanwhile; at most ``max_connections`` connections are open at once, never more than half
+the descriptors the process had left when the view started (RLIMIT_NOFILE), so that the
+Manager can still open its files; at most ``max_streams`` pages follow the stream (503
+beyond); a failed ``accept()`` makes the server pause, not spin, and each kind of error is
+logged once, then at most every ten minutes with a count.
+
 Safe by default: bound to 127.0.0.1; a client that is not on this machine is refused
 (403) unless ``allow_remote``, even when bound to every interface; a ``Host`` header that
 is neither an IP address nor ``localhost`` (nor this machine's name, with ``allow_remote``)
@@ -44,6 +52,7 @@ import time
 from collections.abc import AsyncIterator, Mapping
 from dataclasses import dataclass, fields
 from importlib import resources
+from itertools import accumulate
 from typing import Any
 
 import anyio
@@ -58,6 +67,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 from cosleec.errors import ConfigurationError, UserError, show
 from cosleec.runtime import Manager, VirtualClock
 from cosleec.views.live import Live
+from cosleec.views.web_server import Server, descriptors_left, seconds
 
 #: the runtime's time is sent to every browser this often (seconds)
 HEARTBEAT_S = 0.2
@@ -73,6 +83,13 @@ START_S = 10.0
 MAX_ADVANCE_S = 86_400.0
 #: the largest body a control request may have (bytes): a bigger one is refused unread (413)
 MAX_BODY = 64 * 1024
+#: how deep a control request's JSON may nest (it is one flat object): deeper is a 400
+MAX_BODY_DEPTH = 4
+#: the most connections open at once when ``max_connections`` is not given (fewer if the
+#: process has fewer than twice as many descriptors left)
+DEFAULT_CONNECTIONS = 128
+#: the longest timeout an option may give (seconds)
+MAX_TIMEOUT_S = 3600.0
 
 _FILES = {  # path -> (package file, media type)
     "/": ("index.html", "text/html; charset=utf-8"),
@@ -101,12 +118,24 @@ class WebOptions:
     default), ``allow_remote`` (serve clients on other machines: needed for any host other
     than loopback, and off by default), ``controls`` (accept the page's POST requests that
     change state -- send an event, advance a virtual clock; off by default).
+
+    The bounds: ``request_timeout`` (seconds a request has to arrive whole -- its headers,
+    and a control's body -- from the moment it may begin; 10), ``idle_timeout`` (seconds a
+    connection may send nothing before or between requests; 5), ``max_connections`` (open
+    at once, the next ones wait unaccepted; by default :data:`DEFAULT_CONNECTIONS`, or half
+    the descriptors the process has left if that is fewer; more than that half is refused)
+    and ``max_streams`` (pages following the live stream at once, less than
+    ``max_connections``; 100).
     """
 
     port: int = 0
     host: str = "127.0.0.1"
     allow_remote: bool = False
     controls: bool = False
+    request_timeout: float = 10.0
+    idle_timeout: float = 5.0
+    max_connections: int | None = None
+    max_streams: int = 100
 
     @classmethod
     def of(cls, value: object) -> WebOptions:
@@ -146,6 +175,7 @@ class WebOptions:
                 raise ConfigurationError(
                     f"web option {name} must be true or false, not {show(getattr(self, name))}"
                 )
+        self._check_bounds()
         address = _address(host) if isinstance(host, str) else None
         if address is None:
             raise ConfigurationError(
@@ -159,18 +189,64 @@ class WebOptions:
                 "rules, the context and the decisions (anyone who can reach the port can)",
             )
 
+    def _check_bounds(self) -> None:
+        for name in ("request_timeout", "idle_timeout"):
+            t = getattr(self, name)
+            if (
+                isinstance(t, bool)
+                or not isinstance(t, int | float)
+                or not math.isfinite(t)
+                or not 0 < t <= MAX_TIMEOUT_S
+            ):
+                raise ConfigurationError(
+                    f"web option {name} must be a number of seconds, more than 0 and at most "
+                    f"{MAX_TIMEOUT_S:g}, not {show(t)}"
+                )
+        for name, least in (("max_connections", 2), ("max_streams", 1)):
+            n = getattr(self, name)
+            if n is None and name == "max_connections":
+                continue
+            if isinstance(n, bool) or not isinstance(n, int) or not least <= n <= 1_000_000:
+                raise ConfigurationError(
+                    f"web option {name} must be a whole number from {least} to 1000000, not {show(n)}"
+                )
+        if self.max_connections is not None and self.max_streams >= self.max_connections:
+            raise ConfigurationError(
+                f"web option max_streams must be less than max_connections, not {self.max_streams} "
+                f"of {self.max_connections}",
+                hint="a page also needs connections for its files and its state",
+            )
+
+    def limits(self) -> tuple[int, int]:
+        """The connections and streams this view may have open at once, here and now: the
+        descriptors the process has left decide the default, and refuse more than half of them."""
+        left = descriptors_left()
+        budget = None if left is None else max(0, left - 8) // 2  # 8: the view's own (listening, loop)
+        wanted = self.max_connections
+        if budget is not None and (budget < 2 or (wanted is not None and wanted > budget)):
+            raise UserError(
+                f"the web view may not take {wanted or 2} connections: the process has {left} file "
+                f"descriptors left, and the view takes at most half of them ({budget})",
+                hint="raise the limit of open files (ulimit -n) or give a smaller max_connections",
+            )
+        connections = wanted or (DEFAULT_CONNECTIONS if budget is None else min(DEFAULT_CONNECTIONS, budget))
+        return connections, min(self.max_streams, connections - 1)
+
 
 class WebView:
     """The web view of one Manager, serving on a daemon thread: made by :func:`serve`.
 
     ``url`` is where to open it, ``port`` the port it took, ``live`` what it shows
-    (:class:`~cosleec.views.live.Live`) and ``app`` its ASGI application. :meth:`close` stops
-    the server, frees the port and stops following the Manager (``Manager.close()`` calls it).
+    (:class:`~cosleec.views.live.Live`) and ``app`` its ASGI application;
+    ``max_connections`` and ``max_streams`` what it allows at once (:meth:`WebOptions.limits`).
+    :meth:`close` stops the server, frees the port and stops following the Manager
+    (``Manager.close()`` calls it).
     """
 
     def __init__(self, manager: Manager, options: WebOptions) -> None:
         self.manager = manager
         self.options = options
+        self.max_connections, self.max_streams = options.limits()
         address = _address(options.host)
         assert address is not None  # WebOptions checked it
         family = socket.AF_INET6 if address.version == 6 else socket.AF_INET
@@ -179,6 +255,7 @@ class WebView:
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             sock.bind((str(address), options.port))
             sock.listen(128)  # now: a browser that connects before the loop serves waits, it is not refused
+            sock.setblocking(False)  # the server's loop accepts on it
         except OSError as e:
             sock.close()
             raise UserError(
@@ -210,12 +287,21 @@ class WebView:
             proxy_headers=False,  # the client is the peer: a header cannot claim another address
             server_header=False,
             timeout_graceful_shutdown=SHUTDOWN_S,
+            timeout_keep_alive=math.ceil(options.idle_timeout),  # a backstop: the Protocol closes first
         )
-        self._server = uvicorn.Server(config)
+        self._server = Server(
+            config,
+            sock,
+            max_connections=self.max_connections,
+            idle_timeout=options.idle_timeout,
+            request_timeout=options.request_timeout,
+            headers=_HEADERS,
+        )
         self._thread = threading.Thread(
             target=self._server.run, kwargs={"sockets": [sock]}, name="cosleec-web", daemon=True
         )
         self._thread.start()
+        self._server.filter.attach(self._thread)
         deadline = time.monotonic() + START_S
         while not self._hub.ready.wait(0.05):
             if not self._thread.is_alive() or time.monotonic() > deadline:
@@ -228,6 +314,7 @@ class WebView:
         self._hub.close()
         self._server.should_exit = True
         self._thread.join(SHUTDOWN_S + 5)
+        self._server.filter.detach()
         self._socket.close()
 
 
@@ -254,6 +341,7 @@ class _Hub:
         self.stopping: anyio.Event | None = None
         self.closing = False
         self.waiting = 0  # streams waiting for a change (changed under the lock)
+        self.streams = 0  # pages following the stream (changed on the loop only)
         self._lock = threading.Lock()
         self._pending = False
         self._state: tuple[int, str] | None = None  # the newest state's version, and its JSON without now
@@ -333,7 +421,15 @@ def _app(view: WebView) -> ASGIApp:
         return Response(_json(live.snapshot()), media_type="application/json")
 
     async def events(request: Request) -> Response:
-        return EventSourceResponse(
+        if hub.streams >= view.max_streams:
+            return _error(
+                503,
+                f"this view serves at most {view.max_streams} live pages at once: close another one "
+                "and reload this one (the web option max_streams)",
+                headers={"retry-after": "5"},
+            )
+        return _Counted(
+            hub,
             _stream(hub, live),
             send_timeout=SEND_TIMEOUT_S,
             shutdown_event=hub.stopping,
@@ -341,7 +437,7 @@ def _app(view: WebView) -> ASGIApp:
         )
 
     async def control_event(request: Request) -> Response:
-        body = await _control(request, options.controls)
+        body = await _control(request, options)
         if isinstance(body, Response):
             return body
         name = body.get("event")
@@ -354,7 +450,7 @@ def _app(view: WebView) -> ASGIApp:
         return JSONResponse({"ok": True, "decisions": [d.id for d in decided]})
 
     async def control_advance(request: Request) -> Response:
-        body = await _control(request, options.controls)
+        body = await _control(request, options)
         if isinstance(body, Response):
             return body
         clock = view.manager.clock
@@ -395,6 +491,21 @@ def _app(view: WebView) -> ASGIApp:
     return _Guard(Starlette(routes=routes, lifespan=lifespan), options)
 
 
+class _Counted(EventSourceResponse):
+    """A page's stream, counted in ``hub.streams`` from its making until it ends."""
+
+    def __init__(self, hub: _Hub, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.hub = hub
+        hub.streams += 1  # made on the loop, and served at once: nothing runs in between
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        try:
+            await super().__call__(scope, receive, send)
+        finally:
+            self.hub.streams -= 1
+
+
 async def _stream(hub: _Hub, live: Live) -> AsyncIterator[dict[str, str]]:
     """One browser's server-sent events: the newest state when it changed, the clock between."""
     sent = -1
@@ -409,15 +520,17 @@ async def _stream(hub: _Hub, live: Live) -> AsyncIterator[dict[str, str]]:
         await hub.wait(live, sent)
 
 
-async def _control(request: Request, enabled: bool) -> dict[str, Any] | Response:
+async def _control(request: Request, options: WebOptions) -> dict[str, Any] | Response:
     """The JSON body of a control request, or the response that refuses it.
 
     403 while controls are off, or when the request comes from another origin; 415 unless
     it is JSON (a form posted by another site's page cannot be); 413 when its body is
     larger than :data:`MAX_BODY` (refused unread when it says so, else once it passes it:
-    the robot's memory is not the client's to fill).
+    the robot's memory is not the client's to fill); 408 when it has not arrived within
+    ``request_timeout``; 400 unless it is one JSON object nested at most
+    :data:`MAX_BODY_DEPTH` levels (the depth is counted before it is parsed).
     """
-    if not enabled:
+    if not options.controls:
         return _error(403, "this view is read-only: controls are off (web={'controls': True} turns them on)")
     origin = request.headers.get("origin")
     if origin is not None and origin != f"{request.url.scheme}://{request.headers.get('host', '')}":
@@ -429,10 +542,24 @@ async def _control(request: Request, enabled: bool) -> dict[str, Any] | Response
     if not length.isascii() or not length.isdigit() or int(length) > MAX_BODY:
         return too_big
     data = b""
-    async for chunk in request.stream():
-        data += chunk
-        if len(data) > MAX_BODY:
-            return too_big
+    with anyio.move_on_after(options.request_timeout) as waited:
+        async for chunk in request.stream():
+            data += chunk
+            if len(data) > MAX_BODY:
+                return too_big
+    if waited.cancelled_caught:
+        return _error(
+            408,
+            f"the request's body did not arrive within {seconds(options.request_timeout)}",
+            headers={"connection": "close"},
+        )
+    depth = _nesting(data)
+    if depth > MAX_BODY_DEPTH:
+        return _error(
+            400,
+            f"a control request is one flat JSON object: this one is nested {depth} levels deep "
+            f"(at most {MAX_BODY_DEPTH})",
+        )
     try:
         body = json.loads(data)
     except ValueError:
@@ -442,8 +569,24 @@ async def _control(request: Request, enabled: bool) -> dict[str, Any] | Response
     return body
 
 
-def _error(status: int, message: str) -> Response:
-    return JSONResponse({"ok": False, "error": message}, status_code=status)
+def _error(status: int, message: str, headers: dict[str, str] | None = None) -> Response:
+    return JSONResponse({"ok": False, "error": message}, status_code=status, headers=headers)
+
+
+_NOT_BRACKETS = bytes(b for b in range(256) if b not in b"[]{}")
+_STEP = [0] * 256
+_STEP[ord("[")] = _STEP[ord("{")] = 1
+_STEP[ord("]")] = _STEP[ord("}")] = -1
+
+
+def _nesting(data: bytes) -> int:
+    """How deep the JSON text ``data`` nests arrays and objects (brackets in strings are text):
+    linear and without recursion, whatever the depth, unlike the parser. Escapes go first
+    (``\\\\``, then ``\\"``), so every quote left delimits a string. (cosleec.lsp.wire
+    counts the same way: the two floors do not import each other.)"""
+    plain = data.replace(b"\\\\", b"").replace(b'\\"', b"")
+    brackets = b"".join(plain.split(b'"')[::2]).translate(None, _NOT_BRACKETS)
+    return max(accumulate(map(_STEP.__getitem__, brackets)), default=0)
 
 
 def _json(data: Any) -> str:

@@ -383,7 +383,8 @@ def test_the_manager_wakes_the_server_only_when_a_browser_waits_for_a_change() -
 
 def test_two_hundred_browsers_share_one_state_per_change_each_with_its_own_now() -> None:
     clock = VirtualClock()
-    with served(clock=clock) as m:
+    # 200 streams: more than the default max_streams (100), so allowed here (test_web_limits.py)
+    with served(clock=clock, web={"max_connections": 256, "max_streams": 201}) as m:
         live = view(m).live
         made: list[int] = []
         snapshot = live.snapshot
