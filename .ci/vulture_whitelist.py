@@ -105,3 +105,4 @@ did_open  #
 did_change  #
 did_save  #
 did_close  #
+servers  # views/web_server.Server: uvicorn's Server reads it when it shuts down

@@ -43,12 +43,20 @@ therefore uses two references, both run in the parent's process on the same scri
 killed run made it -- it reported its event or its refusal, or finished). The killed day
 must equal the second record for record, and every call it lost must be named by a
 ``task-interrupted`` record; when nothing was lost, the two references are the same run.
+
+**Damaged files** (:data:`CORRUPTIONS`): a kill leaves the commits of the killed life in
+``state.db-wal`` only. Deleted, truncated or with a byte changed, that file (or the ``.db``
+truncated, or an old copy of both put back) makes SQLite open an older or an empty journal
+without a word; the next life must be refused (JournalError naming the files), never start
+from less than was committed, and with ``"reset": true`` in its configuration
+(``Manager(..., reset_journal=True)``) start afresh after a ``journal-reset`` record.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import sys
 from collections import Counter
@@ -57,6 +65,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from cosleec.errors import UserError
 from cosleec.runtime import AuditLog, Decision, Journal, Manager, Obligation, VirtualClock
 from cosleec.runtime.journal import Change
 
@@ -114,7 +123,7 @@ WARD_RULES = """def_start
  event Shift event Patrol event Check event Log
  event Alarm event Ack event Escalate event Page
  event Visitor event Photo event Alert
- event Door event Lock
+ event Door event Lock event Tour
  measure night : boolean
  measure consent : boolean
  measure staff : numeric
@@ -129,13 +138,15 @@ rule_start
  W5 when Alert then Photo within 10 seconds
  W6 when Door and staff < 2 then Lock within 10 seconds
    unless night then Lock within 5 seconds and Alert within 5 seconds
+ W7 when Tour then Photo within 10 minutes and Log within 20 seconds
 rule_end
 """
 
 #: a purpose-built day: two obligations per decision, a chain of rules triggered by the
 #: robot's own actions, an ``otherwise`` whose fallback is missed too (a second
 #: ``otherwise``), a late event, a prohibition that refuses requests (the driver's and the
-#: robot's own) and one broken anyway, an undetermined decision, a failing action
+#: robot's own) and one broken anyway, an undetermined decision, a failing action,
+#: a decision dispatched in parts (one action runs at once, the other is held until allowed)
 WARD_STEPS: list[Step] = [
     ("set", {"night": False, "consent": False}, "day shift, no consent to photos, staffing unknown"),
     ("event", "Shift", "W1: patrol (W2: log it) and check"),
@@ -164,6 +175,7 @@ WARD_STEPS: list[Step] = [
     ("event", "Ack", "acknowledged in time"),
     ("set", {"consent": False}, "consent withdrawn"),
     ("event", "Visitor", "W4: no photos again"),
+    ("event", "Tour", "W7: log at once; the photo is held until W4's ban ends (a decision in parts)"),
     ("request", "Photo", "refused: the prohibition counts its refusals"),
     ("advance", 400, "end of the day: every window closes, the prohibition was respected"),
 ]
@@ -328,7 +340,8 @@ class KillingJournal(Journal):
 
 
 class KillingAuditLog(AuditLog):
-    """An audit log whose writes pass kill points; ``seq`` is the last record written or found."""
+    """An audit log whose writes pass kill points; ``seq`` is the last record written or found
+    (after a restart set records aside, the last kept)."""
 
     def __init__(self, path: Path, killer: Killer) -> None:
         super().__init__(path)
@@ -351,16 +364,30 @@ class KillingAuditLog(AuditLog):
             self.killer.point("audit-after")
         return end
 
+    def cut(self, at: int) -> list[dict[str, Any]]:
+        """Set aside what a restart finds uncommitted; ``seq`` goes back to the last record kept.
+
+        Otherwise a ``begin`` line would name a ``seq`` the log no longer reaches, records
+        this life commits could carry a ``seq`` below it, and the next life would play again
+        a step this one applied (seed 2521208213).
+        """
+        records = super().cut(at)
+        self.seq = self.last_seq
+        return records
+
 
 def committed_after(records: list[Record], run: str, seq: int) -> list[Record]:
     """The records run ``run`` committed after record ``seq``."""
     return [r for r in records if r.get("run") == run and r["seq"] > seq]
 
 
-def live(workdir: Path, plan: Plan | None = None, only: set[tuple[int, str]] | None = None) -> None:
+def live(
+    workdir: Path, plan: Plan | None = None, only: set[tuple[int, str]] | None = None, reset: bool = False
+) -> None:
     """One life: open the Manager in ``workdir``, resume the day, play it to the end (unless killed).
 
-    ``only`` (the references) runs just the capability calls ``(decision, event)`` it holds.
+    ``only`` (the references) runs just the capability calls ``(decision, event)`` it holds;
+    ``reset`` opens the journal with ``reset_journal=True`` (after a damaged journal was refused).
     """
     day = Day.from_json(json.loads((workdir / "day.json").read_text(encoding="utf-8")))
     steps = day.steps
@@ -382,6 +409,7 @@ def live(workdir: Path, plan: Plan | None = None, only: set[tuple[int, str]] | N
         clock=clock,
         journal=KillingJournal(workdir / "state.db", killer),
         audit=audit,
+        **({"reset_journal": True} if reset else {}),
     )
     log({"k": "life", "run": m.run_id, "from": i, "clock": clock.now(), "pid": os.getpid()})
     failing: set[str] = set()
@@ -579,7 +607,11 @@ def verify(day: Day, killed: Played, plain: Played, same: Played) -> dict[str, A
     torn_path = killed.dir / "audit.jsonl.torn"
     torn = torn_path.read_text(encoding="utf-8").splitlines() if torn_path.exists() else []
     aside_path = killed.dir / "audit.jsonl.uncommitted"
-    aside = [json.loads(x) for x in aside_path.read_text(encoding="utf-8").splitlines()] if aside_path.exists() else []
+    aside = (
+        [json.loads(x) for x in aside_path.read_text(encoding="utf-8").splitlines()]
+        if aside_path.exists()
+        else []
+    )
     for rec in aside:  # set aside: the records of a step whose commit never happened
         if int(rec["seq"]) > len(seqs) + 1:
             problems.append(f"an uncommitted record's seq {rec['seq']} is past the log's end ({len(seqs)})")
@@ -663,11 +695,55 @@ def verify(day: Day, killed: Played, plain: Played, same: Played) -> dict[str, A
     }
 
 
+# ---------------------------------------------------------------------- damaged files
+
+
+def _flip(path: Path, at: int) -> None:
+    data = bytearray(path.read_bytes())
+    data[at] ^= 0xFF
+    path.write_bytes(bytes(data))
+
+
+def _truncate(path: Path, size: int) -> None:
+    os.truncate(path, size)
+
+
+def _put_back(workdir: Path) -> None:
+    for name in ("state.db", "state.db-wal"):
+        shutil.copyfile(workdir / "old" / name, workdir / name)
+
+
+#: what can happen to a killed life's journal, each a function of its directory (an old copy of
+#: ``state.db`` and ``state.db-wal`` is in ``old/``, taken after the life before it was killed)
+CORRUPTIONS: dict[str, Callable[[Path], None]] = {
+    "wal deleted": lambda d: (d / "state.db-wal").unlink(),
+    "wal truncated to 0": lambda d: _truncate(d / "state.db-wal", 0),
+    "wal truncated to half": lambda d: _truncate(
+        d / "state.db-wal", (d / "state.db-wal").stat().st_size // 2
+    ),
+    "wal header flipped": lambda d: _flip(d / "state.db-wal", 24),  # its checksum: the whole file is ignored
+    "wal frame flipped": lambda d: _flip(d / "state.db-wal", (d / "state.db-wal").stat().st_size // 3),
+    "db truncated to 0": lambda d: _truncate(d / "state.db", 0),
+    "journal older than the log": _put_back,
+}
+
+
+def keep_old(workdir: Path) -> None:
+    """Copy the journal's files (a killed life's) to ``old/``: the backup an operator might put back."""
+    (workdir / "old").mkdir(exist_ok=True)
+    for name in ("state.db", "state.db-wal"):
+        shutil.copyfile(workdir / name, workdir / "old" / name)
+
+
 def main(argv: list[str]) -> int:
     """``python -m tests.kill_campaign '{"dir": ..., "plan": ...}'``: one life."""
     config = json.loads(argv[0])
     plan = Plan(**config["plan"]) if config.get("plan") else None
-    live(Path(config["dir"]), plan)
+    try:
+        live(Path(config["dir"]), plan, reset=bool(config.get("reset")))
+    except UserError as e:  # a journal refused: said as the command line says it, with its hint
+        print(f"{type(e).__name__}: {e.render()}", file=sys.stderr)
+        return 3
     return 0
 
 

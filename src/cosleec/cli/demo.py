@@ -35,6 +35,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         help="keep the Manager's state in this SQLite journal (restored by the next run, even after a crash)",
     )
     p.add_argument(
+        "--reset-journal",
+        action="store_true",
+        help="with --journal: start afresh from a journal the Manager refused (a lost or damaged -wal, "
+        "an old copy); the reset and what was lost are recorded in the audit trail",
+    )
+    p.add_argument(
         "--plot",
         metavar="FILE",
         help="draw the run's timeline to FILE once the day is over: .png, .svg or .html (see cosleec timeline)",
@@ -89,6 +95,8 @@ def run(args: argparse.Namespace) -> int:
             )
     if args.journal:
         output_file(args.journal, "the journal", "--journal")
+    elif args.reset_journal:
+        raise UserError("--reset-journal needs --journal", hint="give the journal to start afresh from")
     plot: Callable[[demo.Run], None] | None = None
     if args.plot:
         out, fmt = Path(args.plot), timeline.check_output(Path(args.plot), "--plot")
@@ -110,6 +118,7 @@ def run(args: argparse.Namespace) -> int:
         semantics=args.semantics,
         audit=args.audit,
         journal=args.journal,
+        reset_journal=args.reset_journal,
         on_done=plot,
         **web,
     )

@@ -57,6 +57,7 @@ def run(
     semantics: str = "last-wins",
     audit: str | None = None,
     journal: str | None = None,
+    reset_journal: bool = False,
     on_step: Callable[[float, Step], None] | None = None,
     on_event: Callable[[RuntimeEvent], None] | None = None,
     web: int | Mapping[str, Any] | None = None,
@@ -70,7 +71,8 @@ def run(
     fail or work again. ``on_step(now, step)`` runs before each step, ``on_event`` for
     every runtime event; ``audit`` names a JSON Lines audit trail and ``journal`` the
     Manager's SQLite journal (state kept across runs and crashes: a journal a previous run
-    left is restored first). ``web`` serves the live web view (``Manager(web=...)``);
+    left is restored first; ``reset_journal`` starts afresh from one the Manager refused).
+    ``web`` serves the live web view (``Manager(web=...)``);
     ``on_start(manager)`` runs once it is started (the view's URL is known then) and
     ``before_close(manager)`` after the last step (the web demo serves on there). The Manager
     is closed before returning, even when a step or a hook raises (Ctrl-C).
@@ -82,6 +84,7 @@ def run(
         semantics=semantics,
         audit=AuditLog(audit) if audit else None,
         journal=journal,
+        reset_journal=reset_journal,
         web=web,
     )
     robot = tasks.install(manager)
@@ -209,6 +212,7 @@ def main(
     semantics: str = "last-wins",
     audit: str | None = None,
     journal: str | None = None,
+    reset_journal: bool = False,
     web: int | None = None,
     pace: float = PACE_S,
     on_done: Callable[[Run], None] | None = None,
@@ -222,9 +226,9 @@ def main(
     Returns 0: checking the decisions against ``scenario.EXPECTED`` is the tests' job.
     """
     watch = Watch(pace, lambda line: print(line, file=sys.stderr if as_json else sys.stdout, flush=True))
-    hooks: dict[str, Any] = {}
+    hooks: dict[str, Any] = {"reset_journal": True} if reset_journal else {}
     if web is not None:
-        hooks = {"web": web, "on_start": watch.started, "before_close": watch.linger}
+        hooks |= {"web": web, "on_start": watch.started, "before_close": watch.linger}
     if as_json:
 
         def emit(ev: RuntimeEvent) -> None:

@@ -12,11 +12,41 @@ past the committed length are of a step that never happened, and are set aside.
 SQLite in WAL mode with ``synchronous=NORMAL``: a commit survives the death of the
 process at any instant; a power cut can lose the last commits (pass ``fsync=True`` for
 ``synchronous=FULL``, at a cost per step). One connection, used under the Manager's lock.
+
+**What it restores is all that was committed, or it refuses.** While a Manager runs, the
+commits since it opened the journal are only in ``state.db-wal``: lose that file (deleted,
+truncated, bytes changed -- SQLite silently ignores what it cannot read) or the ``.db``
+(truncated, deleted, an old copy put back) and SQLite opens an older journal, or an empty
+one, without a word. So the journal proves its state before the Manager uses it
+(:func:`verify`), all of it at open and nothing per step:
+
+- opening it marks it *running* in the main file (``meta.running``) and copies the WAL
+  into it (a checkpoint); a clean :meth:`Journal.close` clears the mark. A main file marked
+  running with no ``-wal`` file beside it lost its last commits (:attr:`Journal.suspect`);
+  an empty or missing main file with a ``-wal`` file lost everything (:attr:`Journal.damage`,
+  and SQLite would delete that ``-wal`` file: the journal is not touched);
+- with the audit log beside it, the log says what was committed: each commit's records end
+  where the journal says the log ended (:attr:`Saved.audit`), with the record numbered just
+  before its next ``seq``; a kill between writing a step's records and committing it leaves
+  the records of at most *one* step after that point (every record of a step carries the
+  same ``run``, ``mono`` and ``wall``). Records of two steps or more after it, a log that
+  does not continue where the journal stopped, or an empty journal beside a log that holds
+  a journaled history (a ``restored`` record) mean the journal lost commits.
+
+A journal in doubt is refused (JournalError naming the files and the two ways out: put the
+journal and the audit log back from one backup, or ``Manager(..., reset_journal=True)``,
+which empties the journal and records what was lost as a ``journal-reset`` audit record).
+Without an audit log a truncated or corrupted ``-wal`` file cannot be told from a shorter
+history: run with the audit log beside the journal. A loss of only the very last commit
+looks like a kill before that commit, and is treated as one (its records set aside).
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import json
+import os
 import sqlite3
 import time
 from collections.abc import Mapping
@@ -25,6 +55,7 @@ from pathlib import Path
 from typing import Any
 
 from cosleec.errors import UserError
+from cosleec.runtime.audit import AuditLog
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -32,14 +63,19 @@ CREATE TABLE IF NOT EXISTS context (name TEXT PRIMARY KEY, value TEXT NOT NULL, 
 CREATE TABLE IF NOT EXISTS obligations (id INTEGER PRIMARY KEY, record TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS outbox (id INTEGER PRIMARY KEY, record TEXT NOT NULL);
 """
+_TABLES = ("meta", "context", "obligations", "outbox")
 
 
 class JournalError(UserError):
-    """The journal cannot be opened or written (a path that is not writable, a full disk).
+    """The journal cannot be opened, trusted or written (a path that is not writable, a full
+    disk, a journal that lost commits: see the module docstring).
 
     A Manager whose journal fails stops deciding: every later call raises this error and
     :meth:`~cosleec.runtime.Manager.request` refuses, since its state can no longer be kept.
+    ``reason`` is why a journal was refused (:meth:`Journal.refusal`), without the way out.
     """
+
+    reason: str = ""
 
 
 @dataclass
@@ -77,59 +113,140 @@ class Change:
 class Journal:
     """A SQLite journal of a Manager's state (see the module docstring).
 
+    Opening one takes its lock (one Manager per journal) and looks at its files, writing
+    nothing: ``damage`` says why nothing can be restored from them, ``suspect`` why what
+    can be may be older than what was committed (None when the files look whole). The
+    Manager decides (:func:`verify`), then calls :meth:`start` -- or :meth:`reset` first.
+
     Not thread-safe by itself: the Manager calls it under its lock (the connection is
     allowed to move between threads for that reason).
     """
 
     def __init__(self, path: str | Path, *, fsync: bool = False) -> None:
         self.path = Path(path)
+        self.wal = self.path.with_name(self.path.name + "-wal")
+        self.damage: str | None = None
+        self.suspect: str | None = None
+        self._fsync = fsync
+        self._started = False  # marked running by this object: close() clears the mark
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
+            kept = self._kept()
+            if kept.exists() and not self.wal.exists():  # a close killed while it kept the -wal file
+                os.replace(kept, self.wal)
+            existed = self.path.exists()
+            size = self.path.stat().st_size if existed else 0
+            self._had_wal = self.wal.exists()
+            if size == 0 and self._had_wal:  # SQLite would delete that -wal file: do not even open it
+                self._db = sqlite3.connect(":memory:", check_same_thread=False)
+                self.damage = (
+                    f"the journal's database file {self.path.name} is "
+                    f"{'empty' if existed else 'missing'} but its {self.wal.name} file is there: "
+                    "the database was truncated or deleted, and every commit it held is lost"
+                )
+                return
             self._db = sqlite3.connect(self.path, check_same_thread=False, isolation_level=None, timeout=1.0)
         except (OSError, sqlite3.Error) as e:
             raise JournalError(
-                f"cannot open the journal: {e}",
+                f"cannot open the journal: {_reason(e)}",
                 where=str(path),
-                hint="give a writable path to a journal file",
+                hint=_hint(e, self.path, "give a writable path to a journal file"),
             ) from None
+        self._prepare()
+        marked = self._marked()
+        if marked is not None and not self._had_wal:
+            self.suspect = (
+                f"the journal {self.path.name} was left running (by process {marked.get('pid', '?')}) "
+                f"and its {self.wal.name} file is gone: the commits since it opened were in that file"
+            )
+
+    def _prepare(self) -> None:
+        """Lock the database (a read in exclusive WAL mode locks out every other connection)."""
         try:
-            # one Manager per journal: the first write takes a lock held until close
             self._db.execute("PRAGMA locking_mode=EXCLUSIVE")
             self._db.execute("PRAGMA journal_mode=WAL")
-            self._db.execute(f"PRAGMA synchronous={'FULL' if fsync else 'NORMAL'}")
-            self._db.executescript(_SCHEMA)
-            self._db.execute("INSERT OR REPLACE INTO meta VALUES ('opened', ?)", (str(time.time()),))
+            self._db.execute(f"PRAGMA synchronous={'FULL' if self._fsync else 'NORMAL'}")
         except sqlite3.OperationalError as e:
             self._db.close()
             busy = "locked" in str(e)
             raise JournalError(
-                "the journal is in use by another Manager" if busy else f"cannot use the journal: {e}",
-                where=str(path),
+                "the journal is in use by another Manager"
+                if busy
+                else f"cannot use the journal: {_reason(e)}",
+                where=str(self.path),
                 hint="stop the other Manager first, or give each Manager its own journal"
                 if busy
-                else "give the path of a cosleec journal, or a new file",
+                else _hint(e, self.path, "give the path of a cosleec journal, or a new file"),
             ) from None
         except sqlite3.Error as e:
             self._db.close()
             raise JournalError(
                 f"this is not a cosleec journal: {e}",
-                where=str(path),
+                where=str(self.path),
                 hint="give a new file for a new journal",
             ) from None
 
+    def _marked(self) -> dict[str, Any] | None:
+        """The running mark of the main file (None: closed cleanly, or a journal of before the mark)."""
+        try:
+            if not self._has("meta"):
+                return None
+            row = self._db.execute("SELECT value FROM meta WHERE key = 'running'").fetchone()
+            mark = json.loads(row[0]) if row else None
+        except (sqlite3.Error, ValueError):
+            return None  # a damaged journal: load() says so
+        return mark if isinstance(mark, dict) else {} if mark is not None else None
+
+    def _kept(self) -> Path:
+        """Where :meth:`close` keeps the ``-wal`` file while SQLite closes (see there)."""
+        return self.wal.with_name(self.wal.name + ".kept")
+
+    def _has(self, table: str) -> bool:
+        return bool(self._db.execute("SELECT 1 FROM sqlite_master WHERE name = ?", (table,)).fetchone())
+
+    def start(self) -> None:
+        """Take the journal into use (after :meth:`load` and the Manager's check): create its
+        tables, mark it running and copy the WAL into the main file, so that from now on the
+        ``-wal`` file holds only this Manager's commits and its loss can be seen."""
+        if self.damage is not None:
+            raise self.refusal(self.damage)
+        try:
+            self._db.executescript(_SCHEMA)
+            now = str(time.time())
+            mark = json.dumps({"pid": os.getpid(), "opened": float(now)})
+            self._db.executemany(
+                "INSERT OR REPLACE INTO meta VALUES (?, ?)", [("opened", now), ("running", mark)]
+            )
+            busy, _, _ = self._db.execute("PRAGMA wal_checkpoint(TRUNCATE)").fetchone()
+        except sqlite3.Error as e:
+            raise JournalError(
+                f"cannot use the journal: {_reason(e)}",
+                where=str(self.path),
+                hint=_hint(e, self.path, "give the path of a cosleec journal, or a new file"),
+            ) from None
+        if busy:
+            raise JournalError(
+                "cannot use the journal: its WAL could not be copied into the database",
+                where=str(self.path),
+                hint="make sure no other program has the journal open, then start the Manager again",
+            )
+        self._kept().unlink(missing_ok=True)  # a second name a killed close left: no longer needed
+        self.suspect = None
+        self._started = True
+
     def load(self) -> Saved | None:
         """What the journal holds; None for a new journal; JournalError when it is damaged."""
+        if self.damage is not None:
+            raise self.refusal(self.damage)
         try:
             return self._load()
         except (ValueError, KeyError, TypeError, AttributeError, sqlite3.Error) as e:
-            raise JournalError(
-                f"the journal is damaged ({type(e).__name__}: {str(e)[:200]}); nothing was restored",
-                where=str(self.path),
-                hint="restore it from a backup (with its -wal file), or give a new file to start afresh",
-            ) from None
+            raise self.refusal(f"the journal is damaged ({type(e).__name__}: {str(e)[:200]})") from None
 
     def _load(self) -> Saved | None:
         db = self._db
+        if not self._has("meta"):
+            return None
         row = db.execute("SELECT value FROM meta WHERE key = 'state'").fetchone()
         if row is None:
             return None
@@ -152,10 +269,68 @@ class Journal:
             boot=str(meta.get("boot", "")),
         )
 
+    def refusal(self, reason: str, audit: AuditLog | None = None) -> JournalError:
+        """The error of a journal that cannot be trusted: ``reason``, the files, the two ways out."""
+        files = f"{self.path} and {self.wal.name}" + (f", with the audit log {audit.path}" if audit else "")
+        error = JournalError(
+            f"{reason}. Starting from this journal would forget what the Manager committed; nothing was restored",
+            where=str(self.path),
+            hint=f"put back {files} from one backup taken while the Manager was stopped; or, to start afresh "
+            "on purpose and forget that state, pass reset_journal=True once (--reset-journal on the command "
+            "line; the reset and what was lost are recorded in the audit log)",
+        )
+        error.reason = reason
+        return error
+
+    def reset(self) -> dict[str, Any]:
+        """Forget everything the journal holds (``Manager(..., reset_journal=True)``), then
+        :meth:`start` it afresh. Returns what it said it held (run, lineage, next record ``seq``,
+        time of its last commit), as far as it can still be read: for the ``journal-reset`` record."""
+        held = self._peek()
+        try:
+            if self.damage is not None:  # an empty main file: its orphaned -wal file goes
+                self._db.close()
+                self.wal.unlink(missing_ok=True)
+                self._had_wal = False
+                self._db = sqlite3.connect(
+                    self.path, check_same_thread=False, isolation_level=None, timeout=1.0
+                )
+                self.damage = None
+                self._prepare()
+            self._db.execute("BEGIN IMMEDIATE")
+            for table in _TABLES:
+                self._db.execute(f"DROP TABLE IF EXISTS {table}")
+            self._db.execute("COMMIT")
+        except (OSError, sqlite3.Error) as e:
+            raise JournalError(
+                f"cannot reset the journal: {_reason(e)}",
+                where=str(self.path),
+                hint=_hint(e, self.path, "delete the journal's files by hand, then start with a new journal"),
+            ) from None
+        self.suspect = None
+        self.start()
+        return held
+
+    def _peek(self) -> dict[str, Any]:
+        if self.damage is not None:
+            return {}
+        try:
+            row = self._db.execute("SELECT value FROM meta WHERE key = 'state'").fetchone()
+            meta = json.loads(row[0]) if row else {}
+            held = {
+                "run": meta.get("run"),
+                "lineage": meta.get("lineage"),
+                "record": meta.get("counters", {}).get("record"),
+                "wall": meta.get("wall"),
+            }
+            return {k: v for k, v in held.items() if v is not None}
+        except (sqlite3.Error, ValueError, TypeError, AttributeError):
+            return {}
+
     def commit(self, change: Change, meta: Mapping[str, Any], clock: float) -> None:
         """Write one step: its state change and ``meta`` (counters, the audit log's length), atomically.
 
-        JournalError if the write fails (nothing of it is kept).
+        JournalError if the write fails (nothing of it is kept); a full disk is named as such.
         """
         db = self._db
         try:
@@ -180,14 +355,152 @@ class Journal:
                 db.execute("INSERT OR REPLACE INTO meta VALUES ('state', ?)", (state,))
                 db.execute("COMMIT")
             except BaseException:
-                db.execute("ROLLBACK")
+                # SQLite has already rolled back after some errors (a full disk): a second
+                # rollback would fail and hide the first error
+                if db.in_transaction:
+                    with contextlib.suppress(sqlite3.Error):
+                        db.execute("ROLLBACK")
                 raise
         except sqlite3.Error as e:
-            raise JournalError(f"cannot write the journal: {e}", where=str(self.path)) from None
+            raise JournalError(
+                f"cannot write the journal: {_reason(e)}",
+                where=str(self.path),
+                hint=_hint(e, self.path, "restart the Manager: the journal has the last committed state"),
+            ) from None
 
     def close(self) -> None:
-        """Close the database; the journal keeps what was committed."""
-        self._db.close()
+        """Clear the running mark and close the database; the journal keeps what was committed.
+
+        Never raises. SQLite copies the ``-wal`` file into the database and deletes it when it
+        closes; it is kept (under a second name while SQLite closes, then put back) when the
+        mark cannot be cleared (a full disk: the mark then meets its ``-wal`` file on the next
+        start, as after a crash, and is not taken for a loss), and when the journal was only
+        looked at (refused, or never started): what the next start sees is what this one saw.
+        """
+        keep = self._had_wal and not self._started
+        if self._started:
+            try:
+                if self._db.in_transaction:
+                    self._db.execute("ROLLBACK")
+                self._db.execute("DELETE FROM meta WHERE key = 'running'")
+            except sqlite3.Error:
+                keep = True
+        kept: Path | None = self._kept() if keep else None
+        if kept is not None:
+            try:
+                kept.unlink(missing_ok=True)
+                os.link(self.wal, kept)  # a second name for the same file: no space needed
+            except OSError:
+                kept = None
+        with contextlib.suppress(sqlite3.Error):
+            self._db.close()
+        self._started = False
+        if kept is not None:
+            with contextlib.suppress(OSError):
+                if self.wal.exists():  # SQLite did not delete it: the second name is not needed
+                    kept.unlink()
+                else:
+                    os.replace(kept, self.wal)
+
+
+def verify(journal: Journal, saved: Saved | None, audit: AuditLog | None) -> str | None:
+    """Why ``saved`` (what ``journal`` holds) may be less than was committed; None when it is all.
+
+    Reads at most the audit log's records of two steps after the journal's end, the record
+    before it, and -- for an empty journal only -- back to the log's last ``restored`` record.
+    """
+    if journal.suspect is not None and not _complete(saved, audit):
+        return journal.suspect
+    if audit is None:
+        return None
+    if saved is None:  # (the log's last step may be a first life's, killed before its commit)
+        last = audit.last_of("restored", before=audit.last_step()) if audit.size else None
+        if last is None:
+            return None  # a new journal, beside a new log or one no journaled Manager wrote
+        lineage = last.get("lineage") or (last.get("run") if last.get("from") is None else None) or "unknown"
+        return (
+            f"the journal {journal.path.name} holds no state, but the audit log {audit.path.name} continues "
+            f"a journaled history (lineage {lineage}, records up to seq {audit.last_seq})"
+        )
+    if saved.audit is None or audit.size < saved.audit:
+        return None  # no log then, or a log shorter than committed: the Manager records the mismatch
+    record = saved.counters.get("record", 1)
+    if not _ends_at(saved, audit):
+        return (
+            f"the audit log {audit.path.name} does not continue where the journal {journal.path.name} stopped "
+            f"(record seq {record - 1} of run {saved.run} ending at byte {saved.audit}): "
+            "the log was changed, or belongs to another journal"
+        )
+    tail = audit.steps_after(saved.audit)
+    steps = {(r.get("run"), r.get("mono"), r.get("wall")) for r in tail}
+    if len(steps) > 1 or (tail and tail[0].get("seq") != record):
+        return (
+            f"the journal {journal.path.name} is older than the audit log {audit.path.name}: the log holds "
+            f"committed records after the journal's last commit (seq {record - 1}, lineage {saved.lineage}) "
+            f"up to seq {audit.last_seq}"
+        )
+    return None
+
+
+def _ends_at(saved: Saved, audit: AuditLog) -> bool:
+    """Does the journal's last commit end the log where it says, with its last record?"""
+    if not saved.audit:
+        return True
+    rec = audit.record_before(saved.audit)
+    return (
+        rec is not None
+        and rec.get("seq") == saved.counters.get("record", 1) - 1
+        and rec.get("run") == saved.run
+    )
+
+
+def _complete(saved: Saved | None, audit: AuditLog | None) -> bool:
+    """Does the audit log prove that ``saved`` is the last commit (nothing after it)?"""
+    return (
+        saved is not None
+        and audit is not None
+        and saved.audit is not None
+        and audit.size == saved.audit
+        and _ends_at(saved, audit)
+    )
+
+
+def lost(held: Mapping[str, Any], audit: AuditLog | None, reason: str) -> dict[str, Any]:
+    """The ``journal-reset`` record's data: why, and the history given up (lineage, last ``seq``)."""
+    lineage = held.get("lineage")
+    if not lineage and audit is not None:
+        last = audit.last_of("restored")
+        lineage = None if last is None else last.get("lineage") or last.get("run")
+    return {
+        "reason": reason,
+        "lineage": lineage,
+        "last_seq": audit.last_seq if audit is not None else None,
+        "journal": dict(held) or None,
+    }
+
+
+def _full(e: BaseException) -> bool:
+    """Is ``e`` a full disk (or quota)?"""
+    if isinstance(e, OSError):
+        return e.errno in (errno.ENOSPC, errno.EDQUOT)
+    return isinstance(e, sqlite3.Error) and (
+        getattr(e, "sqlite_errorcode", None) == sqlite3.SQLITE_FULL or "disk is full" in str(e)
+    )
+
+
+def _reason(e: BaseException) -> str:
+    """``e`` in words, a full disk named as such."""
+    text = (e.strerror if isinstance(e, OSError) else None) or str(e)
+    return f"the disk is full ({text})" if _full(e) else text
+
+
+def _hint(e: BaseException, path: Path, otherwise: str) -> str:
+    if _full(e):
+        return (
+            f"free space on the disk that holds {path.parent}, then start the Manager again: "
+            "the journal keeps what it committed"
+        )
+    return otherwise
 
 
 def _dumps(record: Mapping[str, Any]) -> str:

@@ -31,9 +31,13 @@ What happens when the runtime does not know (each a documented policy, fail clos
   (:meth:`Manager.permission` says why, as it does for every refusal).
 
 When rules demand E and forbid it at once (a *conflict*), the Manager records a
-``conflict`` and resolves it by the declared priorities, or else lets the prohibition win;
-an action that is forbidden for now is held until it is allowed, so ``request(E)`` and what
-the Manager dispatches never disagree (:mod:`cosleec.runtime.priorities`).
+``conflict`` and resolves it by the declared priorities, or else lets the prohibition win
+(:mod:`cosleec.runtime.priorities`). Each action of a decision is dispatched on its own: one
+that is forbidden for now is held until it is allowed while the others run. Whether an
+action may start is checked again where its implementation is started, under the lock
+``request`` takes: a prohibition that took force since the decision stops it (a
+``refused`` record; it is held again), so ``request(E)`` and what the Manager dispatches
+never disagree, whatever other threads or observers do in between.
 
 The rules themselves can change while the Manager runs (:meth:`Manager.reload`): the swap
 is one step, so every trigger is decided wholly by the old rules or wholly by the new;
@@ -52,6 +56,7 @@ import itertools
 import json
 import logging
 import math
+import sys
 import threading
 import time
 import uuid
@@ -83,7 +88,7 @@ from cosleec.runtime.context import Context
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.errors import BindingError, ConfigurationError, ContextError, ReloadError
 from cosleec.runtime.implementations import Capability, Implementations, Ran
-from cosleec.runtime.journal import Change, Journal, JournalError, Saved
+from cosleec.runtime.journal import Change, Journal, JournalError, Saved, lost, verify
 from cosleec.runtime.layers import LayerManager, LayerSwitch, evaluate
 from cosleec.runtime.model import MAX_WINDOW_S, CompiledRule, ItemSpec, Obligation, ResponseSpec
 from cosleec.runtime.obligations import CANCELLED, PENDING, REFUSED, Outcome, Tracked, Tracker
@@ -126,8 +131,8 @@ class RuntimeEvent:
 
     ``kind`` is one of options, event, context, layers, semantics, decision, obligation,
     refused, rejected, conflict, cancelled, held, dispatch, withheld, task-done, task-failed,
-    task-interrupted, restored, reloaded, dropped, uncommitted, audit-mismatch. ``seq``
-    numbers the records of one Manager (continued across restarts with a journal, or from
+    task-interrupted, restored, reloaded, reload-attempt, dropped, uncommitted, audit-mismatch,
+    journal-reset. ``seq`` numbers the records of one Manager (continued across restarts with a journal, or from
     the audit log it appends to); 0 when nothing records.
     """
 
@@ -185,11 +190,17 @@ class Reloaded:
 
 
 class _Step:
-    """What one locked step changed: its records, in order, and the journal's share of it."""
+    """What one locked step changed: its records, in order, and the journal's share of it.
 
-    __slots__ = ("_change", "events", "more")
+    ``now`` is the clock read once, under the lock, when the step began: every record of the
+    step is stamped with it (a decision's own ``time`` aside), so the audit log's times never
+    go back in ``seq`` order, however many threads take steps.
+    """
 
-    def __init__(self) -> None:
+    __slots__ = ("_change", "events", "more", "now")
+
+    def __init__(self, now: float = 0.0) -> None:
+        self.now = now
         self.events: list[RuntimeEvent] = []
         self._change: Change | None = None  # made on first use: most steps without a journal need none
         self.more = False  # a batched tick left deadlines for the next batch
@@ -222,7 +233,7 @@ class _Scope:
         if m._broken is not None or m._closed:  # the step it waited behind failed, or closed
             m._lock.release()
             raise m._refusal()
-        self.step = _Step()
+        self.step = _Step(m.clock.now())  # read under the lock: steps' times follow their order
         return self.step
 
     def __exit__(self, *exc: object) -> None:
@@ -243,6 +254,12 @@ class _Job:
     annotated within the step when the dispatch differs from the decision;
     ``implementations`` those bound when it was decided (a reload since binds the new
     rules' own: a decision runs as it was decided, under the rule it was decided by).
+
+    Each action (an obligation of ``items`` that requires an event) runs on its own: when
+    some are forbidden for now, the others run and these wait. ``sent`` holds the ids of
+    the actions already handed to the implementation; a *part* -- the job a dispatch runs
+    -- shares it with the decision's job, and its ``items`` are the actions it runs (and
+    the decision's prohibitions).
     """
 
     rule: CompiledRule
@@ -251,6 +268,7 @@ class _Job:
     items: list[Tracked]
     record: dict[str, Any] | None = None
     implementations: Implementations | None = None
+    sent: set[int] = field(default_factory=set)
 
 
 @dataclass
@@ -283,8 +301,11 @@ class Manager:
     ``"conflict-aware"``; ``priority_lead`` -- seconds before the forcing deadline a
     conflict-aware priority cancels the lower rule (0, as SLEEC-TK; give a real robot time
     to act); ``max_age`` -- seconds after which a measure's value is stale; ``audit`` --
-    a JSON Lines audit log; ``journal`` -- a SQLite file the state survives a crash in
-    (:mod:`cosleec.runtime.journal`); ``history`` -- how many decisions :attr:`decisions`
+    a JSON Lines audit log (one writer: a second Manager on it is refused); ``journal`` --
+    a SQLite file the state survives a crash in (:mod:`cosleec.runtime.journal`), refused
+    (JournalError) when it holds less than was committed; ``reset_journal=True`` -- start
+    afresh from such a journal on purpose, once, recording what is lost as a
+    ``journal-reset`` audit record (refused when the journal is sound); ``history`` -- how many decisions :attr:`decisions`
     keeps; ``max_depth`` -- how deeply implementations may trigger rules whose
     implementations trigger rules (a capability that triggers its own rule is stopped
     there, with a ``task-failed`` record); ``dispatch=False`` decides without running
@@ -309,6 +330,7 @@ class Manager:
         untimed: str | float = "none",
         audit: str | Path | AuditLog | None = None,
         journal: str | Path | Journal | None = None,
+        reset_journal: bool = False,
         max_age: Mapping[str, float] | None = None,
         history: int = 10_000,
         max_depth: int = 16,
@@ -337,8 +359,13 @@ class Manager:
         self.dispatch_locally = dispatch
         if isinstance(history, bool) or not isinstance(history, int) or history < 1:
             raise ConfigurationError(f"history must be a whole number of at least 1, not {show(history)}")
-        if isinstance(max_depth, bool) or not isinstance(max_depth, int) or max_depth < 1:
-            raise ConfigurationError(f"max_depth must be a whole number of at least 1, not {max_depth!r}")
+        deepest = _deepest()
+        if isinstance(max_depth, bool) or not isinstance(max_depth, int) or not 1 <= max_depth <= deepest:
+            raise ConfigurationError(
+                f"max_depth must be a whole number from 1 to {deepest}, not {show(max_depth)}",
+                hint=f"each level of implementations that trigger rules takes about {_FRAMES_PER_LEVEL} of "
+                f"Python's {sys.getrecursionlimit()} stack frames (sys.getrecursionlimit()); 16 is the default",
+            )
         self.max_depth = max_depth
         given = _given(priorities)
         self.priorities = Priorities.build(
@@ -353,6 +380,10 @@ class Manager:
             self.priorities.above
         )
         self._held: dict[int, _Job] = {}  # decisions whose action is forbidden for now, by id
+        # with a journal: the actions of a decision dispatched in parts that were handed to their
+        # implementation and whose outcome is not recorded yet, by decision id (its outbox entry
+        # names them: a restart records them task-interrupted, see _keep_held)
+        self._running: dict[int, set[int]] = {}
         self._cut: tuple[int, tuple[float, Tracked, str] | None] | None = None  # (tracker version, forced())
         # held decisions as last examined: (tracker version, when the next interval opens)
         self._held_seen: tuple[int, float] = (-1, 0.0)
@@ -399,17 +430,31 @@ class Manager:
         # the Manager node publishes them again after a restart (task nodes run each id once)
         self.undelivered: list[dict[str, Any]] = []
         self._delivered: deque[int] = deque()  # published since the last commit: leave the outbox
-        self.audit = audit if isinstance(audit, AuditLog) else AuditLog(audit) if audit else None
-        if self.audit is not None:  # sequence numbers go on from where the log ends
-            self._next["record"] = self.audit.last_seq + 1
-        self.journal = journal if isinstance(journal, Journal) else Journal(journal) if journal else None
-        if self.journal is not None:
-            self._open_journal(self.journal)
-        # the live web view: found now (a missing extra is said at once), served from start()
+        if not isinstance(reset_journal, bool) or (reset_journal and not journal):
+            raise ConfigurationError(
+                f"reset_journal must be True or False, and True only with a journal, not {show(reset_journal)}"
+            )
+        self._reset_journal = reset_journal
+        # the live web view: found now (a missing extra is said at once, before any file is
+        # opened or locked), served from start()
         self._web: tuple[ViewFactory, int | Mapping[str, Any]] | None = (
             None if web is None else (load_view("web"), web)
         )
         self.view: View | None = None
+        self.audit = audit if isinstance(audit, AuditLog) else AuditLog(audit) if audit else None
+        if self.audit is not None:  # sequence numbers go on from where the log ends
+            self._next["record"] = self.audit.last_seq + 1
+        self.journal: Journal | None = None
+        try:
+            self.journal = journal if isinstance(journal, Journal) else Journal(journal) if journal else None
+            if self.journal is not None:
+                self._open_journal(self.journal)
+        except BaseException:  # refused: what this constructor opened is free again (the audit log's lock)
+            if self.journal is not None and self.journal is not journal:
+                self.journal.close()
+            if self.audit is not None and self.audit is not audit:
+                self.audit.close()
+            raise
 
     @classmethod
     def from_file(cls, path: str | Path, *, infer_defs: bool = False, **options: Any) -> Manager:
@@ -568,13 +613,15 @@ class Manager:
         with self._lock:
             if self._closed:
                 return
-            if self.journal is not None:
-                if self._delivered and self._broken is None:
-                    self._commit(_Step())  # what was published leaves the outbox
-                self.journal.close()
             self._closed = True
-            if self.audit is not None:
-                self.audit.close()
+            try:
+                if self.journal is not None and self._delivered and self._broken is None:
+                    self._commit(_Step())  # what was published leaves the outbox (JournalError if not)
+            finally:  # the files are released whatever happened: neither close raises
+                if self.journal is not None:
+                    self.journal.close()
+                if self.audit is not None:
+                    self.audit.close()
 
     # ------------------------------------------------------------------ context
     def update(self, values: Mapping[str, object] | None = None, /, **kw: object) -> list[LayerSwitch]:
@@ -597,7 +644,7 @@ class Manager:
                 self._emit(step, "rejected", {"reason": clip(str(e), 300), "update": shown})
                 rejected = e
             else:
-                now = self.clock.now()
+                now = step.now
                 self.stats["updates"] += 1
                 followups = self._advance(now, step)
                 changed = self.context.apply(stored, now)
@@ -694,7 +741,7 @@ class Manager:
         with self._step() as step:
             if self._unknown(name, "event", step) is not None:
                 return []
-            now = self.clock.now()
+            now = step.now
             self.stats["events"] += 1
             followups += self._advance(now, step)
             seq = self._count("seq")  # after what time's passing started: this occurrence counts for it
@@ -757,7 +804,7 @@ class Manager:
                 unknown = self._unknown(name, "request", step)
                 if unknown is not None:
                     return Permission(name, False, (), unknown)
-                now = self.clock.now()
+                now = step.now
                 followups = self._ready(self._advance(now, step), now, step)
                 forbidding = self.tracker.forbidding(name, now)
                 answer = self._allowed.get(name) if not forbidding else None
@@ -838,7 +885,7 @@ class Manager:
         more = True
         while more:
             with self._step() as step:
-                now = self.clock.now()
+                now = step.now
                 batch = self._advance(now, step, limit=1000)
                 more = step.more
                 batch = self._ready(batch, now, step)
@@ -882,7 +929,11 @@ class Manager:
 
     def _commit(self, step: _Step) -> None:
         while self._delivered:  # published decisions leave the journal's outbox with this step
-            step.change.outbox[self._delivered.popleft()] = None
+            done = self._delivered.popleft()
+            if done in self._held or done in self._running:  # dispatched in parts: keep what still waits
+                self._landed(done, list(self._running.get(done, ())), step)
+            else:
+                step.change.outbox[done] = None
         if not step.events and not step.changed():
             return
         lines: list[tuple[int, str]] = []
@@ -1221,14 +1272,15 @@ class Manager:
 
     # ------------------------------------------------------------------ dispatch, held until allowed
     def _ready(self, jobs: list[_Job], now: float, step: _Step) -> list[_Job]:
-        """Of ``jobs`` (and those held before), what may run now; the rest is held.
+        """Of ``jobs`` (and those held before), the parts that may run now; the rest is held.
 
-        A decision runs with the obligations still in force (refused and cancelled ones are
-        left out). While any of them names an event a prohibition forbids now, or one whose
-        interval has not opened (an earlier occurrence would not count), the whole decision
-        waits (a ``held`` record; kept in the journal), so that nothing it does contradicts
-        ``request``; once allowed it runs (a ``dispatch`` record). One whose obligations all
-        ended while it waited never runs.
+        Each action of a decision is judged on its own (refused and cancelled ones are left
+        out): one that names an event a prohibition forbids now, or whose interval has not
+        opened (an earlier occurrence would not count), waits (a ``held`` record naming it;
+        kept in the journal), so that nothing dispatched contradicts ``request``; the
+        decision's other actions run now, as a part of it (a ``dispatch`` record). A waiting
+        action runs once allowed (another ``dispatch`` record); one that ended while it
+        waited never runs (``withheld``).
         """
         quiet = not self._held and not self.tracker.bans  # nothing is forbidden: the common case
         if quiet and all(
@@ -1240,66 +1292,129 @@ class Manager:
         recheck = self.tracker.ended != self._held_seen[0] or now >= self._held_seen[1]
         opening = math.inf if recheck else self._held_seen[1]
         for job in [*(self._held.values() if recheck else ()), *jobs]:
-            was_held = job.decision.id in self._held
-            items = [t for t in job.items if not t.prohibition]
-            live = [t for t in items if t.status == PENDING]
-            if items and not live:  # refused, cancelled, closed at once, or met while it waited
-                self._held.pop(job.decision.id, None)
-                if job.record is not None and not was_held:
-                    job.record["dispatch"] = "withheld"  # a Manager node does not hand it on either
-                self._emit(
-                    step,
-                    "withheld",
-                    {
-                        "decision": job.decision.id,
-                        "rule": job.decision.rule,
-                        "reason": "nothing it required is still owed",
-                    },
-                )
-                if self.journal is not None:
-                    step.change.outbox[job.decision.id] = None
-                continue
-            blocked = [t for t in live if t.lo > now or self.tracker.forbidding(t.event, now)]
-            if blocked:
-                opening = min([opening, *(t.lo for t in blocked if t.lo > now)])
-                if not was_held:
-                    self._held[job.decision.id] = job
-                    if job.record is not None:
-                        job.record["dispatch"] = "held"
-                    opens = [t.lo for t in blocked if t.lo > now]
-                    self._emit(
-                        step,
-                        "held",
-                        {
-                            "decision": job.decision.id,
-                            "rule": job.decision.rule,
-                            "events": sorted({t.event for t in blocked}),
-                            "by": sorted(
-                                {p.rule for t in blocked for p in self.tracker.forbidding(t.event, now)}
-                            ),
-                            "opens": max(opens) if opens else None,
-                        },
-                    )
-                    if self.journal is not None:  # a restart holds it again (and runs it once allowed)
-                        step.change.outbox[job.decision.id] = {
-                            "decision": job.decision.id,
-                            "rule": job.decision.rule,
-                            "event": job.decision.event,
-                            "held": True,
-                            "trigger": job.composition is not None,
-                            "record": job.decision.to_json(),
-                        }
-                continue
-            self._held.pop(job.decision.id, None)
-            kept = tuple(t.obligation for t in job.items if t.prohibition or t.status == PENDING)
-            if was_held or len(kept) != len(job.decision.obligations):
-                job.decision = dataclasses.replace(job.decision, obligations=kept)
-                if job.record is not None and not was_held:
-                    job.record["dispatch"] = "changed"
-                self._emit(step, "dispatch", {"decision": job.decision.to_json()})
-            out.append(job)
+            part, blocked = self._split(job, now, step)
+            opening = min([opening, *(t.lo for t in blocked if t.lo > now)])
+            if part is not None:
+                out.append(part)
         self._held_seen = (self.tracker.ended, opening)
         return out
+
+    def _split(self, job: _Job, now: float, step: _Step) -> tuple[_Job | None, list[Tracked]]:
+        """The part of ``job`` that may run now (None: nothing), and the actions that must wait."""
+        was_held = job.decision.id in self._held
+        todo = [t for t in job.items if not t.prohibition and t.id not in job.sent]
+        if not todo and (was_held or job.sent):  # every action was handed on: nothing waits
+            self._held.pop(job.decision.id, None)
+            return None, []
+        live = [t for t in todo if t.status == PENDING]
+        if todo and not live:  # refused, cancelled, closed at once, or met while it waited
+            self._held.pop(job.decision.id, None)
+            if job.record is not None and not was_held and not job.sent:
+                job.record["dispatch"] = "withheld"  # a Manager node does not hand it on either
+            self._emit(
+                step,
+                "withheld",
+                {
+                    "decision": job.decision.id,
+                    "rule": job.decision.rule,
+                    "reason": "nothing it required is still owed",
+                },
+            )
+            if self.journal is not None:
+                if job.decision.id in self._running:  # a part handed on before still runs
+                    self._keep_held(job, step)
+                else:
+                    step.change.outbox[job.decision.id] = None
+            return None, []
+        blocked = [t for t in live if t.lo > now or self.tracker.forbidding(t.event, now)]
+        ready = [t for t in live if t not in blocked]
+        if blocked:
+            if not was_held:
+                self._hold(job, blocked, now, step, annotate=True)
+            if not ready:
+                return None, blocked
+        else:
+            self._held.pop(job.decision.id, None)
+        ids = {t.id for t in ready}
+        whole = not was_held and not blocked and not job.sent
+        job.sent.update(ids)
+        kept = [t for t in job.items if t.prohibition or t.id in ids]
+        if whole and len(kept) == len(job.decision.obligations):
+            return job, blocked  # as decided: the decision record says all
+        part = dataclasses.replace(
+            job,
+            decision=dataclasses.replace(job.decision, obligations=tuple(t.obligation for t in kept)),
+            items=kept,
+        )
+        if job.record is not None and whole:
+            job.record["dispatch"] = "changed"
+        if self.journal is not None and (blocked or (was_held and self.dispatch_locally)):
+            self._handed_on(job.decision.id, ids)  # in flight until _run records its outcome
+            self._keep_held(job, step)  # what was handed on is not run again after a restart
+        self._emit(step, "dispatch", {"decision": part.decision.to_json()})
+        return part, blocked
+
+    def _hold(self, job: _Job, blocked: list[Tracked], now: float, step: _Step, *, annotate: bool) -> None:
+        """Hold ``job`` until its ``blocked`` actions are allowed, with a ``held`` record.
+
+        ``annotate``: the decision's record is still being written (the step that made it):
+        it says ``dispatch: held``, so a Manager node hands on each part by its ``dispatch`` record.
+        """
+        self._held[job.decision.id] = job
+        if annotate and job.record is not None and "dispatch" not in job.record:
+            job.record["dispatch"] = "held"
+        opens = [t.lo for t in blocked if t.lo > now]
+        self._emit(
+            step,
+            "held",
+            {
+                "decision": job.decision.id,
+                "rule": job.decision.rule,
+                "events": sorted({t.event for t in blocked}),
+                "by": sorted({p.rule for t in blocked for p in self.tracker.forbidding(t.event, now)}),
+                "opens": max(opens) if opens else None,
+            },
+        )
+        if self.journal is not None:  # a restart holds it again (and runs it once allowed)
+            self._keep_held(job, step)
+
+    def _keep_held(self, job: _Job, step: _Step) -> None:
+        """The journal's outbox entry of a decision dispatched in parts: whether actions of it
+        are still held, those already handed on (``sent``: never run again) and those of them
+        whose outcome is not recorded yet (``running``: a restart records the decision
+        ``task-interrupted``)."""
+        step.change.outbox[job.decision.id] = {
+            "decision": job.decision.id,
+            "rule": job.decision.rule,
+            "event": job.decision.event,
+            "held": job.decision.id in self._held,
+            "running": sorted(self._running.get(job.decision.id, ())),
+            "trigger": job.composition is not None,
+            "record": job.decision.to_json(),
+            "sent": sorted(job.sent),
+        }
+
+    def _handed_on(self, decision: int, actions: Iterable[int]) -> None:
+        """(In a step.) ``actions`` of a decision dispatched in parts are handed to their
+        implementation: in flight until :meth:`_landed`, named by its outbox entry meanwhile."""
+        ids = set(actions)
+        if ids and self.journal is not None:  # (a Manager node: handed on until it is published)
+            self._running.setdefault(decision, set()).update(ids)
+
+    def _landed(self, decision: int, actions: Iterable[int], step: _Step) -> None:
+        """(In a step, with a journal.) ``actions`` of ``decision`` are no longer in flight
+        (their outcome is recorded, they will not start, or -- a Manager node -- they were
+        published): its outbox entry keeps what still waits or runs, and leaves when nothing does."""
+        running = self._running.get(decision)
+        if running is not None:
+            running.difference_update(actions)
+            if not running:
+                del self._running[decision]
+        held = self._held.get(decision)
+        if held is not None:
+            self._keep_held(held, step)
+        elif decision not in self._running:
+            step.change.outbox[decision] = None
 
     def _forced(self) -> tuple[float, Tracked, str] | None:
         """The next conflict-aware cancellation (:func:`forced`), kept while nothing in force ends
@@ -1318,6 +1433,24 @@ class Manager:
         self._cut = (tr.ended, kept)
         return kept
 
+    def _republish_part(self, rec: dict[str, Any], step: _Step) -> None:
+        """(Restore, a Manager node.) The part of a held decision that was handed on but not
+        known to be published goes into :attr:`undelivered` again -- only its actions still
+        owed, so the held ones are not published before they are allowed (task nodes run each
+        action of a decision once); it stays in the outbox until it is published."""
+        job = self._held[int(rec["decision"])]
+        ids = {int(i) for i in rec.get("running", ()) if isinstance(i, int)}
+        owed = [t for t in job.items if t.id in ids and t.status == PENDING and not t.prohibition]
+        if owed:
+            events = {t.event for t in owed}
+            record = dict(rec["record"])
+            record["obligations"] = [
+                o for o in record.get("obligations", ()) if o.get("negated") or o.get("event") in events
+            ]
+            self.undelivered.append(record)
+            self._running[job.decision.id] = {t.id for t in owed}
+        self._keep_held(job, step)
+
     def _rehold(self, rec: dict[str, Any]) -> bool:
         """Hold again a decision the journal kept as held; False when it cannot be (its rule is gone)."""
         try:
@@ -1331,20 +1464,113 @@ class Manager:
             else None
         )
         items = [t for t in self.tracker.active if t.decision_id == d.id]
-        self._held[d.id] = _Job(rule, d, composition, items, None, self.implementations)
+        sent = {int(i) for i in rec.get("sent", ()) if isinstance(i, int)}
+        self._held[d.id] = _Job(rule, d, composition, items, None, self.implementations, sent)
         return True
 
     def _dispatch(self, jobs: list[_Job]) -> None:
-        """Run each job's implementation (outside the lock), when this Manager dispatches."""
+        """Run each job's implementation (outside the lock), when this Manager dispatches.
+
+        Each is admitted first (:meth:`_admit`), under the lock ``request`` takes: a
+        prohibition that took force since the decision stops the actions it forbids.
+        """
         if not self.dispatch_locally:
             return
-        for job in jobs:
+        for given in jobs:
+            admitted = self._admit(given)
+            if admitted is None:
+                continue
+            job, checked = admitted
             impl = job.implementations if job.implementations is not None else self.implementations
             if job.composition is not None:
                 call = functools.partial(impl.dispatch, job.rule, job.decision, job.composition)
             else:
                 call = functools.partial(impl.dispatch_fallback, job.rule, job.decision)
-            self._run(job.rule, job.decision, call)
+            self._run(job.rule, job.decision, call, checked, [t.id for t in given.items if not t.prohibition])
+
+    def _admit(self, job: _Job) -> tuple[_Job, int] | None:
+        """``job`` as it may start now, with the ``seq`` of the last record before the check;
+        None when nothing of it may.
+
+        The check and what it reads happen under the lock ``request`` takes, so a dispatch
+        and ``request`` never disagree: an action a prohibition forbids now is refused (a
+        ``refused`` record, ``source`` the dispatch) and held again until allowed; one that
+        ended since the decision (met, cancelled) is left out. A Manager that can no longer
+        keep its state, or is closed, starts nothing.
+        """
+        with self._lock:
+            if self._broken is not None or self._closed:
+                return None
+            if not self.tracker.bans and all(t.status == PENDING for t in job.items):
+                return job, self._next["record"] - 1  # nothing can forbid it: the common case
+            actions = [t for t in job.items if not t.prohibition]
+            with self._step() as step:
+                now = step.now
+                gone = [t for t in actions if t.status != PENDING]
+                stopped = [
+                    t for t in actions if t.status == PENDING and self.tracker.forbidding(t.event, now)
+                ]
+                if stopped:
+                    self._stop_at_start(job, stopped, now, step)
+                if not gone and not stopped:
+                    return job, self._next["record"] - 1
+                left = {t.id for t in gone + stopped}
+                kept = [t for t in job.items if t.id not in left]
+                if gone and not stopped and all(t.id in left for t in actions):
+                    self._emit(
+                        step,
+                        "withheld",
+                        {
+                            "decision": job.decision.id,
+                            "rule": job.decision.rule,
+                            "reason": "nothing it required is still owed",
+                        },
+                    )
+                if actions and all(t.id in left for t in actions):
+                    if self.journal is not None:
+                        self._landed(job.decision.id, [t.id for t in actions], step)
+                    return None  # every action it had waits, or is over
+                part = dataclasses.replace(
+                    job,
+                    decision=dataclasses.replace(job.decision, obligations=tuple(t.obligation for t in kept)),
+                    items=kept,
+                )
+                self._emit(step, "dispatch", {"decision": part.decision.to_json()})
+            return part, self._next["record"] - 1
+
+    def _stop_at_start(self, job: _Job, stopped: list[Tracked], now: float, step: _Step) -> None:
+        """Refuse the ``stopped`` actions of ``job`` (a prohibition took force since it was
+        decided) and hold them until allowed, as :meth:`_ready` holds an action."""
+        for t in stopped:
+            t.refused += 1
+            job.sent.discard(t.id)
+            if self.journal is not None:
+                step.change.obligations[t.id] = t.to_json()
+        for event in sorted({t.event for t in stopped}):
+            forbidding = self.tracker.forbidding(event, now)
+            self.stats["refused"] += 1
+            self._emit(
+                step,
+                "refused",
+                {
+                    "event": event,
+                    "by": [p.rule for p in forbidding],
+                    "obligations": [p.id for p in forbidding],
+                    "reason": self._forbidden_by(event, forbidding).reason,
+                    "source": f"dispatch of decision {job.decision.id} ({job.decision.rule})",
+                },
+            )
+        held = self._held.get(job.decision.id)
+        if held is None:  # the part waits as the decision's job: the rest of it has been handed on
+            job.sent.update(t.id for t in job.items if not t.prohibition and t not in stopped)
+            self._handed_on(
+                job.decision.id,
+                (t.id for t in job.items if not t.prohibition and t not in stopped and t.status == PENDING),
+            )
+            self._hold(job, stopped, now, step, annotate=False)
+        elif self.journal is not None:
+            self._keep_held(held, step)
+        self._held_seen = (-1, 0.0)  # look at the held decisions again at the next step
 
     def _decide(self, rule: CompiledRule, event: str, now: float) -> Decision | None:
         v = self.context.values
@@ -1520,7 +1746,7 @@ class Manager:
         ``at`` is the time the step judged at, for the records a reader re-judges (occurrences,
         values): the clock may have moved since the step read it.
         """
-        t = self.clock.now() if at is None else at
+        t = step.now if at is None else at
         step.events.append(RuntimeEvent.made(kind, t, data, self._count("record")))
 
     @property
@@ -1529,8 +1755,20 @@ class Manager:
         return bool(self._observers) or self.audit is not None or self.journal is not None
 
     # ------------------------------------------------------------------ implementations (outside the lock)
-    def _run(self, rule: CompiledRule, d: Decision, run: Callable[[], list[Ran]]) -> None:
-        """Run a decision's implementation once, then record each outcome in a step of its own."""
+    def _run(
+        self,
+        rule: CompiledRule,
+        d: Decision,
+        run: Callable[[], list[Ran]],
+        checked: int = 0,
+        actions: Iterable[int] = (),
+    ) -> None:
+        """Run a decision's implementation once, then record each outcome in a step of its own.
+
+        ``checked`` is the ``seq`` of the last record before the dispatch was admitted: the
+        outcome records carry it, so a reader can tell what was in force when it started.
+        ``actions``: the ids of the actions it was handed (they are no longer in flight).
+        """
         depth = getattr(self._depth, "n", 0)
         if depth >= self.max_depth:
             ran = [
@@ -1556,10 +1794,18 @@ class Manager:
             for r in ran:
                 kind = "task-done" if r.ok else "task-failed"
                 self._emit(
-                    step, kind, {"rule": rule.name, "decision": d.id, "clause": d.clause, **r.to_json()}
+                    step,
+                    kind,
+                    {
+                        "rule": rule.name,
+                        "decision": d.id,
+                        "clause": d.clause,
+                        **r.to_json(),
+                        "checked": checked,
+                    },
                 )
             if self.journal is not None and self.dispatch_locally:
-                step.change.outbox[d.id] = None
+                self._landed(d.id, actions, step)  # (a decision with actions still held keeps its entry)
 
     def _due_for_timer(self) -> float | None:
         """(Under the lock, at the end of a step.) The earliest clock time the deadline timer
@@ -1696,7 +1942,7 @@ class Manager:
         with self._step() as step:
             prio, impl = self._bindings(rules, given, binding, handlers)
             self._carried(rules)  # refused before anything changes
-            now = self.clock.now()
+            now = step.now
             followups = self._advance(now, step)  # (nothing, unless the clock moved since the tick)
             result, followups = self._swap(rules, prio, impl, followups, now, step)
             self._given = given  # the next reload keeps these
@@ -1708,6 +1954,24 @@ class Manager:
         self._notify_timer()
         self._dispatch(followups)
         return result
+
+    def note(self, kind: str, data: Mapping[str, Any]) -> None:
+        """Record what a front end refused, or was asked, before anything reached the rules.
+
+        For the Manager node, whose inputs are decoded before the runtime sees them:
+        ``rejected`` -- an input it could not use (a message that cannot be decoded, a call
+        to a service turned off), counted in ``stats["rejected"]`` as the runtime's own
+        rejections are; ``reload-attempt`` -- a request to reload rules, allowed or refused,
+        with who asked and both rule hashes. One step of its own (numbered, in the audit
+        log, heard by observers); nothing else changes. Raises as any step does once the
+        Manager is closed or its journal failed; ConfigurationError for another ``kind``.
+        """
+        if kind not in ("rejected", "reload-attempt"):
+            raise ConfigurationError(f"note records rejected or reload-attempt, not {show(kind)}")
+        with self._step() as step:
+            if kind == "rejected":
+                self.stats["rejected"] += 1
+            self._emit(step, kind, dict(data))
 
     def _bindings(
         self,
@@ -1901,10 +2165,29 @@ class Manager:
 
     # ------------------------------------------------------------------ restoring from a journal
     def _open_journal(self, journal: Journal) -> None:
-        saved = journal.load()
-        if saved is None:
+        """Restore what the journal holds, once it is known to be all that was committed
+        (:func:`~cosleec.runtime.journal.verify`, against the audit log): a journal that lost
+        commits is refused -- or, with ``reset_journal=True``, emptied, and what was lost
+        recorded (``journal-reset``) before this Manager starts a lineage of its own."""
+        try:
+            saved = journal.load()
+            doubt = verify(journal, saved, self.audit)
+        except JournalError as e:  # damaged: nothing can be restored
+            saved, doubt = None, e.reason or str(e)
+        if doubt is None and self._reset_journal:
+            raise ConfigurationError(
+                "reset_journal=True, but the journal holds all that was committed: there is nothing to reset",
+                hint="start without reset_journal (it is for a journal the Manager refused, once)",
+            )
+        if doubt is not None and not self._reset_journal:
+            raise journal.refusal(doubt, self.audit)
+        reset = None if doubt is None else lost(journal.reset(), self.audit, doubt)
+        journal.start()
+        if saved is None or reset is not None:
             with self._step() as step:
-                self._emit(step, "restored", {"from": None, "rules_changed": False})
+                if reset is not None:
+                    self._emit(step, "journal-reset", reset)
+                self._emit(step, "restored", {"from": None, "lineage": self.lineage, "rules_changed": False})
             return
         self.lineage = saved.lineage or saved.run
         with self._step() as step:
@@ -1963,7 +2246,7 @@ class Manager:
         now = self.clock.now()
         if isinstance(self.clock, VirtualClock) and now < saved.clock:
             self.clock.set(saved.clock)  # virtual (simulated) time goes on from where it stopped
-            now = saved.clock
+            now = step.now = saved.clock
         # a monotonic clock that started again (a reboot): shift saved clock times. How long
         # the Manager was down is known only from the wall clock, which may be wrong: each
         # reading is the stricter one -- obligations as if all that time passed (deadlines
@@ -2018,18 +2301,28 @@ class Manager:
             step.change.obligations[gone] = None
         self.tracker.forgotten.clear()
         for rec in saved.outbox:
-            if rec.get("held") and self._rehold(rec):
+            held = bool(rec.get("held")) and self._rehold(rec)
+            if held and not rec.get("running"):
                 continue  # still waiting to be allowed: it runs (once) when it is
-            if not self.dispatch_locally and isinstance(rec.get("record"), dict):
+            if held and not self.dispatch_locally:  # a part perhaps never published: published again
+                self._republish_part(rec, step)
+                continue
+            if not held and not self.dispatch_locally and isinstance(rec.get("record"), dict):
                 self.undelivered.append(rec["record"])  # the Manager node publishes it again
                 continue
-            # decided, but perhaps never run: recorded, not run again (at most once)
+            # decided (a part of it handed on), but perhaps never run: recorded, not run again
             self._emit(
                 step,
                 "task-interrupted",
-                {**rec, "reason": "the Manager stopped before it was known to have run"},
+                {
+                    **{k: rec[k] for k in ("decision", "rule", "event") if k in rec},
+                    "reason": "the Manager stopped before it was known to have run",
+                },
             )
-            step.change.outbox[int(rec["decision"])] = None
+            if held:  # the rest still waits to be allowed; what was handed on is not run again
+                self._keep_held(self._held[int(rec["decision"])], step)
+            else:
+                step.change.outbox[int(rec["decision"])] = None
         if uncommitted:
             self._emit(
                 step,
@@ -2048,6 +2341,7 @@ class Manager:
             "restored",
             {
                 "from": saved.run,
+                "lineage": self.lineage,
                 "rules_changed": changed,
                 "context": sorted(values),
                 "obligations": kept,
@@ -2074,6 +2368,18 @@ class Manager:
         for t in sorted(items, key=lambda t: t.instance):
             if t.status == PENDING and t.clause is not None and self.tracker.of_instance(t.instance):
                 self._prioritise(t.instance, t.rule, now, step)
+
+
+#: Python stack frames one level of "an implementation triggers a rule" takes (measured: about
+#: 12 for a capability; a task's own calls add some), and the frames kept for the caller
+_FRAMES_PER_LEVEL = 16
+_FRAMES_KEPT = 200
+
+
+def _deepest() -> int:
+    """The largest ``max_depth`` the interpreter's recursion limit allows: deeper, a trigger
+    loop would end in RecursionError instead of the Manager's own ``task-failed`` record."""
+    return max(1, (sys.getrecursionlimit() - _FRAMES_KEPT) // _FRAMES_PER_LEVEL)
 
 
 def _given(priorities: Iterable[str | tuple[str, str]] | None) -> list[str | tuple[str, str]]:

@@ -41,6 +41,7 @@ class MeasureSpec:
         if self.kind == "numeric":
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise ContextError(f"{self.name} is numeric; got {type(value).__name__} {show(value)}")
+            value = _plain(self.name, value)
             try:
                 finite = math.isfinite(value)  # an int beyond float range overflows here
             except OverflowError:
@@ -51,6 +52,12 @@ class MeasureSpec:
                 )
             return value
         if isinstance(value, str):
+            if type(value) is not str:
+                raise ContextError(
+                    f"{self.name}: a scale value is a plain str, not {type(value).__name__}, "
+                    "whose comparisons could differ from the text it holds",
+                    hint="pass str(value)",
+                )
             try:
                 return self.literals.index(value)
             except ValueError:
@@ -81,3 +88,23 @@ class MeasureSpec:
                 except ValueError:
                     raise ContextError(f"{self.name} is numeric: {show(text)} is not a number") from None
         return self.coerce(t)
+
+
+def _plain(name: str, value: int | float) -> int | float:
+    """``value`` as a plain int or float: the Manager compares what it stores, so a number
+    must not bring comparisons of its own.
+
+    A NumPy scalar (``numpy.float64`` subclasses float) is read as the number it holds;
+    any other subclass of int or float is refused, since its class may define ``<`` or
+    ``==`` to say something other than the number does.
+    """
+    kind = type(value)
+    if kind is int or kind is float:
+        return value
+    if kind.__module__ == "numpy" and isinstance(value, float):
+        return float.__float__(value)  # the C double it holds, whatever its class says
+    raise ContextError(
+        f"{name} is numeric: give a plain int or float, not {kind.__name__} (a subclass of "
+        f"{'float' if isinstance(value, float) else 'int'}, whose comparisons could differ from its value)",
+        hint="pass float(value)",
+    )

@@ -478,7 +478,7 @@ def _continues(records: Sequence[Mapping[str, Any]], i: int, run: object) -> boo
         if not isinstance(rec, Mapping) or rec.get("run") != run:
             return False
         if rec.get("kind") == "restored":
-            return True
+            return rec.get("from") is not None  # a new journal, or one reset on purpose, starts afresh
         if rec.get("kind") in ("decision", "obligation"):
             return False
     return False

@@ -433,6 +433,81 @@ def test_a_capability_that_triggers_its_own_rule_is_stopped_with_a_record(tmp_pa
     assert len(failed) == 1 and "max_depth=5" in failed[0]["error"]
 
 
+def test_a_max_depth_the_stack_cannot_hold_is_refused_with_the_limit() -> None:
+    from cosleec.runtime.manager import _deepest
+
+    deepest = _deepest()
+    with pytest.raises(
+        ConfigurationError, match=f"max_depth must be a whole number from 1 to {deepest}"
+    ) as e:
+        manager("R1 when E then F", max_depth=10**9)
+    assert "getrecursionlimit" in (e.value.hint or "")
+    with pytest.raises(ConfigurationError, match="max_depth"):
+        manager("R1 when E then F", max_depth=deepest + 1)  # the first one too deep, not only huge ones
+
+
+def test_the_deepest_max_depth_allowed_ends_a_trigger_loop_with_a_record_not_recursion_error(
+    tmp_path: Path,
+) -> None:
+    from cosleec.runtime.manager import _deepest
+
+    log = tmp_path / "a.jsonl"
+    m, _ = manager("R1 when E then F", audit=log, max_depth=_deepest())
+    m.capability("F")(lambda ob, d: m.event("E"))  # E -> F -> E ... without end
+    m.start()
+    m.event("E")
+    m.close()
+    failed = [r for r in read_audit(log) if r["kind"] == "task-failed"]
+    assert len(failed) == 1 and f"max_depth={_deepest()}" in failed[0]["error"]
+    assert "RecursionError" not in failed[0]["error"]
+
+
+class Liar(float):
+    """A float that says it is never greater than anything."""
+
+    def __gt__(self, other: object) -> bool:
+        return False
+
+
+class Shouty(str):
+    """A str equal to every text."""
+
+    def __eq__(self, other: object) -> bool:
+        return True
+
+    __hash__ = str.__hash__
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        (Liar(5.0), "not Liar"),
+        (type("Count", (int,), {})(3), "not Count"),
+    ],
+)
+def test_a_number_that_brings_its_own_comparisons_is_refused(value: Any, message: str) -> None:
+    m, _ = manager("R1 when E and x > 1 then F", defs="measure x : numeric")
+    with pytest.raises(ContextError, match=message) as e:
+        m.update(x=value)
+    assert e.value.hint == "pass float(value)"
+    assert m.values()["x"] is None  # nothing changed
+
+
+def test_a_scale_value_that_brings_its_own_equality_is_refused() -> None:
+    m, _ = manager("R1 when E and s = high then F", defs="measure s : scale(low, high)")
+    with pytest.raises(ContextError, match="plain str, not Shouty"):
+        m.update(s=Shouty("low"))
+    m.update(s="high")
+    assert m.values()["s"] == "high"
+
+
+def test_a_numpy_float_is_stored_as_the_plain_float_it_holds() -> None:
+    np = pytest.importorskip("numpy")
+    m, _ = manager("R1 when E and x > 1 then F", defs="measure x : numeric")
+    m.update(x=np.float64(2.5))
+    assert type(m.context.values["x"]) is float and m.values()["x"] == 2.5
+
+
 def test_an_exception_inside_a_step_keeps_the_record_of_every_change_made(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -15,7 +15,7 @@ from typing import Any
 
 import pytest
 
-from cosleec.runtime import JournalError, Manager, VirtualClock, read_audit
+from cosleec.runtime import ConfigurationError, JournalError, Manager, VirtualClock, read_audit
 
 RULES = """def_start
  event Trigger event Act event Help event Rec event Watch
@@ -171,12 +171,14 @@ def test_an_unwritable_journal_is_a_user_error(tmp_path: Path) -> None:
 
 
 def test_one_journal_serves_one_manager_at_a_time(tmp_path: Path) -> None:
-    (tmp_path / "rules.sleec").write_text(RULES)
-    m = again(tmp_path, 100)
+    def plain() -> Manager:  # no audit log: the journal's own lock
+        return Manager.from_text(RULES, clock=VirtualClock(100), journal=tmp_path / "state.db")
+
+    m = plain()
     with pytest.raises(JournalError, match="in use by another Manager"):
-        again(tmp_path, 100)
+        plain()
     m.close()
-    again(tmp_path, 100).close()
+    plain().close()
 
 
 def test_a_damaged_journal_is_a_user_error_and_restores_nothing(tmp_path: Path) -> None:
@@ -251,11 +253,11 @@ def test_an_audit_log_edited_by_hand_is_not_cut_mid_record(tmp_path: Path) -> No
     log = tmp_path / "audit.jsonl"
     log.write_text("# reviewed by Ann\n" + log.read_text())  # every committed offset moves
     before = log.read_text()
-    m = again(tmp_path, 101)
-    m.close()
-    records = read_audit(log)
-    assert log.read_text().startswith(before)  # nothing of the history was cut or moved
-    assert any(r["kind"] == "audit-mismatch" for r in records)
+    # the journal can no longer show where its history ends in the log: refused (it was recorded
+    # as an audit-mismatch before the journal proved what it restores), and nothing is cut
+    with pytest.raises(JournalError, match=r"does not continue where the journal state\.db stopped"):
+        again(tmp_path, 101)
+    assert log.read_text() == before
 
 
 def test_a_dropped_obligation_is_reported_once(tmp_path: Path) -> None:
@@ -293,3 +295,374 @@ def test_a_prohibition_survives_an_item_inserted_before_it(tmp_path: Path) -> No
     m = again(tmp_path, 160).start()
     assert m.request("Rec") is False  # before: dropped, its key R2:0 now names `Act`
     m.close()
+
+
+# ------------------------------------------- a journal that proves what it restores (issue 28)
+# A kill leaves the commits since the Manager opened its journal in state.db-wal only. Each test
+# kills a real process with a prohibition in force (not Rec for 10 minutes), damages the files
+# as a lost or restored file would, and expects a refusal naming the files -- never an empty
+# start that answers request("Rec") True.
+
+FORBID = 'm.update(consent=False); m.event("Watch"); m.event("Trigger"); m.event("Act")'
+
+
+def two_lives(tmp_path: Path) -> None:
+    """A first life, then a second killed with the prohibition in force: the journal's main file
+    holds the first life's state (copied in when the second opened it), its -wal file the rest."""
+    die_after(tmp_path, 'm.event("Trigger"); m.event("Act")')
+    die_after(tmp_path, FORBID)
+
+
+def refused(tmp_path: Path, match: str) -> JournalError:
+    """Start a Manager on the damaged files: refused, naming them and both ways out -- twice, as
+    the first refusal left the files as it found them (the -wal file there, or not there)."""
+    wal = (tmp_path / "state.db-wal").exists()
+    log = (tmp_path / "audit.jsonl").read_bytes()
+    with pytest.raises(JournalError, match=match) as e:
+        again(tmp_path, 160)
+    said = e.value.render()
+    assert "state.db" in said and "state.db-wal" in said and "reset_journal=True" in said
+    assert (tmp_path / "state.db-wal").exists() == wal and (tmp_path / "audit.jsonl").read_bytes() == log
+    with pytest.raises(JournalError) as second:
+        again(tmp_path, 160)
+    assert str(second.value) == str(e.value)
+    return e.value
+
+
+@pytest.mark.parametrize("lives", [1, 2])
+def test_a_deleted_wal_is_refused_not_an_empty_start(tmp_path: Path, lives: int) -> None:
+    two_lives(tmp_path) if lives == 2 else die_after(tmp_path, FORBID)
+    (tmp_path / "state.db-wal").unlink()
+    e = refused(tmp_path, "left running .* state.db-wal file is gone")
+    assert "audit.jsonl" in e.render()  # put back with the log, from one backup
+
+
+def test_a_deleted_wal_is_refused_without_an_audit_log_too(tmp_path: Path) -> None:
+    (tmp_path / "rules.sleec").write_text(RULES)
+    script = f"""
+import os, signal
+from cosleec.runtime import Manager, VirtualClock
+m = Manager.from_file({str(tmp_path / "rules.sleec")!r}, clock=VirtualClock(100), journal={str(tmp_path / "state.db")!r})
+m.update(consent=False); m.event("Watch")
+os.kill(os.getpid(), signal.SIGKILL)
+"""
+    assert subprocess.run([sys.executable, "-c", script], timeout=60).returncode == -9
+    (tmp_path / "state.db-wal").unlink()
+    with pytest.raises(JournalError, match="left running"):
+        Manager.from_file(tmp_path / "rules.sleec", clock=VirtualClock(160), journal=tmp_path / "state.db")
+
+
+@pytest.mark.parametrize("how", ["truncated", "deleted"])
+def test_a_truncated_or_deleted_database_is_refused_and_its_wal_kept(tmp_path: Path, how: str) -> None:
+    die_after(tmp_path, FORBID)
+    db = tmp_path / "state.db"
+    db.write_bytes(b"") if how == "truncated" else db.unlink()
+    refused(
+        tmp_path,
+        f"database file state.db is {'empty' if how == 'truncated' else 'missing'} but its state.db-wal",
+    )
+    assert (tmp_path / "state.db-wal").stat().st_size > 0  # SQLite would have deleted it
+
+
+@pytest.mark.parametrize(
+    "damage", ["truncated to 0", "truncated to its header", "header flipped", "a frame flipped"]
+)
+def test_a_damaged_wal_is_refused_when_the_audit_log_has_more(tmp_path: Path, damage: str) -> None:
+    two_lives(tmp_path)
+    wal = tmp_path / "state.db-wal"
+    data = bytearray(wal.read_bytes())
+    if damage == "truncated to 0":
+        data = bytearray()
+    elif damage == "truncated to its header":
+        data = data[:32]
+    else:
+        at = 20 if damage == "header flipped" else 32 + 24 + 4096 + 24 + 100  # inside the second frame
+        data[at] ^= 0xFF
+    wal.write_bytes(bytes(data))
+    refused(tmp_path, "state.db is older than the audit log audit.jsonl")
+
+
+def test_an_old_copy_of_the_journal_is_refused(tmp_path: Path) -> None:
+    die_after(tmp_path, 'm.event("Trigger"); m.event("Act")')
+    old = {n: (tmp_path / n).read_bytes() for n in ("state.db", "state.db-wal")}
+    die_after(tmp_path, FORBID)  # a second life: the copy is a whole life behind the log
+    for name, data in old.items():
+        (tmp_path / name).write_bytes(data)
+    e = refused(tmp_path, r"state.db is older than the audit log audit.jsonl: .* up to seq \d+")
+    last = read_audit(tmp_path / "audit.jsonl")[-1]["seq"]
+    assert f"up to seq {last}" in str(e)
+
+
+def test_an_empty_journal_beside_a_journaled_audit_log_is_refused(tmp_path: Path) -> None:
+    die_after(tmp_path, FORBID)
+    (tmp_path / "state.db").unlink()
+    (tmp_path / "state.db-wal").unlink()
+    records = read_audit(tmp_path / "audit.jsonl")
+    lineage = records[0]["run"]
+    refused(
+        tmp_path,
+        f"holds no state, but the audit log audit.jsonl continues a journaled history "
+        f"\\(lineage {lineage}, records up to seq {records[-1]['seq']}\\)",
+    )
+
+
+def test_a_first_life_killed_before_its_first_commit_is_not_a_lost_history(tmp_path: Path) -> None:
+    # its `restored` record is in the log, its commit never happened: the journal is empty, rightly
+    (tmp_path / "rules.sleec").write_text(RULES)
+    script = f"""
+import os, signal
+from cosleec.runtime import Manager, VirtualClock, journal
+journal.Journal.commit = lambda *a, **k: os.kill(os.getpid(), signal.SIGKILL)
+Manager.from_file({str(tmp_path / "rules.sleec")!r}, clock=VirtualClock(100),
+                  journal={str(tmp_path / "state.db")!r}, audit={str(tmp_path / "audit.jsonl")!r})
+"""
+    assert subprocess.run([sys.executable, "-c", script], timeout=60).returncode == -9
+    assert [r["kind"] for r in read_audit(tmp_path / "audit.jsonl")] == ["restored"]
+    m = again(tmp_path, 101).start()  # not refused: the log holds no committed journaled history
+    m.close()
+
+
+def test_the_records_of_one_step_share_run_mono_and_wall(tmp_path: Path) -> None:
+    # what tells one step's uncommitted records (a kill) from lost commits (two steps or more)
+    m = again_text(tmp_path)
+    m.update(consent=False)
+    m.event("Watch")
+    m.event("Trigger")  # a step of several records: event, decision, obligation
+    m.close()
+    steps: dict[tuple[Any, Any, Any], list[str]] = {}
+    for r in read_audit(tmp_path / "audit.jsonl"):
+        steps.setdefault((r["run"], r["mono"], r["wall"]), []).append(r["kind"])
+    assert list(steps.values())[-1] == ["event", "decision", "obligation"]
+    assert len(steps) == 4  # restored; context and layers; Watch; Trigger
+
+
+def again_text(tmp_path: Path) -> Manager:
+    journal, audit = tmp_path / "state.db", tmp_path / "audit.jsonl"
+    return Manager.from_text(RULES, clock=VirtualClock(100), journal=journal, audit=audit, dispatch=False)
+
+
+def test_reset_journal_starts_afresh_once_and_records_what_was_lost(tmp_path: Path) -> None:
+    two_lives(tmp_path)
+    (tmp_path / "state.db-wal").unlink()
+    before = read_audit(tmp_path / "audit.jsonl")
+    m = again(tmp_path, 160, reset_journal=True).start()
+    assert m.request("Rec") is True  # forgotten, on purpose -- and said so:
+    assert m.lineage == m.run_id != before[0]["run"]
+    m.close()
+    records = read_audit(tmp_path / "audit.jsonl")
+    assert records[: len(before)] == before and [r["seq"] for r in records] == list(
+        range(1, len(records) + 1)
+    )
+    reset, restored = records[len(before)], records[len(before) + 1]
+    assert reset["kind"] == "journal-reset" and "state.db-wal file is gone" in reset["reason"]
+    assert reset["lineage"] == before[0]["run"] and reset["last_seq"] == before[-1]["seq"]
+    assert reset["journal"]["lineage"] == before[0]["run"]  # what the main file still said
+    assert restored["kind"] == "restored" and restored["from"] is None and restored["lineage"] == m.run_id
+    with pytest.raises(ConfigurationError, match="nothing to reset"):  # once: the journal is sound now
+        again(tmp_path, 170, reset_journal=True)
+    m = again(tmp_path, 170).start()  # and it is the new lineage's journal
+    assert m.lineage == restored["lineage"]
+    m.close()
+
+
+def test_a_log_with_a_reset_is_read_by_conforms_and_the_timeline(tmp_path: Path) -> None:
+    from cosleec.cli.main import main
+    from cosleec.views.timeline import Timeline
+
+    die_after(tmp_path, FORBID)
+    (tmp_path / "state.db-wal").unlink()
+    m = again(tmp_path, 160, reset_journal=True).start()
+    m.event("Trigger")
+    m.clock.set(170)  # type: ignore[attr-defined]
+    m.tick()
+    m.close()
+    log = tmp_path / "audit.jsonl"
+    assert main(["conforms", str(tmp_path / "rules.sleec"), str(log)]) in (0, 1)  # judged, not refused (2)
+    timeline = Timeline.read(log)
+    assert timeline.counts["journal-reset"] == 1 and timeline.ignored == {"journal-reset": 1}
+    # the reset run's ids start again: its obligations are its own, not merged with the old run's
+    from cosleec.runtime import read_audit
+
+    made = {(r["run"], r["id"]) for r in read_audit(log) if r["kind"] == "obligation"}
+    assert len(timeline.bars) == len(made) == 4  # two of each run, none lost to a merge
+
+
+def test_reset_journal_needs_a_journal_the_manager_refused(tmp_path: Path) -> None:
+    die_after(tmp_path, FORBID)
+    with pytest.raises(ConfigurationError, match="nothing to reset"):
+        again(tmp_path, 160, reset_journal=True)
+    assert again(tmp_path, 160).start().request("Rec") is False  # the refusal to reset changed nothing
+    with pytest.raises(ConfigurationError, match="only with a journal"):
+        Manager.from_text(RULES, reset_journal=True)
+
+
+def test_a_clean_close_or_a_checkpoint_by_another_program_is_not_a_lost_wal(tmp_path: Path) -> None:
+    import sqlite3
+
+    (tmp_path / "rules.sleec").write_text(RULES)
+    m = again(tmp_path, 100)
+    m.update(consent=False)
+    m.event("Watch")
+    m.close()
+    assert not (tmp_path / "state.db-wal").exists()  # SQLite removes it on a clean close
+    m = again(tmp_path, 101).start()
+    assert m.request("Rec") is False
+    m.close()
+    die_after(tmp_path, 'm.event("Trigger")')
+    sqlite3.connect(tmp_path / "state.db").close()  # copies the WAL into the database, deletes it
+    m = again(tmp_path, 102).start()  # the audit log shows nothing was lost
+    assert m.request("Rec") is False
+    m.close()
+
+
+def test_one_audit_log_has_one_writer(tmp_path: Path) -> None:
+    from cosleec.errors import UserError
+    from cosleec.runtime import AuditLog
+
+    log = tmp_path / "audit.jsonl"
+    m = Manager.from_text(RULES, clock=VirtualClock(0), audit=log, journal=tmp_path / "a.db")
+    with pytest.raises(
+        UserError, match=r"audit log is in use by another writer \(process \d+, this one\)"
+    ) as e:
+        Manager.from_text(RULES, clock=VirtualClock(0), audit=log, journal=tmp_path / "b.db")
+    assert e.value.where == str(log) and "give each Manager its own audit log" in e.value.hint
+    with pytest.raises(UserError, match="in use by another writer"):
+        Manager.from_text(RULES, clock=VirtualClock(0), audit=log)  # nor one without a journal
+    with pytest.raises(UserError, match="in use by another writer"):
+        AuditLog(log)
+    m.event("Watch")
+    m.close()
+    other = Manager.from_text(RULES, clock=VirtualClock(0), audit=log)  # free once it closed
+    other.event("Watch")
+    other.close()
+    assert [r["seq"] for r in read_audit(log)] == list(range(1, len(read_audit(log)) + 1))
+
+
+def test_one_audit_log_has_one_writer_across_processes(tmp_path: Path) -> None:
+    from cosleec.errors import UserError
+
+    log = tmp_path / "audit.jsonl"
+    script = f"""
+import sys
+from cosleec.runtime import Manager
+m = Manager.from_text({RULES!r}, audit={str(log)!r})
+print("open", flush=True)
+sys.stdin.read()
+m.close()
+"""
+    p = subprocess.Popen(
+        [sys.executable, "-c", script], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+    )
+    try:
+        assert p.stdout is not None and p.stdout.readline() == "open\n"
+        with pytest.raises(UserError, match=f"in use by another writer \\(process {p.pid}\\)"):
+            Manager.from_text(RULES, audit=log)
+    finally:
+        p.communicate("", timeout=30)
+    Manager.from_text(RULES, audit=log).close()
+
+
+def test_a_manager_refused_at_construction_frees_its_audit_log(tmp_path: Path) -> None:
+    m = Manager.from_text(RULES, clock=VirtualClock(0), journal=tmp_path / "state.db")
+    with pytest.raises(JournalError, match="in use by another Manager") as e:
+        Manager.from_text(
+            RULES, clock=VirtualClock(0), journal=tmp_path / "state.db", audit=tmp_path / "b.jsonl"
+        )
+    # the refused Manager lives on in the traceback (as in any caller that keeps the error):
+    # its audit log is closed all the same
+    assert e.traceback
+    Manager.from_text(RULES, clock=VirtualClock(0), audit=tmp_path / "b.jsonl").close()
+    m.close()
+
+
+# ------------------------------------------------------------ a full disk (issue 28, finding 13)
+# A real full disk: a 1 MiB tmpfs mounted in a mount namespace of the test's own (unshare), the
+# audit log or the journal on it, filled to the last byte once the Manager runs.
+
+FULL = """
+import json, os, sys
+from cosleec.runtime import JournalError, Manager, VirtualClock, read_audit
+full, disk, on_it = sys.argv[1], sys.argv[2], sys.argv[3]
+where = {"journal": (disk, full), "audit": (full, disk)}[on_it]
+rules = sys.stdin.read()
+out = {}
+
+def manager(t):
+    return Manager.from_text(rules, clock=VirtualClock(t), journal=where[1] + "/state.db",
+                             audit=where[0] + "/audit.jsonl", dispatch=False)
+
+m = manager(100)
+m.update(consent=False)
+m.event("Watch")
+fd = os.open(full + "/filler", os.O_WRONLY | os.O_CREAT)
+try:
+    while True:
+        os.write(fd, b"x" * 256)
+except OSError as e:
+    out["filled"] = e.strerror
+os.close(fd)
+try:
+    for _ in range(10_000):
+        m.event("Trigger")
+        m.event("Act")
+except JournalError as e:
+    out["error"] = e.render()
+out["refuses"] = m.request("Rec") is False
+try:
+    m.close()
+    out["close"] = "ok"
+except BaseException as e:
+    out["close"] = f"{type(e).__name__}: {e}"
+os.unlink(full + "/filler")  # space is freed: a new Manager goes on from the journal
+try:
+    m = manager(101)
+    out["restarted"] = m.request("Rec") is False
+    m.close()
+except BaseException as e:
+    out["restarted"] = f"{type(e).__name__}: {e}"
+seqs = [r["seq"] for r in read_audit(where[0] + "/audit.jsonl")]
+out["seq"] = seqs == list(range(1, len(seqs) + 1))
+print(json.dumps(out))
+"""
+
+
+def on_a_full_disk(tmp_path: Path, on_it: str) -> dict[str, Any]:
+    """Run :data:`FULL` with the journal or the audit log (``on_it``) on a disk that fills up."""
+    import shutil
+
+    unshare = shutil.which("unshare")
+    if unshare is None or subprocess.run([unshare, "--mount", "--map-root-user", "true"]).returncode != 0:
+        pytest.skip("a real full disk needs `unshare --mount --map-root-user` (a tmpfs of the test's own)")
+    full, disk = tmp_path / "full", tmp_path / "disk"
+    full.mkdir()
+    disk.mkdir()
+    mount = f'mount -t tmpfs -o size=1m tmpfs {full} && exec "$@"'
+    args = [str(full), str(disk), on_it]
+    p = subprocess.run(
+        [unshare, "--mount", "--map-root-user", "sh", "-c", mount, "sh", sys.executable, "-c", FULL, *args],
+        input=RULES,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert p.returncode == 0, p.stderr
+    out: dict[str, Any] = json.loads(p.stdout)
+    assert out["filled"] == "No space left on device"
+    return out
+
+
+def test_a_full_audit_disk_is_named_and_close_does_not_raise(tmp_path: Path) -> None:
+    out = on_a_full_disk(tmp_path, "audit")
+    assert "cannot write the audit log: No space left on device" in out["error"]
+    assert out["close"] == "ok"  # before: OSError [Errno 28] No space left on device
+    assert out["refuses"] is True and out["restarted"] is True and out["seq"] is True
+
+
+def test_a_full_journal_disk_is_named_and_the_journal_restarts(tmp_path: Path) -> None:
+    out = on_a_full_disk(tmp_path, "journal")
+    # before: "cannot write the journal: cannot rollback - no transaction is active"
+    assert "cannot write the journal: the disk is full (database or disk is full)" in out["error"]
+    assert "hint: free space on the disk that holds" in out["error"]
+    assert out["close"] == "ok"
+    # the running mark could not be cleared: its -wal file was kept, so the restart is no "lost WAL"
+    assert out["refuses"] is True and out["restarted"] is True and out["seq"] is True

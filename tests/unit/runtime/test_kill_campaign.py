@@ -23,6 +23,12 @@ Two days: the purpose-built ward day and the demo's assistive-care day. ``COSLEE
 kills for each (5 by default, in one day; ``COSLEEC_KILLS=200`` for a long run, at most 6
 a day, about 90 s a day-kind on one core), seeded by ``COSLEEC_KILL_SEED`` (fixed by
 default, ``random`` for a fresh one; printed either way, with where each kill landed).
+
+Damaged files (:data:`tests.kill_campaign.CORRUPTIONS`: the ``-wal`` file deleted, truncated
+or with a byte changed, the ``.db`` truncated, an old copy of both put back) after a kill:
+the next life is refused with a JournalError naming the files, never started from less than
+was committed; with ``reset_journal=True`` it starts afresh after a ``journal-reset`` record.
+Each damage once on the ward day by default, ``COSLEEC_KILLS // 25`` times in a long run.
 """
 
 from __future__ import annotations
@@ -42,13 +48,16 @@ import pytest
 
 from cosleec.runtime import Manager, VirtualClock, read_audit
 from tests.kill_campaign import (
+    CORRUPTIONS,
     POINTS,
     ROOT,
     Day,
     Plan,
     Played,
     assistive_care_day,
+    keep_old,
     prepare,
+    read_lines,
     reference,
     unique,
     verify,
@@ -63,9 +72,10 @@ SEED = random.randrange(2**32) if _seed == "random" else int(_seed)
 DAY_KILLS = 6  # at most this many kills in one day: a long campaign plays many days
 
 
-def life(workdir: Path, plan: Plan | None, timer: float | None) -> tuple[int, str]:
-    """Run one life to its end or its death; ``timer``: SIGKILL it after that many seconds."""
-    config = json.dumps({"dir": str(workdir), "plan": plan.to_json() if plan else None})
+def life(workdir: Path, plan: Plan | None, timer: float | None, reset: bool = False) -> tuple[int, str]:
+    """Run one life to its end or its death; ``timer``: SIGKILL it after that many seconds;
+    ``reset``: start it with ``reset_journal=True``."""
+    config = json.dumps({"dir": str(workdir), "plan": plan.to_json() if plan else None, "reset": reset})
     p = subprocess.Popen(
         [sys.executable, "-m", "tests.kill_campaign", config],
         cwd=ROOT,
@@ -160,6 +170,55 @@ def test_a_day_killed_at_random_points_ends_as_if_uninterrupted(
     assert totals["kills"].total() == KILLS
 
 
+# ---------------------------------------------------------------------- damaged files after a kill
+
+ROUNDS = 1 if KILLS <= 5 else max(1, KILLS // 25)  # each damage, on as many killed days
+#: where the second life dies: in the middle of the day, at least 6 passes in (the WAL then holds
+#: the commits of several steps, so a damage loses more than one -- see test_journal.py for less)
+LATE = ("in-step", "between-steps", "journal-before", "journal-inside", "journal-after", "audit-after")
+
+
+def damaged_day(day: Day, workdir: Path, damage: str, rng: random.Random) -> str:
+    """Two lives killed, the journal damaged, a life refused, then one started with ``reset_journal``."""
+    prepare(day, workdir)
+    first = Plan(rng.choice(POINTS[:2] + LATE[2:]), rng.randint(1, 4), rng.randint(1, 150))
+    second = Plan(rng.choice(LATE), rng.randint(6, 10), rng.randint(1, 150))
+    for n, plan in enumerate((first, second)):
+        code, err = life(workdir, plan, None)
+        assert code == -signal.SIGKILL, f"life {n + 1} ({plan}) was not killed: {code}\n{err[-2000:]}"
+        if n == 0:
+            keep_old(workdir)
+    CORRUPTIONS[damage](workdir)
+    records = read_lines(workdir / "audit.jsonl")
+    lives = len([r for r in Played.load(workdir).progress if r["k"] == "life"])
+    code, err = life(workdir, None, None)
+    assert code == 3, f"{damage} after {first}, {second}: not refused ({code})\n{err[-2000:]}"
+    refusal = err.split(": ", 2)[-1].split(". Starting from")[0]  # what it found, without the files' paths
+    for name in ("JournalError", "state.db", "state.db-wal", "audit.jsonl", "reset_journal=True"):
+        assert name in err, f"{damage}: the refusal does not name {name}:\n{err}"
+    assert read_lines(workdir / "audit.jsonl") == records  # nothing of the history was cut or added
+    assert len([r for r in Played.load(workdir).progress if r["k"] == "life"]) == lives  # never started
+    code, err = life(workdir, None, None, reset=True)
+    assert code == 0, f"{damage}: the reset life failed ({code})\n{err[-3000:]}"
+    after = read_lines(workdir / "audit.jsonl")
+    assert after[: len(records)] == records
+    reset, restored = after[len(records)], after[len(records) + 1]
+    assert reset["kind"] == "journal-reset" and reset["last_seq"] == records[-1]["seq"]
+    lineage = [r["lineage"] for r in records if r["kind"] == "restored"][-1]
+    assert reset["lineage"] == lineage  # the history given up
+    assert restored["kind"] == "restored" and restored["from"] is None
+    assert [r["seq"] for r in after] == list(range(1, len(after) + 1))
+    assert any(r["k"] == "end" for r in Played.load(workdir).progress)
+    return refusal
+
+
+@pytest.mark.parametrize("damage", list(CORRUPTIONS))
+def test_a_damaged_journal_is_refused_never_an_empty_start(damage: str, tmp_path: Path) -> None:
+    rng = random.Random(f"{SEED}/{damage}")
+    said = Counter(damaged_day(ward_day(), tmp_path / f"day{n}", damage, rng) for n in range(ROUNDS))
+    print(f"{damage}: refused {ROUNDS} of {ROUNDS}, then reset (COSLEEC_KILL_SEED={SEED}): {dict(said)}")
+
+
 # ---------------------------------------------------------------------- what the campaign found, one by one
 
 
@@ -239,3 +298,32 @@ def test_an_audit_record_names_its_time_once(tmp_path: Path) -> None:
     ]  # before: "time" twice, 110 and 105
     (fallback,) = [r for r in records if r.get("event") == "otherwise"]
     assert fallback["time"] == 105.0
+
+
+def test_a_step_committed_after_a_restore_set_records_aside_is_not_played_again(tmp_path: Path) -> None:
+    # seed 2521208213, ward day 1: the fourth life's restart set aside records 63-69 (a commit
+    # the third life never made), wrote its own from 63, committed step 15 (Shift) as 67-69 and
+    # died in its capability's records (a torn line). Its ``begin`` line gave seq 69, the log's
+    # length before the cut, so the next life found nothing committed after it and played Shift
+    # again: a second W1.1 decision, every later decision id one higher, and the campaign
+    # reported calls "lost with no task-interrupted record" that the Manager had not lost
+    day = ward_day()
+    workdir = prepare(day, tmp_path / "day")
+    for plan in (
+        Plan("journal-before", 16),
+        Plan("journal-inside", 4, 98),
+        Plan("journal-inside", 12, 8),
+        Plan("audit-partial", 4, 972024),
+    ):
+        code, err = life(workdir, plan, None)
+        assert code == -signal.SIGKILL, f"{plan}: not killed ({code})\n{err[-2000:]}"
+    code, err = life(workdir, None, None)
+    assert code == 0, err[-3000:]
+    played = Played.load(workdir)
+    shifts = [r for r in played.records if r["kind"] == "event" and r["event"] == "Shift"]
+    assert len(shifts) == 2  # steps 1 and 15, each once (before: 3)
+    for begin in (r for r in played.progress if r["k"] == "begin"):  # what the log held when it began
+        kept = [r for r in played.records if r["seq"] <= begin["seq"]]
+        assert kept and kept[-1]["seq"] == begin["seq"]
+    plain = reference(day, tmp_path / "plain")
+    verify(day, played, plain, reference(day, tmp_path / "same", made(played)))
