@@ -122,7 +122,7 @@ def test_a_typed_subscriber_receives_decisions_with_their_explanation(
 def test_the_request_service_says_no_while_a_prohibition_holds_and_which_rule(
     backend: str, graph: dict[str, str], transport: Any, namespace: str
 ) -> None:
-    with System(backend, namespace, env=graph, nodes=[manager()]):
+    with System(backend, namespace, env=graph, nodes=[manager("--decide", "all")]):
         driver = Driver(transport, namespace, tasks=())
         driver.ready(layers=False)
         service = manager_service(namespace, "request")
@@ -363,7 +363,19 @@ def test_reload_keeps_the_old_rules_on_error_and_takes_good_ones_between_decisio
     rules = tmp_path / "rules.sleec"
     shutil.copy(RULES, rules)
     audit = tmp_path / "audit.jsonl"
-    nodes = [["manager", str(rules), "--sim-time", "--status-each", "--audit", str(audit)]]
+    # the operator allows ~/reload to read the files of this test's directory
+    nodes = [
+        [
+            "manager",
+            str(rules),
+            "--sim-time",
+            "--status-each",
+            "--audit",
+            str(audit),
+            "--reload-dir",
+            str(tmp_path),
+        ]
+    ]
     with System(backend, namespace, env=graph, nodes=nodes) as system:
         driver = Driver(transport, namespace, tasks=())
         driver.ready(layers=False)

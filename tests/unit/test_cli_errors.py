@@ -188,6 +188,13 @@ def test_the_manager_node_creates_no_directory_for_its_files(
     assert not (d / "missing").exists()
 
 
+def test_the_manager_node_resets_a_journal_only_when_given_one(
+    d: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rc, err = run(["ros2", "manager", "good.sleec", "--reset-journal"], capsys)
+    assert rc == 1 and "--reset-journal needs --journal" in err
+
+
 # ---------------------------------------------------------------- demo --audit / --journal
 
 
@@ -199,6 +206,23 @@ def test_demo_audit_refuses_a_missing_directory(tmp_path: Path, capsys: pytest.C
     (tmp_path / "file.txt").write_text("")
     rc, err = run(["demo", "--audit", str(tmp_path / "file.txt" / "a.jsonl")], capsys)
     assert rc == 1 and "file.txt is a file, not a directory" in err
+
+
+def test_demo_refuses_a_damaged_journal_and_reset_journal_starts_afresh(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    journal, log = tmp_path / "state.db", tmp_path / "a.jsonl"
+    assert main(["demo", "--json", "--journal", str(journal), "--audit", str(log)]) == 0
+    capsys.readouterr()
+    journal.write_bytes(b"")  # the database truncated to 0 bytes beside a journaled audit trail
+    rc, err = run(["demo", "--json", "--journal", str(journal), "--audit", str(log), "--append"], capsys)
+    assert rc == 1 and str(journal) in err and "--reset-journal" in err
+    rc = main(
+        ["demo", "--json", "--journal", str(journal), "--audit", str(log), "--append", "--reset-journal"]
+    )
+    assert rc == 0 and '"kind":"journal-reset"' in log.read_text()
+    rc, err = run(["demo", "--reset-journal"], capsys)
+    assert rc == 1 and "--reset-journal needs --journal" in err
 
 
 def test_demo_audit_refuses_to_mix_two_runs_unless_append(

@@ -21,6 +21,8 @@ from cosleec import ros
 from cosleec.cli.common import add_clause_options, add_priority_options, input_file, output_file, port
 from cosleec.errors import UserError
 from cosleec.nodes import (
+    DECIDE,
+    DEFAULT_DECIDE,
     GuardNode,
     LayersNode,
     ListenerNode,
@@ -35,7 +37,10 @@ from cosleec.runtime import RuleSet, Unknowns
 #: the options of each node kind that are also ROS parameters (argparse dests). Not the
 #: namespace: it names the node, which exists before its parameters can be read (ROS 2 has
 #: its own `-r __ns:=/robot1`); nor the Manager's --web: it opens a port, which is asked for
-#: where the node is started, not by a parameter file shared between robots
+#: where the node is started, not by a parameter file shared between robots; nor
+#: --reload-dir and --decide, which say what anyone on the domain may make the Manager do:
+#: a ROS 1 node reads parameters it was not given from the parameter server, which anyone
+#: on the graph can write, so these come from the command line (or launch file) alone
 PARAMETERS = {
     "manager": (
         "rules",
@@ -133,6 +138,12 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
         metavar="FILE",
         help="keep the Manager's state in this SQLite journal: a restarted Manager restores it",
     )
+    m.add_argument(
+        "--reset-journal",
+        action="store_true",
+        help="with --journal: start afresh from a journal the Manager refused (a lost or damaged -wal, an "
+        "old copy), once; the reset and what was lost are recorded in the audit log",
+    )
     add_priority_options(m, lead=True)
     m.add_argument("--record", metavar="FILE.mcap", help="record the decision stream (Foxglove opens it)")
     m.add_argument(
@@ -143,6 +154,19 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
         type=port,
         metavar="PORT",
         help="serve the live web view on 127.0.0.1:PORT (0: a free port; its address is printed on stderr)",
+    )
+    m.add_argument(
+        "--reload-dir",
+        metavar="DIR",
+        help="~/reload may also read rule files under DIR (symlinks and .. resolved first); "
+        "default: only the rule file the Manager runs. Give a directory only the operator can write to",
+    )
+    m.add_argument(
+        "--decide",
+        choices=DECIDE,
+        default=DEFAULT_DECIDE,
+        help="what the ~/decide service takes: off (the default: the context comes from the Context "
+        "Listener), events-only (an event, no measure values) or all (values and an event; simulation, tests)",
     )
     m.add_argument(
         "--no-autostart",
@@ -295,6 +319,13 @@ def run(args: argparse.Namespace) -> int:
         ):
             if path:
                 output_file(path, what, option)
+        if args.reset_journal and not args.journal:
+            raise UserError("--reset-journal needs --journal", hint="give the journal to start afresh from")
+        if args.reload_dir and not os.path.isdir(args.reload_dir):
+            raise UserError(
+                f"--reload-dir {args.reload_dir!r} is not a directory",
+                hint="give an existing directory of rule files that only the operator can write to",
+            )
     early = RuleSet.from_file(args.rules) if node in ("listener", "guard") and args.rules else None
     typed: list[tuple[str, str, str]] = []  # (where, what, message type) of the robot's topics
     if node == "listener" and args.mapping:
@@ -324,6 +355,9 @@ def run(args: argparse.Namespace) -> int:
         if node == "manager":
             path = _required(o.rules, "a rule file: rules", node)
             sim = bool(o.sim_time) or bool(getattr(t, "use_sim_time", lambda: False)())
+            # a reset is for the first Manager of this process only: a lifecycle node configured
+            # again restores the journal the first one wrote
+            reset = [bool(args.reset_journal)]
 
             def build(active: bool) -> ManagerNode:
                 node = ManagerNode(
@@ -343,6 +377,9 @@ def run(args: argparse.Namespace) -> int:
                     rules_path=o.rules,
                     active=active,
                     web=args.web,
+                    reload_dir=args.reload_dir,
+                    decide=args.decide,
+                    reset_journal=bool(reset and reset.pop()),
                 )
                 if node.manager.web_url:
                     print(f"cosleec: live web view at {node.manager.web_url}", file=sys.stderr, flush=True)
@@ -487,11 +524,13 @@ class ManagedManager:
         if self.node is not None:
             self.node.status(**extra)
 
-    def reload(self, path: str | None = None) -> dict[str, Any]:
+    def reload(
+        self, path: str | None = None, *, via: str = "call", caller: str | None = None
+    ) -> dict[str, Any]:
         """SIGHUP: as :meth:`ManagerNode.reload`, once configured."""
         if self.node is None:
             return {"success": False, "message": "not configured yet: nothing to reload"}
-        return self.node.reload(path)
+        return self.node.reload(path, via=via, caller=caller)
 
     def close(self) -> None:
         """Close the Manager, if it was ever configured."""

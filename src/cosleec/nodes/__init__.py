@@ -11,7 +11,7 @@ from cosleec.nodes.base import LogLimiter, MessageError, Node
 from cosleec.nodes.guard_node import GuardError, GuardNode, Route, load_routes, route
 from cosleec.nodes.layers_node import LayersNode
 from cosleec.nodes.listener import ListenerNode, Mapping, MappingError
-from cosleec.nodes.manager_node import ManagerNode
+from cosleec.nodes.manager_node import DECIDE, DEFAULT_DECIDE, ManagerNode
 from cosleec.nodes.qos import Qos, QosError
 from cosleec.nodes.recording import McapRecorder, read_recording
 from cosleec.nodes.task_node import ManagerUnavailable, TaskNode
@@ -28,6 +28,8 @@ from cosleec.nodes.transport import (
 )
 
 __all__ = [
+    "DECIDE",
+    "DEFAULT_DECIDE",
     "DEFAULT_NAMESPACE",
     "LATCHED",
     "GuardError",

@@ -92,6 +92,48 @@ class LogLimiter:
         return True
 
 
+class Answering:
+    """Whether the Manager answered the last question a node asked it: the node's health says so.
+
+    A guard or task node whose Manager is gone fails closed -- every guarded message
+    blocked, every request refused -- and its status must say why, not "ok"
+    (``/diagnostics`` shows ERROR while :meth:`fields` has ``manager_answering`` false).
+    Unknown until the first question; the last question decides, so the node is healthy
+    again with the first answer. Thread-safe; :meth:`answered` and :meth:`unanswered`
+    return True when the state changed (the node then publishes its status at once).
+    """
+
+    def __init__(self) -> None:
+        self._state: tuple[bool, str] | None = None  # (answering, why not)
+        self._lock = threading.Lock()
+
+    def answered(self) -> bool:
+        """The Manager answered (yes or no); True if it had not answered before."""
+        return self._set((True, ""))
+
+    def unanswered(self, why: str) -> bool:
+        """The Manager did not answer in time, or could not be asked: ``why``, and what it means."""
+        return self._set((False, why))
+
+    def _set(self, state: tuple[bool, str]) -> bool:
+        with self._lock:
+            changed = self._state is None or self._state[0] != state[0]
+            self._state = state
+        return changed
+
+    def fields(self) -> dict[str, Any]:
+        """The status fields: ``manager_answering`` (once asked) and, while false, ``manager_problem``."""
+        with self._lock:
+            state = self._state
+        if state is None:
+            return {}
+        return (
+            {"manager_answering": True}
+            if state[0]
+            else {"manager_answering": False, "manager_problem": state[1]}
+        )
+
+
 def context_values(msg: dict[str, Any]) -> dict[str, Any]:
     """The ``values`` of a ``context`` message (Manager and Layer Manager read the same stream)."""
     values = msg.get("values")

@@ -17,6 +17,8 @@ the Manager records and publishes the refusal, with the rules that forbid it and
 the message is dropped too (fail closed), and the guard itself publishes that refusal.
 Messages leave in the order they came, whatever order the answers come in; at most
 ``max_pending`` wait for an answer per route, the oldest refused first beyond that.
+While the Manager does not answer, the guard's status says so (``manager_answering``
+false, with the reason) and ``/diagnostics`` shows ERROR, until the next answer.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from cosleec.errors import UserError
-from cosleec.nodes.base import Node
+from cosleec.nodes.base import Answering, Node
 from cosleec.nodes.listener import MappingError, read_yaml
 from cosleec.nodes.qos import Qos, QosError
 from cosleec.nodes.transport import DEFAULT_NAMESPACE
@@ -136,7 +138,8 @@ class GuardNode(Node):
     ``timeout`` how long a message waits for the answer before it is dropped. The
     transport needs ``subscribe_raw``, ``publish_raw`` and ``ask`` (ROS 2 and ROS 1 have
     them). Counters: ``forwarded``, ``blocked``, ``unanswered`` (blocked for want of an
-    answer), ``overflow`` (blocked because ``max_pending`` were waiting).
+    answer), ``overflow`` (blocked because ``max_pending`` were waiting). Status also says
+    whether the Manager answered the last question (:class:`~cosleec.nodes.base.Answering`).
     """
 
     name = "guard"
@@ -164,6 +167,7 @@ class GuardNode(Node):
         self._queues: dict[str, deque[_Waiting]] = {r.source: deque() for r in routes}
         self._lock = threading.Lock()
         self._sending = threading.Lock()
+        self.answering = Answering()
         for key in ("forwarded", "blocked", "unanswered", "overflow"):
             self.counters[key] = 0
         self.advertise("refusals")
@@ -212,12 +216,12 @@ class GuardNode(Node):
                 queued = waiting in self._queues[r.source]
             if queued:
                 self._count("unanswered")
-            answer = {
-                "permitted": False,
-                "rules": [],
-                "reason": f"the Manager ({self.service}) did not answer within {self.timeout:g} s: "
-                "blocked, as the guard fails closed",
-            }
+            why = f"the Manager ({self.service}) did not answer within {self.timeout:g} s"
+            if self.answering.unanswered(f"{why}: every guarded message is blocked until it answers"):
+                self.status()  # health changed: say so now, not at the next heartbeat
+            answer = {"permitted": False, "rules": [], "reason": f"{why}: blocked, as the guard fails closed"}
+        elif self.answering.answered():
+            self.status()
         answer["_own"] = own
         # answers come on several threads (the executor, a timeout's timer): one sends at a
         # time, from taking the ready messages off the queue to the last send, so they leave in
@@ -250,6 +254,11 @@ class GuardNode(Node):
                     # (no answer, inactive, an undeclared event) only the guard can report
                     self._block(r, w.answer, own=bool(w.answer.get("_own")) or not w.answer.get("rules"))
         self._count("processed")
+
+    def status(self, **extra: Any) -> None:
+        """Publish the counters, and whether the Manager answered the last question (and if not, why)."""
+        with self._status_lock:
+            super().status(**self.answering.fields(), **extra)
 
     def _block(self, r: Route, answer: dict[str, Any], *, own: bool) -> None:
         """Count a blocked message; publish its refusal if the Manager could not (it did otherwise)."""

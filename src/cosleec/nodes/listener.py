@@ -39,7 +39,9 @@ at least be a boolean, a number or a short string. A rejected value is counted a
 reported on ``rejected``; the rest of the message still counts.
 
 A mistake in a mapping is a :class:`MappingError` that names the file, the line and
-column, and the entry: ``mapping.yaml:7:3: events.Clean: ...``.
+column, and the entry: ``mapping.yaml:7:3: events.Clean: ...``. A threshold or band bound
+must be a finite number (``below: .nan`` would be taken by YAML, and the event never fire),
+and band bounds must rise; the error then points at the value itself.
 """
 
 from __future__ import annotations
@@ -123,9 +125,16 @@ def _unknown(given: Iterable[object], allowed: Iterable[str]) -> str:
 
 
 class _Marked(dict[Any, Any]):
-    """A YAML mapping that remembers where each of its keys was written (``marks``)."""
+    """A YAML mapping that remembers where each of its keys (``marks``) and values (``value_marks``) was written."""
 
     marks: dict[Any, yaml.Mark]
+    value_marks: dict[Any, yaml.Mark]
+
+
+class _MarkedList(list[Any]):
+    """A YAML sequence that remembers where each of its items was written (``marks``, in order)."""
+
+    marks: list[yaml.Mark]
 
 
 class _Duplicate(Exception):
@@ -147,7 +156,7 @@ class _Loader(yaml.SafeLoader):
 def _construct_map(loader: _Loader, node: yaml.MappingNode) -> Iterator[_Marked]:
     """:class:`_Loader`'s constructor of every YAML mapping: a :class:`_Marked` dict, or _Duplicate."""
     data = _Marked()
-    data.marks = {}
+    data.marks, data.value_marks = {}, {}
     yield data  # first, as SafeConstructor does: an anchor may refer to the mapping itself
     seen: set[Any] = set()
     for key_node, _ in node.value:  # before merge keys (<<) are flattened in: an override is fine
@@ -157,12 +166,24 @@ def _construct_map(loader: _Loader, node: yaml.MappingNode) -> Iterator[_Marked]
                 raise _Duplicate(key, key_node.start_mark)
             seen.add(key)
     data.update(loader.construct_mapping(node))
-    for key_node, _ in node.value:  # flattened now: a key of the mapping itself comes after a merged one
+    # flattened now: a key of the mapping itself comes after a merged one
+    for key_node, value_node in node.value:
         with contextlib.suppress(TypeError):  # an unhashable key: construct_mapping refused it already
-            data.marks[loader.construct_object(key_node)] = key_node.start_mark
+            key = loader.construct_object(key_node)
+            data.marks[key] = key_node.start_mark
+            data.value_marks[key] = value_node.start_mark
+
+
+def _construct_seq(loader: _Loader, node: yaml.SequenceNode) -> Iterator[_MarkedList]:
+    """:class:`_Loader`'s constructor of every YAML sequence: a :class:`_MarkedList`."""
+    data = _MarkedList()
+    data.marks = [item.start_mark for item in node.value]
+    yield data  # first, as SafeConstructor does: an anchor may refer to the sequence itself
+    data.extend(loader.construct_sequence(node))
 
 
 _Loader.add_constructor("tag:yaml.org,2002:map", _construct_map)
+_Loader.add_constructor("tag:yaml.org,2002:seq", _construct_seq)
 
 
 def read_yaml(text: str, source: str) -> Any:
@@ -191,6 +212,39 @@ def _at(source: str, where: Any, key: Any, otherwise: str | None = None) -> str:
     if mark is None:
         return otherwise or source
     return f"{source}:{mark.line + 1}:{mark.column + 1}"
+
+
+def _value_at(source: str, where: Any, key: Any, otherwise: str) -> str:
+    """``source:line:col`` of the value of ``key`` in the loaded YAML mapping ``where``; else ``otherwise``."""
+    mark = where.value_marks.get(key) if isinstance(where, _Marked) else None
+    return otherwise if mark is None else f"{source}:{mark.line + 1}:{mark.column + 1}"
+
+
+def _item_at(source: str, items: Any, i: int, otherwise: str) -> str:
+    """``source:line:col`` of item ``i`` of the loaded YAML sequence ``items``; else ``otherwise``."""
+    marks = items.marks if isinstance(items, _MarkedList) else []
+    return otherwise if i >= len(marks) else f"{source}:{marks[i].line + 1}:{marks[i].column + 1}"
+
+
+def _not_finite(value: Any) -> str | None:
+    """How a number no finite float can be is shown (``NaN``, ``-infinity``, ``an integer of 401
+    digits``); None for a finite one, and for what is no number (a boolean, a string)."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    if isinstance(value, int):
+        return f"an integer of {len(str(abs(value)))} digits" if abs(value) > sys.float_info.max else None
+    if math.isnan(value):
+        return "NaN"
+    if math.isinf(value):
+        return "infinity" if value > 0 else "-infinity"
+    return None
+
+
+#: why a threshold must be finite, said with every refusal of one
+FIXED = (
+    "a finite reading compared with it always gives the same answer, so the condition could never "
+    "change (an event would never fire, or fire on every reading)"
+)
 
 
 def default_qos(kind: str, type_name: str) -> Qos:
@@ -438,6 +492,42 @@ def _qos(at: str, kind: str, type_name: str, raw: Any) -> Qos:
         raise MappingError(f"{at}: qos: {e}{near}") from None
 
 
+def _bands(source: str, at: str, where: str, raw: Any) -> tuple[tuple[float, str], ...]:
+    """The checked ``bands`` of the entry ``where`` (written at ``at``): finite bounds that rise.
+
+    A band a finite reading can never fall in -- a bound that is NaN, infinite, too large
+    for a float, or not above the bound before it -- is a MappingError at that bound.
+    """
+    if not isinstance(raw, list) or not raw:
+        raise MappingError(f"{where}: `bands` is a list of [upper bound, literal], the last just [literal]")
+    out: list[tuple[float, str]] = []
+    for i, band in enumerate(raw):
+        last = i == len(raw) - 1
+        if last and isinstance(band, list) and len(band) == 1:
+            out.append((math.inf, str(band[0])))
+            continue
+        if not (isinstance(band, list) and len(band) == 2 and isinstance(band[0], int | float)):
+            raise MappingError(f"{where}: band {i + 1} must be [upper bound, literal] (the last: [literal])")
+        bound, label = band[0], f"{_item_at(source, band, 0, at)}: {where.split(': ')[-1]}"
+        shown = _not_finite(bound)
+        if shown is not None:
+            raise MappingError(
+                f"{label}: band {i + 1}'s bound must be a finite number, not {shown}: every finite reading "
+                "falls on the same side of it, so a band would never (or always) be given; give a number, "
+                "and give the last band no bound: [literal]"
+            )
+        if out and float(bound) <= out[-1][0]:
+            before = raw[i - 1][0]
+            raise MappingError(
+                f"{label}: band {i + 1}'s bound {bound!r} must be above band {i}'s {before!r}: bands are "
+                f"tried in order, so {str(band[1])!r} could never be given; list the bounds rising"
+            )
+        out.append((float(bound), str(band[1])))
+    if out[-1][0] != math.inf:
+        out.append((math.inf, out[-1][1]))
+    return tuple(out)
+
+
 def _entry(
     source: str,
     at: str,
@@ -466,27 +556,15 @@ def _entry(
     if len(comps) + ("bands" in spec) > 1:
         raise MappingError(f"{where}: give at most one of {sorted(COMPARISONS)} or `bands`")
     comparison = (comps[0], spec[comps[0]]) if comps else None
-    bands = None
-    if "bands" in spec:
-        raw = spec["bands"]
-        if not isinstance(raw, list) or not raw:
+    if comparison is not None:
+        shown = _not_finite(comparison[1])
+        if shown is not None:  # `below: .nan` would be taken, and the condition never hold
+            op = comparison[0]
             raise MappingError(
-                f"{where}: `bands` is a list of [upper bound, literal], the last just [literal]"
+                f"{_value_at(source, spec, op, at)}: {kind}s.{name}: `{op}` must be a finite number, "
+                f"not {shown}: {FIXED}; give a number such as `{op}: 10`"
             )
-        out: list[tuple[float, str]] = []
-        for i, band in enumerate(raw):
-            last = i == len(raw) - 1
-            if last and isinstance(band, list) and len(band) == 1:
-                out.append((math.inf, str(band[0])))
-            elif isinstance(band, list) and len(band) == 2 and isinstance(band[0], int | float):
-                out.append((float(band[0]), str(band[1])))
-            else:
-                raise MappingError(
-                    f"{where}: band {i + 1} must be [upper bound, literal] (the last: [literal])"
-                )
-        if out[-1][0] != math.inf:
-            out.append((math.inf, out[-1][1]))
-        bands = tuple(out)
+    bands = _bands(source, at, where, spec["bands"]) if "bands" in spec else None
     fire = spec.get("fire", "edge")
     if "fire" in spec:
         fire_at = here("fire")

@@ -10,6 +10,18 @@ Where the transport offers services it also answers ``~/request`` (may E happen 
 why not), ``~/decide`` (apply values, let an event occur, return the decisions) and
 ``~/reload`` (new rules without a restart, :meth:`ManagerNode.reload`).
 
+**Privileged services stay privileged.** Anyone on the robot's ROS domain can call a
+service, so the two that change what the Manager enforces take only what the operator
+allowed when starting the node. ``~/reload`` re-reads the rule file the node runs and,
+with ``reload_dir``, reads files under that directory (symlinks and ``..`` resolved before
+the check); any other path is refused with a fixed message, without touching the file,
+so the answer says nothing of what exists or what it holds. Every attempt is recorded in
+the audit log (a ``reload-attempt`` record: caller where the middleware says who it is,
+path, outcome, both rule hashes). ``~/decide`` is ``off`` unless the operator chooses
+``events-only`` (an event, no values) or ``all``; a refused call is recorded as
+``rejected``. So is every message the node cannot decode: the runtime never sees it, so
+the node records it (:meth:`cosleec.runtime.Manager.note`).
+
 **Active and inactive.** A Manager node enforces only while active (the default). While
 inactive -- a lifecycle node before ``activate`` or after ``deactivate`` -- it refuses
 every request (fail closed: "the Manager is inactive") and rejects every event and
@@ -20,15 +32,17 @@ the clock, so that its view of the world is current when it is activated again.
 from __future__ import annotations
 
 import difflib
+import logging
 import math
+import os
 import sys
 import threading
 import time
 from collections.abc import Callable
 from typing import Any
 
-from cosleec.errors import UserError, show
-from cosleec.nodes.base import MessageError, Node, context_values
+from cosleec.errors import ConfigurationError, CosleecError, UserError, clip, show
+from cosleec.nodes.base import REASON_LIMIT, MessageError, Node, context_values, excerpt
 from cosleec.nodes.recording import McapRecorder
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
 from cosleec.runtime import (
@@ -50,6 +64,15 @@ REPUBLISH_SETTLE_S = 1.0
 #: the longest event name (or request id) the Manager node takes; SLEEC names are identifiers
 MAX_NAME = 256
 
+#: what ``~/decide`` takes: nothing, an event without values, or values and an event
+DECIDE = ("off", "events-only", "all")
+#: ``~/decide`` is off unless the operator turns it on: enforcement needs it not (the
+#: context comes from the Context Listener), and a service that changes the context is
+#: one more way in for anyone on the domain (docs/ros.md, "Threat model")
+DEFAULT_DECIDE = "off"
+#: the longest path a ``reload-attempt`` record keeps (a caller chooses what it sends)
+MAX_PATH_SHOWN = 300
+
 
 class ManagerNode(Node):
     """The Manager as a node: one per robot, the only node that decides.
@@ -61,7 +84,9 @@ class ManagerNode(Node):
     (``journal=PATH`` keeps the state across a crash; in simulated time the clock then goes
     on from the journal's last time). ``load`` reads a rule file for :meth:`reload` (the
     CLI gives ``RuleSet.from_file`` and the file it started with as ``rules_path``);
-    ``active=False`` starts it inactive (a lifecycle node before ``activate``).
+    ``reload_dir`` is a directory whose files :meth:`reload` may read besides that one
+    (None: no other file); ``decide`` is what ``~/decide`` takes (:data:`DECIDE`, off by
+    default); ``active=False`` starts it inactive (a lifecycle node before ``activate``).
     """
 
     name = "manager"
@@ -80,8 +105,14 @@ class ManagerNode(Node):
         rules_path: str | None = None,
         load: Callable[[str], RuleSet] | None = None,
         active: bool = True,
+        reload_dir: str | None = None,
+        decide: str = DEFAULT_DECIDE,
         **manager_kw: Any,
     ) -> None:
+        if decide not in DECIDE:
+            raise ConfigurationError(f"decide must be one of {', '.join(DECIDE)}, not {show(decide)}")
+        self.decide = decide
+        self.reload_dir = _directory(reload_dir) if reload_dir is not None else None
         super().__init__(transport, namespace)
         self.rules_path = rules_path
         self._load = load or RuleSet.from_file
@@ -108,9 +139,12 @@ class ManagerNode(Node):
             self.on("clock", self._clock)
         serve = getattr(transport, "serve", None)
         if serve is not None:  # the typed interface: ask, decide and reload as services
-            serve("~/request", "request", self._serve_request)
-            serve("~/decide", "decide", self._serve_decide)
-            serve("~/reload", "reload", self._serve_reload)
+            for name, kind, handler in (
+                ("~/request", "request", self._serve_request),
+                ("~/decide", "decide", self._serve_decide),
+                ("~/reload", "reload", self._serve_reload),
+            ):
+                serve(name, kind, handler, rejected=self._service_rejected)
         self.status()
 
     def _start(self, rules: RuleSet) -> None:
@@ -153,44 +187,128 @@ class ManagerNode(Node):
     def _inactive(self) -> str:
         return "the Manager is inactive (lifecycle): it refuses every request until it is activated"
 
-    def reload(self, path: str | None = None) -> dict[str, Any]:
+    def reload(
+        self, path: str | None = None, *, via: str = "call", caller: str | None = None
+    ) -> dict[str, Any]:
         """Read the rules at ``path`` (default: the file it runs) and swap them in between two decisions.
 
-        The new rules are checked first: on any error the old rules stay and the answer
-        says why (``success`` false, ``message`` the diagnostics). Otherwise obligations of
-        rules that still exist are kept and those of removed rules withdrawn
-        (:meth:`cosleec.runtime.Manager.reload`); the audit log records both hashes.
+        Only a file the operator allowed is read (:meth:`allowed`): any other path is
+        refused with a fixed message and never touched. The new rules are checked first: on
+        any error the old rules stay and the answer says why (``success`` false, ``message``
+        the diagnostics). Otherwise obligations of rules that still exist are kept and those
+        of removed rules withdrawn (:meth:`cosleec.runtime.Manager.reload`). Every attempt
+        gets a ``reload-attempt`` record in the audit log: ``via`` (service, signal, call),
+        ``caller`` (who asked, where the middleware says), the path, the outcome
+        (``reloaded``, ``failed``: allowed but not taken, ``refused``: not allowed), both hashes.
         """
-        target = path or self.rules_path
         before = self.manager.rules_hash
-        if not target:
-            return {
-                "success": False,
-                "message": "no rule file to reload: give one",
-                "previous_hash": before,
-                "current_hash": before,
-            }
+        target = self.allowed(path)
+        if target is None:
+            self._count("reloads_refused")
+            return self._reloaded(
+                via, caller, path, None, "refused", self._refused_reload(path), before, before
+            )
         try:
             rules = self._load(target)
             done = self.manager.reload(rules)
         except UserError as e:
             self._count("reloads_rejected")
-            return {
-                "success": False,
-                "message": e.render() if hasattr(e, "render") else str(e),
-                "previous_hash": before,
-                "current_hash": before,
-            }
+            why = e.render() if hasattr(e, "render") else str(e)
+            return self._reloaded(via, caller, path, target, "failed", why, before, before)
+        except Exception as e:  # a bug of ours: recorded as an attempt all the same, then raised
+            self._reloaded(via, caller, path, target, "failed", f"{type(e).__name__}: {e}", before, before)
+            raise
         self.rules_path = target
         self._count("reloads")
         self.status()
-        return {
-            "success": True,
-            "message": f"reloaded {target}: +{len(done.added)} -{len(done.removed)} ~{len(done.changed)} rules, "
-            f"{len(done.withdrawn)} obligation(s) withdrawn",
-            "previous_hash": done.previous_hash,
-            "current_hash": done.current_hash,
+        message = (
+            f"reloaded {target}: +{len(done.added)} -{len(done.removed)} ~{len(done.changed)} rules, "
+            f"{len(done.withdrawn)} obligation(s) withdrawn"
+        )
+        return self._reloaded(
+            via, caller, path, target, "reloaded", message, done.previous_hash, done.current_hash
+        )
+
+    def allowed(self, path: str | None) -> str | None:
+        """The file a reload of ``path`` may read, or None if the operator allowed no such file.
+
+        No path, or the running file's own path, is the running file. With ``reload_dir``, a
+        path under that directory is allowed once symlinks and ``..`` are resolved and it is
+        still under it (the resolved path is what is read). Everything else is refused
+        before the file system is asked anything: only a path already under the directory
+        (as written, ``..`` collapsed) is resolved at all.
+        """
+        if not path:
+            return self.rules_path
+        if "\0" in path:
+            return None
+        given = os.path.normpath(os.path.abspath(path))
+        if self.rules_path and given == os.path.normpath(os.path.abspath(self.rules_path)):
+            return self.rules_path
+        if self.reload_dir is None:
+            return None
+        real_dir, as_given = self.reload_dir
+        if not any(_under(given, d) for d in {real_dir, as_given}):
+            return None
+        real = os.path.realpath(given)  # a symlink under the directory may point anywhere
+        return real if _under(real, real_dir) else None
+
+    def _refused_reload(self, path: str | None) -> str:
+        """The fixed answer to a reload that is not allowed: the same whatever the path, so that
+        it says nothing of what exists or what a file holds."""
+        if not path:
+            return "no rule file to reload: this Manager was started without one" + (
+                "; give one under the directory its operator allowed" if self.reload_dir else ""
+            )
+        if self.reload_dir is None:
+            return (
+                "reload refused: this Manager reloads only the rule file it runs (call ~/reload with "
+                "no path); its operator can allow a directory of rule files with --reload-dir"
+            )
+        return (
+            "reload refused: this Manager reloads only the rule file it runs (call ~/reload with no "
+            "path) or a rule file under the directory its operator allowed with --reload-dir"
+        )
+
+    def _reloaded(
+        self,
+        via: str,
+        caller: str | None,
+        path: str | None,
+        target: str | None,
+        outcome: str,
+        message: str,
+        previous: str,
+        current: str,
+    ) -> dict[str, Any]:
+        """Record a reload attempt in the audit log; return the answer to the caller."""
+        record: dict[str, Any] = {
+            "via": via,
+            "caller": clip(caller, MAX_NAME) if caller else None,
+            "path": clip(path, MAX_PATH_SHOWN) if path else None,
+            "outcome": outcome,
+            "previous_hash": previous,
+            "current_hash": current,
         }
+        if target is not None:  # what was read, symlinks resolved (only ever an allowed file)
+            record["file"] = target
+        if outcome != "reloaded":
+            record["reason"] = clip(message, REASON_LIMIT)
+        self._note("reload-attempt", record)
+        return {
+            "success": outcome == "reloaded",
+            "message": message,
+            "previous_hash": previous,
+            "current_hash": current,
+        }
+
+    def _note(self, kind: str, record: dict[str, Any]) -> None:
+        """Write ``record`` in the audit log through the Manager; a Manager that takes no more
+        steps (closed, its journal failed) cannot, which is logged, never raised into a caller."""
+        try:
+            self.manager.note(kind, record)
+        except CosleecError as e:
+            self.limiter.log(logging.ERROR, ("note", kind), "manager: cannot record %s: %s", kind, e)
 
     # ------------------------------------------------------------------ services
     def _permission(self, event: str, source: str = "") -> Permission:
@@ -210,9 +328,14 @@ class ManagerNode(Node):
         return {"permitted": p.permitted, "rules": list(p.rules), "reason": p.reason}
 
     def _serve_decide(self, req: dict[str, Any]) -> dict[str, Any]:
+        values, name = req.get("values") or {}, req.get("event") or ""
+        turned_off = self._decide_refusal(bool(values))
+        if turned_off is not None:
+            self._audit_rejected("~/decide", turned_off, req, req.get("_caller"))
+            self.reject("~/decide", turned_off, {k: v for k, v in req.items() if k != "_caller"})
+            return {"accepted": False, "error": turned_off, "decisions": []}
         if not self.active:
             return {"accepted": False, "error": self._inactive(), "decisions": []}
-        values, name = req.get("values") or {}, req.get("event") or ""
         if name and name not in self.manager.ruleset.events:  # before any value is taken: all or nothing
             close = difflib.get_close_matches(str(name), sorted(self.manager.ruleset.events), n=1)
             hint = f" (did you mean {close[0]}?)" if close else ""
@@ -231,8 +354,58 @@ class ManagerNode(Node):
             return {"accepted": False, "error": str(e), "decisions": []}
         return {"accepted": True, "error": "", "decisions": [d.to_json() for d in decisions]}
 
+    def _decide_refusal(self, with_values: bool) -> str | None:
+        """Why ``~/decide`` refuses a call (None: it takes it), as the operator chose (``decide``)."""
+        if self.decide == "off":
+            return (
+                "~/decide is off on this Manager: publish measures on `context` and events on `events`, "
+                "or start the Manager with --decide events-only or --decide all"
+            )
+        if self.decide == "events-only" and with_values:
+            return (
+                "~/decide takes events only on this Manager (--decide events-only), not values: "
+                "publish measures on `context`, or start the Manager with --decide all"
+            )
+        return None
+
     def _serve_reload(self, req: dict[str, Any]) -> dict[str, Any]:
-        return self.reload(str(req.get("rules") or "") or None)
+        caller = req.get("_caller")
+        return self.reload(
+            str(req.get("rules") or "") or None,
+            via="service",
+            caller=caller if isinstance(caller, str) else None,
+        )
+
+    def _service_rejected(self, name: str, error: Exception, caller: str | None = None) -> None:
+        """A call to service ``name`` the transport could not decode (a value of an unknown kind, a
+        measure given twice): rejected, counted, published and recorded like a bad message."""
+        reason = str(error) or type(error).__name__
+        self._audit_rejected(name, reason, "", caller)
+        self.reject(name, reason, "")
+
+    def reject_error(self, where: str, error: Exception, payload: Any) -> None:
+        """As :meth:`Node.reject_error`, and a ``rejected`` record in the audit log for what the
+        runtime never saw: a message that could not be decoded or read, an event while
+        inactive. (What the runtime refused -- a ContextError -- it recorded itself.)"""
+        if not isinstance(error.__cause__, ContextError):
+            self._audit_rejected(where, str(error) or type(error).__name__, payload)
+        super().reject_error(where, error, payload)
+
+    def _audit_rejected(self, where: str, reason: str, payload: Any, caller: Any = None) -> None:
+        """A ``rejected`` record (as the runtime writes for an unknown event) for an input of ``where``."""
+        record: dict[str, Any] = {
+            "reason": clip(reason, REASON_LIMIT),
+            "what": where.rsplit("/", 1)[-1],
+            "topic": where,
+        }
+        if payload not in ("", None) and not callable(payload):  # (a typed message's decoder shows nothing)
+            shown = (
+                {k: v for k, v in payload.items() if k != "_caller"} if isinstance(payload, dict) else payload
+            )
+            record["payload"] = excerpt(shown, REASON_LIMIT)
+        if isinstance(caller, str) and caller:
+            record["caller"] = clip(caller, MAX_NAME)
+        self._note("rejected", record)
 
     def status(self, **extra: Any) -> None:
         """Publish the counters with the context version, runtime statistics, active layers and time.
@@ -399,3 +572,18 @@ class ManagerNode(Node):
         self.manager.close()
         if self.recorder is not None:
             self.recorder.close()
+
+
+def _directory(path: str) -> tuple[str, str]:
+    """``reload_dir`` resolved (symlinks and ``..``) and as given (absolute); UserError unless a directory."""
+    if not os.path.isdir(path):
+        raise UserError(
+            f"the reload directory {path!r} is not a directory",
+            hint="give --reload-dir an existing directory that only the operator can write to",
+        )
+    return os.path.realpath(path), os.path.normpath(os.path.abspath(path))
+
+
+def _under(path: str, directory: str) -> bool:
+    """Is ``path`` strictly inside ``directory`` (both absolute, normalised)? Pure string work."""
+    return path != directory and os.path.commonpath([path, directory]) == directory

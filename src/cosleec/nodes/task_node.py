@@ -5,14 +5,18 @@ to ``obligations``. Each decision names its clause and layer; the node runs that
 on a worker thread (so a task may block, or ask whether an action is allowed, without
 stalling the middleware), and tasks report what they did on ``events``.
 
-Each decision runs at most once: the node remembers the ``(session, id)`` of the decisions
-it took (the Manager node stamps its obligations with its ``session``), so a message
-duplicated on the wire -- re-delivered, replayed from a recording, forged -- is counted in
-``duplicates`` and not run again.
+Each action runs at most once: the node remembers the ``(session, id, action)`` of what it
+ran (the Manager node stamps its obligations with its ``session``; an action is an event
+the decision obliges), so a message duplicated on the wire -- re-delivered, replayed from
+a recording, forged -- is counted in ``duplicates`` and not run again. The Manager hands a
+decision on in parts when some of its actions are held (forbidden for now): each part
+names only its own actions and runs when it arrives; a message that repeats actions
+already run runs only the others.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import logging
 import math
@@ -23,7 +27,7 @@ from collections.abc import Callable
 from typing import Any
 
 from cosleec.errors import ConfigurationError, UserError
-from cosleec.nodes.base import MessageError, Node
+from cosleec.nodes.base import Answering, MessageError, Node
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
 from cosleec.runtime import Capability, Decision, Implementations, RuleSet, Task
 
@@ -43,7 +47,10 @@ class ManagerUnavailable(UserError):
 
 
 class SeenDecisions:
-    """The ``(session, id)`` of the decisions a task node took, in bounded memory.
+    """The ``(session, id, action)`` of what a task node ran, in bounded memory.
+
+    ``action`` is an event the decision obliges, or ``""`` for a decision that obliges
+    none (its task method runs once all the same).
 
     The last ``window`` keys are remembered exactly. When one is forgotten, every id of its
     session up to it is from then on treated as seen: the Manager numbers its decisions
@@ -58,18 +65,18 @@ class SeenDecisions:
             raise ConfigurationError(f"the window of seen decisions must be at least 1, not {window}")
         self.window = window
         self.max_sessions = max_sessions
-        self._seen: OrderedDict[tuple[str, int], None] = OrderedDict()
+        self._seen: OrderedDict[tuple[str, int, str], None] = OrderedDict()
         self._floor: OrderedDict[str, int] = OrderedDict()  # session -> every id <= it counts as seen
 
-    def add(self, session: str, decision: int) -> bool:
-        """Remember that ``decision`` of ``session`` is taken; False if it was already (a duplicate)."""
-        key = (session, decision)
+    def add(self, session: str, decision: int, action: str = "") -> bool:
+        """Remember that ``action`` of ``decision`` of ``session`` ran; False if it had (a duplicate)."""
+        key = (session, decision, action)
         floor = self._floor.get(session)
         if key in self._seen or (floor is not None and decision <= floor):
             return False
         self._seen[key] = None
         if len(self._seen) > self.window:
-            (old_session, old), _ = self._seen.popitem(last=False)
+            (old_session, old, _), _ = self._seen.popitem(last=False)
             self._floor[old_session] = max(old, self._floor.get(old_session, old))
             self._floor.move_to_end(old_session)
             if len(self._floor) > self.max_sessions:
@@ -140,6 +147,7 @@ class TaskNode(Node):
         self._seen_lock = threading.Lock()
         for key in ("duplicates", "request_timeouts"):
             self.counters[key] = 0
+        self.answering = Answering()  # did the Manager answer the last request? (status, /diagnostics)
         for t in ("events", "request"):
             self.advertise(t)
         self._worker = threading.Thread(target=self._run, name=f"cosleec-{name}", daemon=True)
@@ -173,8 +181,14 @@ class TaskNode(Node):
         finally:
             self._replies.pop(rid, None)
         if box:
+            if self.answering.answered():
+                self.status()  # healthy again: say so now
             return box[0]
         self._count("request_timeouts")
+        then = "are refused" if self.when_manager_down == "refuse" else "raise ManagerUnavailable"
+        why = f"the Manager did not answer a request within {self.request_timeout:g} s"
+        if self.answering.unanswered(f"{why}: the tasks' requests {then} until it answers"):
+            self.status()  # health changed: say so now, not at the next heartbeat
         self.limiter.log(
             logging.WARNING,
             "request_timeout",
@@ -227,8 +241,13 @@ class TaskNode(Node):
         session = msg.get("session", "")
         if not isinstance(session, str):
             raise MessageError("obligation `session` must be a string")
+        actions = sorted({o.event for o in d.obligations if not o.negated}) or [""]
         with self._seen_lock:
-            new = self._seen.add(session, d.id)
+            new = [a for a in actions if self._seen.add(session, d.id, a)]
+        if len(new) < len(actions) and new:  # a part of it ran before: only the rest runs now
+            d = dataclasses.replace(
+                d, obligations=tuple(o for o in d.obligations if o.negated or o.event in new)
+            )
         if not new:
             self._count("duplicates")
             self.limiter.log(
@@ -297,10 +316,17 @@ class TaskNode(Node):
         """Publish the counters with ``handled`` (decisions run, in all) and ``failures`` (implementations raised).
 
         The counters include ``duplicates`` (decisions received again, not run) and
-        ``request_timeouts`` (requests the Manager did not answer in time).
+        ``request_timeouts`` (requests the Manager did not answer in time); whether the
+        Manager answered the last request is ``manager_answering`` (``manager_problem`` says
+        why not: ``/diagnostics`` then shows ERROR).
         """
         with self._status_lock:
-            super().status(handled=self.handled_total, failures=self.implementations.failures, **extra)
+            super().status(
+                handled=self.handled_total,
+                failures=self.implementations.failures,
+                **self.answering.fields(),
+                **extra,
+            )
 
     def close(self) -> None:
         """Stop the worker once the decisions already queued have run (waits up to 5 s).

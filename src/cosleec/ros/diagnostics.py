@@ -5,8 +5,10 @@ from ``/diagnostics``; cosleec's own ``status`` topic says more but only cosleec
 Each status record a node publishes is summarised here: at most once a second, and at
 once when the level changes, so a burst of rejected messages shows without flooding.
 
-Levels: ERROR while the executor is not alive (the node is deaf) or a handler failed on
-a bug of ours (``errors`` grew); WARN when messages were rejected, violations occurred or
+Levels: ERROR while the executor is not alive (the node is deaf), while the Manager does
+not answer a guard or task node (``manager_answering`` false: it blocks or refuses
+everything, and the message says why), or when a handler failed on a bug of ours
+(``errors`` grew); WARN when messages were rejected, violations occurred or
 a QoS-incompatible peer appeared since the last report; OK otherwise. The values are the
 counters that matter (received, rejected, decisions, violations, executor alive, ...).
 """
@@ -60,9 +62,10 @@ class Diagnostics:
             for k, v in sorted(stats.items())
             if k in ("decisions", "violations", "refused", "conflicts")
         ]
-        for k in ("transport_errors", "transport_lost", "lifecycle"):
+        for k in ("transport_errors", "transport_lost", "lifecycle", "manager_answering"):
             if k in status:
-                values.append((k, str(status[k])))
+                v = status[k]
+                values.append((k, str(v).lower() if isinstance(v, bool) else str(v)))
         self.send(
             {
                 "name": f"cosleec: {status.get('node', self.name)} ({self.name})",
@@ -78,6 +81,8 @@ class Diagnostics:
     ) -> tuple[int, str]:
         if status.get("executor_alive") is False:
             return ERROR, "the executor has stopped: the node hears nothing"
+        if status.get("manager_answering") is False:
+            return ERROR, str(status.get("manager_problem") or "the Manager does not answer")
         grew = {
             k: int(v) - int(self._seen.get(k, 0))
             for k, v in [*counters.items(), *((f"stats.{k}", v) for k, v in stats.items())]

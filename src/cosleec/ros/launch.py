@@ -15,7 +15,7 @@ none behind.
 Paths in a launch file are relative to the launch file's directory, not to wherever the
 launcher was started: a node's first argument unless it is an option (its rules, or the
 listener's or guard's mapping) and the values of the path options (``--audit out.jsonl``, ``--rules``,
-``--mapping``, ``--journal``, ``--record``, ``--path``, ``--params-file``) become absolute
+``--mapping``, ``--journal``, ``--record``, ``--path``, ``--params-file``, ``--reload-dir``) become absolute
 paths there, whether the file exists yet or not (``~`` is expanded; absolute paths stay).
 Each node also runs in that directory, so anything else relative -- a ``--module`` next to
 the launch file -- behaves the same.
@@ -47,7 +47,7 @@ KINDS = ("manager", "layers", "listener", "task", "guard")
 FILE_FIRST = frozenset({"manager", "layers", "listener", "task", "guard"})
 #: options whose value is a path, resolved against the launch file's directory
 PATH_OPTIONS = frozenset(
-    {"--audit", "--journal", "--record", "--rules", "--mapping", "--path", "--params-file"}
+    {"--audit", "--journal", "--record", "--rules", "--mapping", "--path", "--params-file", "--reload-dir"}
 )
 
 

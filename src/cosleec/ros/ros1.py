@@ -218,16 +218,37 @@ class Ros1Transport:
     def _resolve(self, name: str) -> str:
         return f"{self.node_name}/{name[2:]}" if name.startswith("~/") else name
 
-    def serve(self, name: str, kind: str, handler: Callable[[dict[str, Any]], dict[str, Any]]) -> None:
-        """Offer service ``name`` (``~/request`` is under this node's name) of ``kind``; as on ROS 2."""
+    def serve(
+        self,
+        name: str,
+        kind: str,
+        handler: Callable[[dict[str, Any]], dict[str, Any]],
+        rejected: Callable[[str, Exception, str | None], None] | None = None,
+    ) -> None:
+        """Offer service ``name`` (``~/request`` is under this node's name) of ``kind``; as on ROS 2.
+
+        ROS 1 tells who called: the caller's node name (its ``callerid``, which the caller
+        states itself -- nothing on ROS 1 checks it) joins the request as ``_caller``, and
+        is given to ``rejected(name, error, caller)`` with a request that cannot be decoded.
+        """
         services = self._wire.services()
         cls = services.service_type(kind)
 
         def call(req: Any) -> Any:
+            header = getattr(req, "_connection_header", None)
+            caller = header.get("callerid") if isinstance(header, dict) else None
+            caller = caller if isinstance(caller, str) else None
             try:
                 fields = services.read_request(kind, req)
             except MessageError as e:  # the caller's mistake (a kind that is no value): said, not a bug
+                if rejected is not None:
+                    try:
+                        rejected(name, e, caller)
+                    except Exception as bug:  # the caller still gets its answer
+                        self._guard.failed(name, bug)
                 return services.fill_response(kind, cls._response_class(), failure(kind, e))
+            if caller is not None:
+                fields["_caller"] = caller
             try:
                 answer = handler(fields)
             except Exception as e:

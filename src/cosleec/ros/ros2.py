@@ -354,12 +354,22 @@ class Ros2Transport:
         return pub.get_subscription_count() if pub is not None else 0
 
     # ------------------------------------------------------------------ services
-    def serve(self, name: str, kind: str, handler: Callable[[dict[str, Any]], dict[str, Any]]) -> None:
+    def serve(
+        self,
+        name: str,
+        kind: str,
+        handler: Callable[[dict[str, Any]], dict[str, Any]],
+        rejected: Callable[[str, Exception, str | None], None] | None = None,
+    ) -> None:
         """Offer service ``name`` (``~/request``) of ``kind`` (request, decide, reload).
 
         ``handler`` takes the request as a dict and returns the answer as a dict. An
         exception in it answers with the service's failure form (not permitted, not
         accepted, not reloaded) and is counted: a caller is never left without an answer.
+        A request that cannot be decoded (a value of an unknown kind, a measure given
+        twice) is answered so too, and told to ``rejected(name, error, caller)``. rclpy does
+        not tell a service callback who called (the request's writer is taken inside its
+        executor), so the caller is None here and no ``_caller`` joins the request.
         """
         services = self._wire.services()
         cls = services.service_type(kind)
@@ -368,6 +378,11 @@ class Ros2Transport:
             try:
                 fields = services.read_request(kind, req)
             except MessageError as e:  # the caller's mistake (a kind that is no value): said, not a bug
+                if rejected is not None:
+                    try:
+                        rejected(name, e, None)
+                    except Exception as bug:  # the caller still gets its answer
+                        self._guard.failed(name, bug)
                 return services.fill_response(kind, resp, failure(kind, e))
             try:
                 answer = handler(fields)

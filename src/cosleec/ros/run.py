@@ -234,7 +234,7 @@ def serve(
                 hup.clear()
                 reload = getattr(node, "reload", None)
                 if reload is not None:
-                    answer = reload()
+                    answer = reload(via="signal")  # recorded as such in the audit log
                     log.log(
                         logging.INFO if answer.get("success") else logging.ERROR,
                         "SIGHUP: %s",

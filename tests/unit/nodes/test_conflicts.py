@@ -54,3 +54,32 @@ def test_a_held_decision_reaches_them_once_allowed(bus: LocalBus) -> None:
 
 def test_by_day_the_decision_is_handed_on_at_once(bus: LocalBus) -> None:
     assert [d["rule"] for d in run(bus, "10 minutes", night=False)] == ["R1"]
+
+
+SPLIT = """def_start
+  event X event Y event A event B
+def_end
+rule_start
+R1 when X then A within 60 seconds and B within 5 seconds
+R2 when Y then not A within 30 seconds
+rule_end
+"""
+
+
+def test_the_allowed_part_of_a_decision_is_handed_on_at_once_and_the_held_part_once_allowed(
+    bus: LocalBus,
+) -> None:
+    t = bus.transport()
+    node = ManagerNode(t, RuleSet.from_text(SPLIT), sim_time=True)
+    handed = collect(bus, "/cosleec/obligations")
+    for event in ("Y", "X"):
+        t.publish("/cosleec/events", json.dumps({"event": event}))
+    assert bus.wait_idle()
+    r1 = [d for d in handed if d["rule"] == "R1"]
+    assert [[o["event"] for o in d["obligations"]] for d in r1] == [["B"]]  # B at once, A held
+    t.publish("/cosleec/clock", json.dumps({"t": 31.0}))
+    assert bus.wait_idle()
+    node.close()
+    r1 = [d for d in handed if d["rule"] == "R1"]
+    assert [[o["event"] for o in d["obligations"]] for d in r1] == [["B"], ["A"]]
+    assert len({d["id"] for d in r1}) == 1  # two parts of one decision

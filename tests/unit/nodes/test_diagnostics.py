@@ -366,3 +366,67 @@ def test_a_transports_incompatible_peers_reach_the_diagnostics(bus: LocalBus) ->
     h = Harness()
     h.d.report(status)
     assert h.last["level"] == WARN and "incompatible QoS" in h.last["message"]
+
+
+# ----------------------------------------------------------------------------- a Manager that does not answer
+
+
+PROBLEM = (
+    "the Manager (/cosleec_manager/request) did not answer within 0.5 s: every guarded message is blocked"
+)
+
+
+def test_a_manager_that_does_not_answer_is_an_error_saying_why() -> None:
+    h = Harness("cosleec_guard")
+    h.at(0, node="guard", counters=counters(), manager_answering=True)
+    assert h.last["level"] == OK and ("manager_answering", "true") in h.last["values"]
+    h.at(0.1, node="guard", counters=counters(), manager_answering=False, manager_problem=PROBLEM)
+    assert (h.last["level"], h.last["message"]) == (ERROR, PROBLEM)  # at once: the level changed
+    assert ("manager_answering", "false") in h.last["values"]
+    h.at(0.2, node="guard", counters=counters(), manager_answering=True)
+    assert (h.last["level"], h.last["message"]) == (OK, "ok")  # and back, at once
+
+
+def test_a_manager_not_asked_yet_is_no_error_and_no_value() -> None:
+    h = Harness("cosleec_guard")
+    h.at(0, node="guard", counters=counters())
+    assert h.last["level"] == OK and all(k != "manager_answering" for k, _ in h.last["values"])
+
+
+def test_a_manager_that_does_not_answer_outranks_warnings_but_not_a_dead_executor() -> None:
+    h = Harness()
+    h.at(0, counters=counters(rejected=2), manager_answering=False, manager_problem=PROBLEM)
+    assert (h.last["level"], h.last["message"]) == (ERROR, PROBLEM)
+    h.at(5, counters=counters(rejected=2), manager_answering=False, executor_alive=False)
+    assert "executor has stopped" in h.last["message"]
+
+
+def test_a_task_node_whose_manager_does_not_answer_reports_an_error_until_it_answers(bus: LocalBus) -> None:
+    from cosleec.nodes import ManagerNode, TaskNode
+    from cosleec.runtime import RuleSet
+
+    from .support import collect
+    from .test_manager_services import RULES
+
+    rules = RuleSet.from_file(RULES)
+    status = collect(bus, "/cosleec/status")
+    task = TaskNode(bus.transport(), rules, request_timeout=0.05)
+    h = Harness("cosleec_task")
+    assert task.request("MoveNearUser") is False  # nobody answers: refused (fail closed)
+    bus.wait_idle()
+    mine = [s for s in status if s["node"] == "task"]
+    assert mine[-1]["manager_answering"] is False  # said at once, not at the next heartbeat
+    h.d.report(mine[-1])
+    assert h.last["level"] == ERROR
+    assert h.last["message"] == (
+        "the Manager did not answer a request within 0.05 s: the tasks' requests are refused until it answers"
+    )
+    manager = ManagerNode(bus.transport(), rules, sim_time=True)
+    assert task.request("MoveNearUser") is True
+    bus.wait_idle()
+    mine = [s for s in status if s["node"] == "task"]
+    h.clock.t += PERIOD
+    h.d.report(mine[-1])
+    assert (mine[-1]["manager_answering"], h.last["level"]) == (True, OK)
+    manager.close()
+    task.close()

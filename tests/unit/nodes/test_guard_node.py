@@ -482,7 +482,9 @@ class WithManager(FakeRos):
         super().__init__(bus)
         self.services: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {}
 
-    def serve(self, name: str, kind: str, handler: Callable[[dict[str, Any]], dict[str, Any]]) -> None:
+    def serve(
+        self, name: str, kind: str, handler: Callable[[dict[str, Any]], dict[str, Any]], rejected: Any = None
+    ) -> None:
         self.services[name.replace("~", "/cosleec_manager")] = handler
 
     def ask(
@@ -810,3 +812,65 @@ def test_load_routes_a_key_that_is_no_topic_name_is_refused(tmp_path: Path) -> N
     p = write(tmp_path, "guards:\n  1: {to: /b, type: T, event: E}\n")
     with pytest.raises(GuardError, match=r"guards\.1: guarded topic '1' is not an absolute ROS topic name"):
         load_routes(p)
+
+
+# ----------------------------------------------------------------------------- health (issue 28, finding 12)
+
+
+def diagnosed(t: FakeRos) -> list[tuple[int, str]]:
+    """Each status the guard published, as /diagnostics would show it: (level, message)."""
+    from cosleec.ros.diagnostics import Diagnostics
+
+    out: list[tuple[int, str]] = []
+    d = Diagnostics(
+        "guard", lambda s: out.append((s["level"], s["message"])), clock=itertools.count().__next__
+    )
+    for topic, m in t.published:
+        if topic == "/cosleec/status":
+            d.report(m)
+    return out
+
+
+def test_a_guard_whose_manager_does_not_answer_reports_an_error_until_it_answers(bus: LocalBus) -> None:
+    # before: level 0, "ok", while every message was blocked and `unanswered` rose
+    node, t = guard(bus, [CMD], answer_at_once=None, timeout=0.5)
+    node.status()
+    assert "manager_answering" not in t.published[-1][1]  # not asked yet: nothing known
+    for i in range(3):
+        t.send("/planner/cmd_vel", twist(i))
+    node.status()  # the heartbeat
+    last = [m for topic, m in t.published if topic == "/cosleec/status"][-1]
+    assert last["manager_answering"] is False and last["counters"]["unanswered"] == 3
+    problem = (
+        "the Manager (/cosleec_manager/request) did not answer within 0.5 s: "
+        "every guarded message is blocked until it answers"
+    )
+    assert last["manager_problem"] == problem
+    assert diagnosed(t)[-1] == (2, problem)  # ERROR, and why
+    t.answer_at_once = PERMITTED  # the Manager is back
+    t.send("/planner/cmd_vel", twist(9))
+    bus.wait_idle()
+    last = [m for topic, m in t.published if topic == "/cosleec/status"][-1]
+    assert last["manager_answering"] is True and "manager_problem" not in last
+    assert diagnosed(t)[-1] == (0, "ok")
+
+
+def test_a_refusal_is_an_answer_the_manager_is_there(bus: LocalBus) -> None:
+    node, t = guard(bus, [CMD], answer_at_once=REFUSED)
+    t.send("/planner/cmd_vel", twist(1))
+    bus.wait_idle()
+    node.status()
+    bus.wait_idle()
+    last = [m for topic, m in t.published if topic == "/cosleec/status"][-1]
+    assert last["manager_answering"] is True and node.counters["blocked"] == 1
+    assert diagnosed(t)[-1][0] == 0
+
+
+def test_the_guard_says_at_once_when_the_manager_stops_answering(bus: LocalBus) -> None:
+    _, t = guard(bus, [CMD], answer_at_once=PERMITTED)
+    t.send("/planner/cmd_vel", twist(1))
+    t.answer_at_once = None
+    before = len([1 for topic, _ in t.published if topic == "/cosleec/status"])
+    t.send("/planner/cmd_vel", twist(2))  # no heartbeat in between: the change itself publishes
+    statuses = [m for topic, m in t.published if topic == "/cosleec/status"]
+    assert len(statuses) > before and statuses[-1]["manager_answering"] is False

@@ -391,3 +391,65 @@ events:
     assert [(m["event"], m.get("values")) for m in events] == [("Approach", {"near": True}), ("Ping", None)]
     contexts = [m for topic, m in t.published if topic.endswith("/context")]
     assert [m["values"] for m in contexts] == [{"near": True}]  # still published for everyone else
+
+
+# ---------------------------------------------------------------------- thresholds must be finite
+BIG = "1" + "0" * 400  # an integer no float can hold
+
+
+def entry_at(line: str) -> str:
+    """A measure entry in block style whose last line is ``line`` (written on line 5, from column 5)."""
+    return f"measures:\n  m:\n    topic: /t\n    type: std_msgs/Float64\n    {line}\n"
+
+
+@pytest.mark.parametrize(
+    ("line", "column", "shown"),
+    [
+        ("below: .nan", 12, "NaN"),
+        ("above: .inf", 12, "infinity"),
+        ("at_least: -.inf", 15, "-infinity"),
+        ("at_most: .NaN", 14, "NaN"),
+        ("equals: .nan", 13, "NaN"),
+        ("not_equals: +.inf", 17, "infinity"),
+        (f"below: {BIG}", 12, "an integer of 401 digits"),
+    ],
+)
+def test_a_comparison_with_nan_infinity_or_a_huge_integer_is_refused_at_its_value(
+    line: str, column: int, shown: str
+) -> None:
+    # `below: .nan` would be accepted and never hold: the event could never fire
+    got = error(entry_at(line))
+    key = line.split(":")[0]
+    assert got.startswith(f"m.yaml:5:{column}: measures.m: `{key}` must be a finite number, not {shown}"), got
+    assert "give a number such as" in got, got
+
+
+def test_a_non_finite_event_threshold_in_flow_style_points_at_the_value() -> None:
+    text = "events:\n  Near: {topic: /d, type: std_msgs/Float64, below: .nan}\n"
+    got = error(text)
+    assert got.startswith("m.yaml:2:52: events.Near: `below` must be a finite number, not NaN"), got
+
+
+@pytest.mark.parametrize(
+    ("bands", "column", "message"),
+    [
+        ("[[.nan, low], [high]]", 14, "band 1's bound must be a finite number, not NaN"),
+        ("[[0.3, low], [.inf, mid], [high]]", 26, "band 2's bound must be a finite number, not infinity"),
+        ("[[-.inf, low], [high]]", 14, "band 1's bound must be a finite number, not -infinity"),
+        (f"[[{BIG}, low], [high]]", 14, "band 1's bound must be a finite number, not an integer of 401 digits"),
+        ("[[0.7, low], [0.3, mid], [high]]", 26, "band 2's bound 0.3 must be above band 1's 0.7"),
+        ("[[0.5, low], [0.5, mid], [high]]", 26, "band 2's bound 0.5 must be above band 1's 0.5"),
+    ],
+)  # fmt: skip
+def test_a_band_bound_that_no_value_could_reach_is_refused_at_its_value(
+    bands: str, column: int, message: str
+) -> None:
+    got = error(entry_at(f"bands: {bands}"))
+    assert got.startswith(f"m.yaml:5:{column}: measures.m: {message}"), got
+
+
+def test_finite_thresholds_and_rising_bands_are_taken() -> None:
+    m = Mapping.parse(entry_at("bands: [[-1, low], [0.5, mid], [1.0e+3, high], [top]]"), "m.yaml")
+    assert m.entries[0].bands == ((-1.0, "low"), (0.5, "mid"), (1000.0, "high"), (float("inf"), "top"))
+    m = Mapping.parse(entry_at("at_least: -40"), "m.yaml")
+    assert m.entries[0].comparison == ("at_least", -40)

@@ -35,9 +35,10 @@ class Served(LocalTransport):
         super().__init__(bus)
         self.services: dict[str, tuple[str, Service]] = {}
 
-    def serve(self, name: str, kind: str, handler: Service) -> None:
+    def serve(self, name: str, kind: str, handler: Service, rejected: Any = None) -> None:
         assert name not in self.services, f"{name} served twice"
         self.services[name] = (kind, handler)
+        self.rejected = rejected  # the node's: what a transport calls with a request it cannot decode
 
     def call(self, name: str, request: dict[str, Any]) -> dict[str, Any]:
         return self.services[name][1](request)
@@ -94,7 +95,9 @@ def rules_file(tmp_path: Path) -> Path:
 
 @pytest.fixture
 def robot(bus: LocalBus, rules_file: Path) -> Iterator[Robot]:
-    r = Robot(bus, rules_file)
+    """A Manager node whose operator allowed everything: ~/decide takes values and events, and
+    ~/reload reads any file of the test's directory (the defaults are tested on their own)."""
+    r = Robot(bus, rules_file, decide="all", reload_dir=str(rules_file.parent))
     yield r
     r.node.close()
 
@@ -342,7 +345,8 @@ def test_reload_a_missing_file(robot: Robot, tmp_path: Path) -> None:
 @pytest.mark.parametrize("what", ["directory", "latin1"])
 def test_reload_an_unreadable_file(robot: Robot, tmp_path: Path, what: str) -> None:
     before = robot.node.manager.rules_hash
-    target = tmp_path
+    target = tmp_path / "rules.d"
+    target.mkdir()
     if what == "latin1":
         target = tmp_path / "latin1.sleec"
         target.write_bytes(b"\xff\xfe not text")
@@ -393,7 +397,7 @@ def test_reload_with_no_file_at_all(bus: LocalBus) -> None:
     h = r.node.manager.rules_hash
     assert r.reload() == {
         "success": False,
-        "message": "no rule file to reload: give one",
+        "message": "no rule file to reload: this Manager was started without one",
         "previous_hash": h,
         "current_hash": h,
     }

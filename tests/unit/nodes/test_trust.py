@@ -276,6 +276,51 @@ def test_a_decision_sent_twice_runs_once(bus: LocalBus) -> None:
     node.close()
 
 
+def test_each_action_of_a_decision_runs_once_whatever_parts_it_arrives_in(bus: LocalBus) -> None:
+    rules = RuleSet.from_text(
+        "def_start event X event A event B def_end rule_start R1 when X then A and B rule_end"
+    )
+    node = TaskNode(bus.transport(), rules)
+    ran: list[tuple[int, str]] = []
+    for event in ("A", "B"):
+        node.capability(event)(lambda ob, d, event=event: ran.append((d.id, event)))
+    node.start(["R1"])
+    whole = {**Manager(rules).event("X")[0].to_json(), "session": "s1"}
+    b_only = {**whole, "obligations": [o for o in whole["obligations"] if o["event"] == "B"]}
+    a_only = {**whole, "obligations": [o for o in whole["obligations"] if o["event"] == "A"]}
+    t = bus.transport()
+    # B runs while A is held; A once allowed; then the whole decision again (a restart
+    # republishing it) and a part again (re-delivered): nothing runs twice
+    for msg in (b_only, a_only, whole, b_only):
+        t.publish("/cosleec/obligations", json.dumps(msg))
+    assert bus.wait_idle()
+    wait_for(lambda: len(ran) == 2)
+    time.sleep(0.05)
+    assert ran == [(1, "B"), (1, "A")] and node.counters["duplicates"] == 2
+    node.close()
+
+
+def test_a_decision_republished_whole_after_one_part_ran_runs_only_the_rest(bus: LocalBus) -> None:
+    rules = RuleSet.from_text(
+        "def_start event X event A event B def_end rule_start R1 when X then A and B rule_end"
+    )
+    node = TaskNode(bus.transport(), rules)
+    ran: list[str] = []
+    for event in ("A", "B"):
+        node.capability(event)(lambda ob, d, event=event: ran.append(event))
+    node.start(["R1"])
+    whole = {**Manager(rules).event("X")[0].to_json(), "session": "s1"}
+    b_only = {**whole, "obligations": [o for o in whole["obligations"] if o["event"] == "B"]}
+    t = bus.transport()
+    for msg in (b_only, whole):
+        t.publish("/cosleec/obligations", json.dumps(msg))
+    assert bus.wait_idle()
+    wait_for(lambda: len(ran) == 2)
+    time.sleep(0.05)
+    assert ran == ["B", "A"] and node.counters.get("duplicates", 0) == 0
+    node.close()
+
+
 def test_seen_decisions_are_bounded_and_forgotten_ones_count_as_seen() -> None:
     seen = SeenDecisions(window=3)
     assert [seen.add("s", i) for i in (1, 2, 3, 4, 5)] == [True] * 5
