@@ -1348,9 +1348,11 @@ class Manager:
         )
         if job.record is not None and whole:
             job.record["dispatch"] = "changed"
-        if self.journal is not None and (blocked or (was_held and self.dispatch_locally)):
-            self._handed_on(job.decision.id, ids)  # in flight until _run records its outcome
-            self._keep_held(job, step)  # what was handed on is not run again after a restart
+        if self.journal is not None and (blocked or was_held):
+            self._handed_on(
+                job.decision.id, ids
+            )  # in flight until its outcome is recorded (or it is published)
+            self._keep_held(job, step)  # what was handed on is not run (or published) again after a restart
         self._emit(step, "dispatch", {"decision": part.decision.to_json()})
         return part, blocked
 
@@ -1433,14 +1435,20 @@ class Manager:
         self._cut = (tr.ended, kept)
         return kept
 
-    def _republish_part(self, rec: dict[str, Any], step: _Step) -> None:
-        """(Restore, a Manager node.) The part of a held decision that was handed on but not
-        known to be published goes into :attr:`undelivered` again -- only its actions still
-        owed, so the held ones are not published before they are allowed (task nodes run each
-        action of a decision once); it stays in the outbox until it is published."""
-        job = self._held[int(rec["decision"])]
+    def _republish_part(self, rec: dict[str, Any], held: bool, step: _Step) -> None:
+        """(Restore, a Manager node.) The part of a decision dispatched in parts that was
+        handed on but not known to be published goes into :attr:`undelivered` again -- only
+        its actions still owed, so held ones are not published before they are allowed (task
+        nodes run each action of a decision once); it stays in the outbox until published.
+        No ``dispatch`` record is made again: the one before the restart says it."""
+        decision = int(rec["decision"])
         ids = {int(i) for i in rec.get("running", ()) if isinstance(i, int)}
-        owed = [t for t in job.items if t.id in ids and t.status == PENDING and not t.prohibition]
+        items = (
+            self._held[decision].items
+            if held
+            else [t for t in self.tracker.active if t.decision_id == decision]
+        )
+        owed = [t for t in items if t.id in ids and t.status == PENDING and not t.prohibition]
         if owed:
             events = {t.event for t in owed}
             record = dict(rec["record"])
@@ -1448,8 +1456,13 @@ class Manager:
                 o for o in record.get("obligations", ()) if o.get("negated") or o.get("event") in events
             ]
             self.undelivered.append(record)
-            self._running[job.decision.id] = {t.id for t in owed}
-        self._keep_held(job, step)
+            self._running[decision] = {t.id for t in owed}
+        if held:
+            self._keep_held(self._held[decision], step)
+        elif owed:
+            step.change.outbox[decision] = {**rec, "running": sorted(self._running[decision])}
+        else:
+            step.change.outbox[decision] = None
 
     def _rehold(self, rec: dict[str, Any]) -> bool:
         """Hold again a decision the journal kept as held; False when it cannot be (its rule is gone)."""
@@ -2304,8 +2317,8 @@ class Manager:
             held = bool(rec.get("held")) and self._rehold(rec)
             if held and not rec.get("running"):
                 continue  # still waiting to be allowed: it runs (once) when it is
-            if held and not self.dispatch_locally:  # a part perhaps never published: published again
-                self._republish_part(rec, step)
+            if not self.dispatch_locally and rec.get("running") and isinstance(rec.get("record"), dict):
+                self._republish_part(rec, held, step)  # a part perhaps never published: published again
                 continue
             if not held and not self.dispatch_locally and isinstance(rec.get("record"), dict):
                 self.undelivered.append(rec["record"])  # the Manager node publishes it again

@@ -209,6 +209,17 @@ def test_a_manager_node_publishes_again_only_the_part_it_may_never_have_publishe
     m3, records3 = node_manager(31.0)
     assert [d for d in m3.undelivered if d["rule"] == "R1"] == []  # B is not published a third time
     m3.tick()
-    (rest,) = kinds(records3, "dispatch")  # A, once allowed
+    (rest,) = kinds(records3, "dispatch")  # A, once allowed; the node dies before publishing it
     assert [o["event"] for o in rest["decision"]["obligations"]] == ["A"]
     m3.close()
+    m4, records4 = node_manager(32.0)
+    again = [d for d in m4.undelivered if d["rule"] == "R1"]
+    assert [[o["event"] for o in d["obligations"]] for d in again] == [["A"]]  # published again, A only
+    m4.tick()
+    assert kinds(records4, "dispatch") == [] and kinds(records4, "task-interrupted") == []
+    m4.delivered(decision)
+    m4.tick()
+    m4.close()
+    m5, _ = node_manager(33.0)
+    assert [d for d in m5.undelivered if d["rule"] == "R1"] == []  # known published: never again
+    m5.close()
