@@ -13,12 +13,17 @@ Typical use::
     report = analyse_file("rules.sleec", Settings())
     for f in report.findings:
         print(f.diagnostic().render(report.source))
+
+A :class:`Deadline` (``analyse_file(..., deadline=Deadline.after(60))``) bounds a whole run,
+where ``Settings.timeout`` bounds one solver question: the report is then partial, and
+``FileReport.undecided`` says what was not decided.
 """
 
 from __future__ import annotations
 
 from cosleec.analysis.checks import DEFAULT_BOUND, Settings
-from cosleec.analysis.findings import BOUNDED, CHECKS, PROVED, FileReport, Finding, Witness
+from cosleec.analysis.deadline import Deadline
+from cosleec.analysis.findings import BOUNDED, CHECKS, MORE, PROVED, FileReport, Finding, Witness
 from cosleec.analysis.run import Coverage, analyse_file, analyse_spec
 from cosleec.analysis.sarif import sarif
 
@@ -26,8 +31,10 @@ __all__ = [
     "BOUNDED",
     "CHECKS",
     "DEFAULT_BOUND",
+    "MORE",
     "PROVED",
     "Coverage",
+    "Deadline",
     "FileReport",
     "Finding",
     "Settings",

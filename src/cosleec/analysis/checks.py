@@ -30,21 +30,28 @@ question; cores may name them.
 from __future__ import annotations
 
 import functools
+import itertools
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 import z3
 
 from cosleec.analysis.cores import Undecided, minimal_core
+from cosleec.analysis.deadline import Deadline
 from cosleec.analysis.encoding import After, Encoding, Reading, Slot, as_float, clause_items, fallible_events
-from cosleec.analysis.findings import BOUNDED, PROVED, Finding
+from cosleec.analysis.findings import BOUNDED, MORE, PROVED, Finding
 from cosleec.analysis.witness import reads as _reads
 from cosleec.analysis.witness import show, smallest, snapshot, then, witness
 from cosleec.lang import CANCEL, HedgeSemantics, Severity, Specification, closure, pairs, visit
 from cosleec.lang import ast as A
 from cosleec.semantics import Options
+
+T = TypeVar("T")
+
+LISTED = 10_000
+"""Undecided subjects a report lists per check (then :data:`MORE`)."""
 
 DEFAULT_BOUND = 6
 """Slots per event the unfolding may create before it stops (``--bound``)."""
@@ -91,6 +98,8 @@ class Analysis:
     situational_seconds: float = 0.0  # the part of runtime_conflicts spent on situations
     # one z3 context per file and check: terms built elsewhere cannot change this one's answers
     ctx: z3.Context = field(default_factory=z3.Context)
+    deadline: Deadline | None = None  # the whole run's (--deadline): OutOfTime once it passes
+    _at: tuple[str, Any, Iterator[Any], Callable[[Any], str]] | None = None  # walk()'s position
 
     def __post_init__(self) -> None:
         self.above = frozenset(closure([*self.settings.priorities, *pairs(self.spec)]))
@@ -123,7 +132,7 @@ class Analysis:
         """The shared encoding whose probe is an occurrence of ``event`` (built once per bound)."""
         enc = self._by_event.get((event, bound))
         if enc is None:
-            enc = self._new(bound)
+            enc = self.new_encoding(bound)
             enc.probe(event)
             for s in (*self.spec.concerns, *self.spec.purposes):
                 if s.trigger.event == event and s.meanwhile is None:
@@ -136,7 +145,9 @@ class Analysis:
             self._by_event[(event, bound)] = enc
         return enc, enc.slots[0]
 
-    def _new(self, bound: int | None = None) -> Encoding:
+    def new_encoding(self, bound: int | None = None) -> Encoding:
+        """An empty encoding of these rules in this check's context, with the run's limits
+        (``bound``: slots per event, by default the settings')."""
         return Encoding(
             self.spec,
             self.constants,
@@ -144,7 +155,31 @@ class Analysis:
             self.settings.bound if bound is None else bound,
             timeout_ms=int(self.settings.timeout * 1000),
             ctx=self.ctx,
+            deadline=self.deadline,
         )
+
+    def walk(self, check: str, items: Iterable[T], name: Callable[[T], str]) -> Iterator[T]:
+        """``items`` (the subjects of ``check``) in turn, remembering which is being decided:
+        when the deadline stops the check, :meth:`not_decided` names it and those after it.
+        ``items`` may be lazy (the pairs of clauses that can clash are as many as clauses
+        squared): it is read no further than the walk goes."""
+        rest = iter(items)
+        for item in rest:
+            self._at = (check, item, rest, name)
+            yield item
+        self._at = None
+
+    def not_decided(self) -> tuple[str, list[str]] | None:
+        """The check the deadline stopped and its subjects left undecided -- the one being
+        decided, then those after it, at most :data:`LISTED` (then :data:`MORE`) -- or None
+        when no check was under way."""
+        if self._at is None:
+            return None
+        check, item, rest, name = self._at
+        names = [name(item), *(name(x) for x in itertools.islice(rest, LISTED - 1))]
+        if next(rest, None) is not None:
+            names.append(MORE)
+        return check, names
 
     def deepen(
         self, make: Callable[[int], tuple[Encoding, Any]], without: str | None, what: str
@@ -245,7 +280,7 @@ class Analysis:
     def vacuous_conflicts(self) -> None:
         """Rules whose trigger can never occur while every rule holds."""
         possible: set[str] = set()  # rules a trace already showed triggered with every rule met
-        for rule in self.spec.rules:
+        for rule in self.walk("vacuous-conflict", self.spec.rules, _named):
             if rule.name in possible:
                 continue
 
@@ -315,7 +350,7 @@ class Analysis:
     def redundancies(self) -> None:
         """Rules the other rules already imply (a dead rule, already reported, is not repeated)."""
         dead = {f.subject for f in self.findings if f.code == "dead-rule"}
-        for rule in self.spec.rules:
+        for rule in self.walk("redundant", self.spec.rules, _named):
             if rule.name in dead:
                 continue
 
@@ -359,7 +394,7 @@ class Analysis:
     def situations(self, kind: str) -> None:
         """Concerns the rules allow (``concern``) and purposes they block (``purpose``)."""
         items = self.spec.concerns if kind == "concern" else self.spec.purposes
-        for s in items:
+        for s in self.walk("concern-raised" if kind == "concern" else "purpose-blocked", items, _named):
             asked = self.deepen(functools.partial(self._situation, s), None, f"{kind} {s.name}")
             if asked is None:
                 continue
@@ -408,7 +443,7 @@ class Analysis:
         if s.meanwhile is None:
             enc, x = self.encoding(s.trigger.event, bound)
         else:
-            enc = self._new(bound)
+            enc = self.new_encoding(bound)
             chain: list[tuple[A.Situation, Slot]] = []
             cur: A.Situation | None = s
             while cur is not None:
@@ -450,7 +485,7 @@ class Analysis:
         """Clauses that can owe and forbid an event in overlapping windows (and, with
         ``situational``, the situations where that leaves a trigger unanswerable)."""
         above = self.above
-        for ro, ko, io, rp, kp, ip in self.clashes():
+        for ro, ko, io, rp, kp, ip in self.walk("runtime-conflict", self.clashes(), _pair):
             if (ro.name, rp.name) in above or (rp.name, ro.name) in above:
                 continue  # a declared priority settles it
             found = list(self._clash(ro, ko, io, rp, kp, ip))
@@ -503,7 +538,7 @@ class Analysis:
         for one in [True, False] if shared else [False]:
             if one and ro is rp and ko != kp:
                 continue  # two clauses of one rule never apply to one occurrence
-            enc = self._new(min(2, self.settings.bound))  # the two triggers, and what relations need
+            enc = self.new_encoding(min(2, self.settings.bound))  # the two triggers, and what relations need
             xo = enc.probe(ro.trigger.event, "obligation")
             xp = xo if one else enc.probe(rp.trigger.event, "prohibition")
             enc.unfold()
@@ -598,7 +633,7 @@ class Analysis:
         """At ``bound``: the pinned history is allowed and the later trigger then cannot be
         answered -> (encoding, the trigger's slot, goal, candidates, a model of the history);
         None when not; ``"unknown"`` when the solver ran out of time."""
-        fixed = self._new(bound)
+        fixed = self.new_encoding(bound)
         pinned: dict[int, Slot] = {}
         for n, x in enumerate(probes):
             pinned[x.id] = fixed.probe(x.event) if n + 1 < len(probes) else fixed.free(x.event)
@@ -717,6 +752,14 @@ def _overlap(j: Any, event: str, owing: str, banning: str) -> bool:
                 if olo <= (inf if phi is None else phi) and plo <= (inf if ohi is None else ohi):
                     return True
     return False
+
+
+def _named(x: A.Rule | A.Situation) -> str:
+    return x.name
+
+
+def _pair(clash: tuple[A.Rule, int, A.ResponseItem, A.Rule, int, A.ResponseItem]) -> str:
+    return f"{_clause(clash[0].name, clash[1])}/{_clause(clash[3].name, clash[4])}"
 
 
 def _clause(rule: str, k: int) -> str:

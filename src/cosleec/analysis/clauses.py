@@ -16,16 +16,14 @@ from cosleec.analysis.checks import Analysis
 from cosleec.analysis.encoding import Encoding, Slot
 from cosleec.analysis.findings import PROVED, Finding
 from cosleec.analysis.witness import reads, show, snapshot, witness
-from cosleec.lang import HedgeSemantics, Severity
+from cosleec.lang import HedgeSemantics, Severity, choose
 from cosleec.lang import ast as A
 from cosleec.semantics import Judgement
 
 
 def _probe(a: Analysis, rule: A.Rule) -> tuple[Encoding, Slot, list[Any]]:
     """A one-occurrence encoding of ``rule``'s trigger, and what always holds of it."""
-    enc = Encoding(
-        a.spec, a.constants, a.settings.reading, 1, timeout_ms=int(a.settings.timeout * 1000), ctx=a.ctx
-    )
+    enc = a.new_encoding(1)
     x = enc.probe(rule.trigger.event)
     enc.unfold(children=False)
     return enc, x, [enc.fires(rule, x), enc.assumptions(x.snap), *enc.relation_lit]
@@ -37,18 +35,17 @@ def _values(enc: Encoding, model: Any, x: Slot, rule: A.Rule) -> str:
 
 
 def unselectable(a: Analysis) -> None:
-    """Clauses (the default response included) that no values let apply."""
+    """Clauses (the default response included) that no values let apply: one question per
+    clause, asked in turn (:meth:`Encoding.each_clause`, linear in the clauses)."""
     sem = a.settings.semantics
-    for rule in a.spec.rules:
+    for rule in a.walk("unselectable-clause", a.spec.rules, _named):
         ds = rule.response.defeaters
         if not ds:
             continue
         enc, x, base = _probe(a, rule)
         if a.solve(enc, base, f"clauses of {rule.name}") != z3.sat:
             continue  # the trigger condition itself never holds: every clause would be reported
-        for k, cond in enumerate(enc.chosen(ds, x.snap)):
-            if a.solve(enc, [*base, cond], f"clause {k} of {rule.name}") != z3.unsat:
-                continue
+        for k in _never_selected(a, enc, x, base, rule):
             span = rule.response.span if k == 0 else ds[k - 1].span
             what = "the default response" if k == 0 else f"clause {rule.name}.{k} (unless #{k})"
             a.findings.append(
@@ -67,22 +64,50 @@ def unselectable(a: Analysis) -> None:
             )
 
 
+def _never_selected(a: Analysis, enc: Encoding, x: Slot, base: list[Any], rule: A.Rule) -> list[int]:
+    """The clauses of ``rule`` (0: the default) that no values of ``x`` let apply."""
+    never: list[int] = []
+
+    def ask(k: int, applies: Any) -> None:
+        if a.solve(enc, [*base, applies], f"clause {k} of {rule.name}") == z3.unsat:
+            never.append(k)
+
+    enc.each_clause(rule.response.defeaters, x.snap, ask)
+    return sorted(never)
+
+
 def semantics_differ(a: Analysis) -> None:
-    """Rules where last-wins and nested choose different clauses, with such a situation."""
+    """Rules where last-wins and nested choose different clauses, with such a situation.
+
+    They choose alike exactly when the conditions that hold are a prefix of the clauses
+    (1..p), that is when no condition fails right before one that holds: so one question
+    per neighbouring pair, each over two conditions -- linear in the clauses, where one
+    question over every pair of choices was quadratic in size and, for z3, worse in time."""
     sem = a.settings.semantics  # the witness is judged under it
-    for rule in a.spec.rules:
+    for rule in a.walk("semantics-differ", a.spec.rules, _named):
         ds = rule.response.defeaters
         if len(ds) < 2:
             continue
         enc, x, base = _probe(a, rule)
-        lw = enc.chosen(ds, x.snap, HedgeSemantics.LAST_WINS)
-        ne = enc.chosen(ds, x.snap, HedgeSemantics.NESTED)
-        differ = z3.Or(*(z3.And(lw[i], z3.Not(ne[i])) for i in range(len(lw))))
-        if a.solve(enc, [*base, differ], f"semantics of {rule.name}") != z3.sat:
+        c = [enc.truth(d.condition, x.snap) for d in ds]
+        answer, gave_up = z3.unsat, 0
+        for i in range(len(c) - 1):
+            answer = enc.check([*base, z3.Not(c[i]), c[i + 1]])
+            if answer == z3.sat:
+                break
+            gave_up += answer == z3.unknown
+        if answer != z3.sat:
+            if gave_up:  # said once per rule, not once per pair
+                a.unknown.append(
+                    f"semantics of {rule.name}: the solver gave up on {gave_up} of {len(c) - 1} questions "
+                    f"({enc.solver.reason_unknown()})"
+                )
             continue
         model = enc.solver.model()
-        pick_lw = next(i for i, c in enumerate(lw) if z3.is_true(model.eval(c, model_completion=True)))
-        pick_ne = next(i for i, c in enumerate(ne) if z3.is_true(model.eval(c, model_completion=True)))
+        held = [z3.is_true(model.eval(ci, model_completion=True)) for ci in c]
+        pick_lw = choose(held, HedgeSemantics.LAST_WINS)
+        pick_ne = choose(held, HedgeSemantics.NESTED)
+        assert pick_lw is not None and pick_ne is not None  # every value is known in a model
         situation = _values(enc, model, x, rule)
         a.findings.append(
             Finding(
@@ -111,6 +136,10 @@ def semantics_differ(a: Analysis) -> None:
         )
 
 
+def _named(rule: A.Rule) -> str:
+    return rule.name
+
+
 def _picked(j: Judgement, clause: int) -> bool:
     return any(f.fired and f.clause == clause for f in j.firings)
 
@@ -121,7 +150,7 @@ def _name(rule: str, k: int) -> str:
 
 def negative_deadlines(a: Analysis) -> None:
     """Deadlines computed from measures that some values make negative (or end before they start)."""
-    for rule in a.spec.rules:
+    for rule in a.walk("negative-deadline", a.spec.rules, _named):
         for clause, depth, it in _items(rule.response, 0, 0):
             lim = it.occurrence.limit
             measures = {m.name for m in a.spec.measures}

@@ -53,7 +53,8 @@ from typing import Any
 
 import z3
 
-from cosleec.lang import HedgeSemantics, Specification
+from cosleec.analysis.deadline import Deadline, OutOfTime, question_ms
+from cosleec.lang import HedgeSemantics, Specification, visit
 from cosleec.lang import ast as A
 
 Z3 = Any  # z3's Python API is untyped
@@ -133,6 +134,7 @@ class Encoding:
         *,
         timeout_ms: int = 0,
         ctx: z3.Context | None = None,
+        deadline: Deadline | None = None,
     ) -> None:
         self.ctx = ctx if ctx is not None else z3.Context()
         self.spec = spec
@@ -142,6 +144,8 @@ class Encoding:
         self.measures = {m.name: m.type for m in spec.measures}
         self.solver = z3.Solver(ctx=self.ctx)
         self.solver.set("random_seed", 0)
+        self.timeout_ms = timeout_ms
+        self.deadline = deadline  # the whole run's (--deadline): checked while building and asking
         if timeout_ms:
             self.solver.set("timeout", timeout_ms)
         self.slots: list[Slot] = []
@@ -165,6 +169,8 @@ class Encoding:
         self._ids = itertools.count()
         self._fresh = itertools.count()
         self._unfolded = False
+        self._choices: dict[tuple[int, int, HedgeSemantics], tuple[object, object, list[Z3]]] = {}
+        self._truths: dict[tuple[int, int], tuple[object, object, Z3]] = {}
 
     # ------------------------------------------------------------------ slots
     def _slot(self, event: str, depth: int, why: str) -> Slot:
@@ -237,6 +243,7 @@ class Encoding:
         for s, extra in self._extra:
             queue.extend((s, e, why) for e, why in extra)
         while queue:
+            self._on_time()
             parent, event, why = queue.popleft()
             if len(self.by_event.get(event, ())) >= self.bound:
                 self.complete = False
@@ -249,6 +256,7 @@ class Encoding:
         self._register_bans()
         for s in self.slots:
             for r in self.rules_by_event.get(s.event, ()):
+                self._on_time()
                 self.solver.add(z3.Implies(self.rule_lit[r.name], self.rule_holds(r, s)))
         for lit, rel in zip(self.relation_lit, self.spec.relations):
             self.solver.add(z3.Implies(lit, self._relation(rel)))
@@ -278,9 +286,17 @@ class Encoding:
 
     # ------------------------------------------------------------------ expressions
     def truth(self, e: A.Expr | None, snap: dict[str, Z3]) -> Z3:
-        """The condition ``e`` on a snapshot (None: true)."""
+        """The condition ``e`` on a snapshot (None: true); built once per condition and
+        snapshot (a question asks a trigger's condition several times)."""
         if e is None:
             return z3.BoolVal(True, self.ctx)
+        key = (id(e), id(snap))
+        known = self._truths.get(key)
+        if known is None:
+            known = self._truths[key] = (e, snap, self._truth(e, snap))  # the keys' objects kept alive
+        return known[2]
+
+    def _truth(self, e: A.Expr, snap: dict[str, Z3]) -> Z3:
         if isinstance(e, A.BoolLit):
             return z3.BoolVal(e.value, self.ctx)
         if isinstance(e, A.Name):
@@ -288,8 +304,10 @@ class Encoding:
         if isinstance(e, A.Not):
             return z3.Not(self.truth(e.operand, snap))
         if isinstance(e, A.BinOp) and e.op in ("and", "or"):
-            a, b = self.truth(e.left, snap), self.truth(e.right, snap)
-            return z3.And(a, b) if e.op == "and" else z3.Or(a, b)
+            # a chain read as one n-ary term, without recursion: a generated condition of
+            # 50,000 terms is as deep (issue 28), and so would the z3 term be
+            parts = [self.truth(t, snap) for t in visit.terms(e)]
+            return z3.And(*parts) if e.op == "and" else z3.Or(*parts)
         if isinstance(e, A.Compare):
             if self._boolean(e.left) or self._boolean(e.right):
                 a, b = self.truth(e.left, snap), self.truth(e.right, snap)
@@ -347,18 +365,68 @@ class Encoding:
         self, defeaters: Sequence[A.Defeater], snap: dict[str, Z3], semantics: HedgeSemantics | None = None
     ) -> list[Z3]:
         """For each clause (0: the default), the condition under which it applies (under
-        ``semantics``, by default the reading's)."""
+        ``semantics``, by default the reading's); built once per clause list and snapshot.
+
+        Linear in the clauses (issue 28): what clause ``i`` needs besides its own condition --
+        that no later condition holds (last-wins), or that every earlier one does (nested) --
+        is one literal per clause, defined from its neighbour's (:meth:`_chain`), where
+        spelling each out made the choice among ``k`` clauses ``k**2`` terms."""
+        sem = semantics or self.reading.semantics
+        key = (id(defeaters), id(snap), sem)
+        known = self._choices.get(key)
+        if known is not None:
+            return known[2]
         c = [self.truth(d.condition, snap) for d in defeaters]
         k = len(c)
-        if (semantics or self.reading.semantics) == HedgeSemantics.LAST_WINS:
-            out = [z3.And(*(z3.Not(x) for x in c), self.ctx)] if c else [z3.BoolVal(True, self.ctx)]
-            out += [z3.And(c[i], *(z3.Not(x) for x in c[i + 1 :])) for i in range(k)]
-            return out
-        out = [z3.Not(c[0])] if c else [z3.BoolVal(True, self.ctx)]
-        for i in range(k):
-            rest = [z3.Not(c[i + 1])] if i + 1 < k else []
-            out.append(z3.And(*c[: i + 1], *rest, self.ctx))
+        if sem == HedgeSemantics.LAST_WINS:
+            none_from = self._chain([z3.Not(x) for x in c], "none")  # no condition i.. holds
+            out = [none_from[0]] + [z3.And(c[i], none_from[i + 1]) for i in range(k)]
+        else:
+            every = self._chain(c[::-1], "all")[::-1]  # every[i]: conditions 0..i-1 all hold
+            out = [z3.Not(c[0])] if c else [z3.BoolVal(True, self.ctx)]
+            out += [z3.And(every[i + 1], z3.Not(c[i + 1])) if i + 1 < k else every[k] for i in range(k)]
+        self._choices[key] = (defeaters, snap, out)  # the keys' objects kept alive: ids stay theirs
         return out
+
+    def _chain(self, parts: list[Z3], name: str) -> list[Z3]:
+        """``v`` with ``v[i]`` equivalent to ``And(parts[i:])`` (``v[len(parts)]`` true): each a
+        fresh literal defined as its part and the next one, so the chain is linear in size and
+        one level deep in z3 whatever its length."""
+        v = [z3.BoolVal(True, self.ctx)]
+        for p in reversed(parts):
+            self._on_time()
+            lit = z3.Bool(f"{name}!{next(self._fresh)}", self.ctx)
+            self.solver.add(lit == z3.And(p, v[-1]))
+            v.append(lit)
+        return v[::-1]
+
+    def each_clause(
+        self, defeaters: Sequence[A.Defeater], snap: dict[str, Z3], ask: Callable[[int, Z3], None]
+    ) -> None:
+        """``ask(k, applies)`` for every clause ``k`` (0: the default), where ``applies`` is,
+        while ``ask`` runs, what it takes for clause ``k`` to apply on ``snap`` under the
+        reading's semantics. One question per clause in linear time (issue 28): what the
+        other clauses must not do is asserted as the walk goes, in a solver scope closed
+        after -- from the last clause back under last-wins (its condition does not hold),
+        from the first on under nested (it does) -- rather than spelled out per question.
+        ``ask`` asks and builds nothing that adds to the solver (:meth:`chosen` does): what it
+        added would go with the scope."""
+        c = [self.truth(d.condition, snap) for d in defeaters]
+        true = z3.BoolVal(True, self.ctx)
+        self.solver.push()
+        try:
+            if self.reading.semantics == HedgeSemantics.LAST_WINS:
+                for k in range(len(c), -1, -1):
+                    ask(k, c[k - 1] if k else true)
+                    if k:
+                        self.solver.add(z3.Not(c[k - 1]))
+            else:
+                for k in range(len(c) + 1):
+                    ask(k, z3.Not(c[k]) if k < len(c) else true)
+                    if k < len(c):
+                        self.solver.add(c[k])
+        finally:
+            self.solver.pop()
 
     def chosen_at(self, response: A.Response, clause: int, snap: dict[str, Z3]) -> Z3:
         """Clause ``clause`` of ``response`` applies on ``snap``."""
@@ -434,6 +502,7 @@ class Encoding:
         conds = self.chosen(resp.defeaters, snap)
         parts = []
         for sub, cond in zip([A.Response(resp.items), *(d.response for d in resp.defeaters)], conds):
+            self._on_time()  # a rule of thousands of clauses takes seconds to encode
             with self._within(cond):
                 parts.append(z3.Implies(cond, self._response(sub, start, after, snap, untimed)))
         return z3.And(*parts, self.ctx)
@@ -598,6 +667,7 @@ class Encoding:
         """The prohibitions each slot's rules can raise (a clause's own items), for refusals."""
         for x in self.slots:
             for r in self.rules_by_event.get(x.event, ()):
+                self._on_time()
                 for k, it in clause_items(r.response):
                     occ = it.occurrence
                     if not occ.negated:
@@ -792,7 +862,19 @@ class Encoding:
     def check(self, assumptions: Sequence[Z3]) -> z3.CheckSatResult:
         """Solve under ``assumptions`` (rule and relation literals, goal literals)."""
         assert self._unfolded, "unfold() first"
-        return self.solver.check(*assumptions)
+        if self.deadline is None:
+            return self.solver.check(*assumptions)
+        self.deadline.check()
+        self.solver.set("timeout", question_ms(self.timeout_ms, self.deadline))
+        answer = self.solver.check(*assumptions)
+        if answer == z3.unknown and self.deadline.passed():
+            raise OutOfTime  # the deadline, not the question's own limit, cut it short
+        return answer
+
+    def _on_time(self) -> None:
+        """Stop building once the run's deadline has passed (:class:`OutOfTime`)."""
+        if self.deadline is not None:
+            self.deadline.check()
 
     def fresh(self, name: str) -> Z3:
         """A new assumption literal."""

@@ -18,6 +18,8 @@ from cosleec.semantics import Step
 
 PROVED = "proved"
 BOUNDED = "bounded"
+MORE = "..."
+"""The last subject of a :attr:`FileReport.undecided` list that does not list them all."""
 
 CHECKS: dict[str, str] = {
     "vacuous-conflict": "a rule whose trigger can never occur without some rule being broken (N-Check)",
@@ -145,8 +147,17 @@ class FileReport:
     unknown: list[str] = field(default_factory=list)
     seconds: dict[str, float] = field(default_factory=dict)  # per check
     diagnostics: list[Diagnostic] = field(default_factory=list)  # the file's own (from check)
+    # what the run's deadline (--deadline) left open: by check, the subjects not decided,
+    # or None for a check that did not run (a file not even read: every check None)
+    undecided: dict[str, list[str] | None] = field(default_factory=dict)
 
     @property
     def failed(self) -> bool:
         """The file could not be analysed (it has errors)."""
         return any(d.is_error for d in self.diagnostics)
+
+    @property
+    def complete(self) -> bool:
+        """Every selected check ran to the end (False: the deadline cut the run short, and
+        :attr:`undecided` says where)."""
+        return not self.undecided

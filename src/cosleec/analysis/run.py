@@ -14,8 +14,9 @@ from pathlib import Path
 
 from cosleec.analysis import clauses
 from cosleec.analysis.checks import Analysis, Settings
+from cosleec.analysis.deadline import Deadline, OutOfTime
 from cosleec.analysis.findings import CHECKS, PROVED, FileReport, Finding
-from cosleec.lang import Severity, Specification, visit
+from cosleec.lang import Severity, Specification, deeply, visit
 from cosleec.lang import analyse_file as check_file
 from cosleec.lang import ast as A
 
@@ -46,32 +47,65 @@ def analyse_spec(
     checks: Iterable[str] = CHECKS,
     coverage: Coverage | None = None,
     seconds: dict[str, float] | None = None,
+    *,
+    deadline: Deadline | None = None,
+    undecided: dict[str, list[str] | None] | None = None,
 ) -> tuple[list[Finding], list[str]]:
     """The findings of ``checks`` on a checked ``spec`` (in a stable order), and the questions
-    the solver could not settle."""
+    the solver could not settle.
+
+    Once ``deadline`` passes, the check under way stops and the later ones do not run; what
+    they leave open is put in ``undecided``: by check, the subjects (rules, clauses, pairs,
+    situations) not decided, or None for a check that did not run at all. The findings made
+    before are kept: each is as proved as it would have been.
+    """
     wanted = set(checks)
-    a = Analysis(spec, constants, settings)
-    times = seconds if seconds is not None else {}
-    steps: list[tuple[str, Callable[[], None]]] = [
-        ("vacuous-conflict", a.vacuous_conflicts),
-        ("redundant", a.redundancies),
-        ("concern-raised", lambda: a.situations("concern")),
-        ("purpose-blocked", lambda: a.situations("purpose")),
-        ("unselectable-clause", lambda: clauses.unselectable(a)),
-        ("semantics-differ", lambda: clauses.semantics_differ(a)),
-        ("negative-deadline", lambda: clauses.negative_deadlines(a)),
-    ]
-    for code, step in steps:
-        if code in wanted or (code == "vacuous-conflict" and "dead-rule" in wanted):
-            if code in WITNESSED:  # a check that shows traces or values starts afresh
+
+    def attempt() -> tuple[list[Finding], list[str], dict[str, float], dict[str, list[str] | None]]:
+        times: dict[str, float] = {}
+        left: dict[str, list[str] | None] = {}
+        findings, unknown = _analyse(spec, constants, settings, wanted, coverage, times, left, deadline)
+        return findings, unknown, times, left
+
+    # the encoding recurses once per level of an expression (but along an and/or chain), as
+    # the checker's passes do: an expression `cosleec check` accepts is analysed in a deep thread
+    findings, unknown, times, left = deeply(attempt)
+    if seconds is not None:
+        seconds.update(times)
+    if undecided is not None:
+        undecided.update(left)
+    return findings, unknown
+
+
+def _analyse(
+    spec: Specification,
+    constants: dict[str, int],
+    settings: Settings,
+    wanted: set[str],
+    coverage: Coverage | None,
+    times: dict[str, float],
+    left: dict[str, list[str] | None],
+    deadline: Deadline | None,
+) -> tuple[list[Finding], list[str]]:
+    """:func:`analyse_spec`, once."""
+    a = Analysis(spec, constants, settings, deadline=deadline)
+    plan = [(code, step) for code, step in _steps(a, wanted) if wanted & ANSWERS[code]]
+    for n, (code, step) in enumerate(plan):
+        try:
+            if code in WITNESSED or code == "runtime-conflict":  # a check that shows traces starts afresh
                 a.fresh_context()
             _timed(step, times, code)
-    if wanted & {"runtime-conflict", "situational-conflict"}:
-        a.fresh_context()
-        _timed(lambda: a.runtime_conflicts("situational-conflict" in wanted), times, "runtime-conflict")
+        except OutOfTime:
+            stopped = a.not_decided()
+            for answered in _in_order(wanted & ANSWERS[code]):
+                left[answered] = stopped[1] if stopped is not None else None
+            for later, _ in plan[n + 1 :]:
+                left.update(dict.fromkeys(_in_order(wanted & ANSWERS[later])))
+            break
+    if "runtime-conflict" in times:
         times["runtime-conflict"] -= a.situational_seconds
         times["situational-conflict"] = times.get("situational-conflict", 0.0) + a.situational_seconds
-    if coverage is not None and wanted & {"unimplemented-clause", "unproduced-input"}:
+    if coverage is not None and wanted & {"unimplemented-clause", "unproduced-input"}:  # no solver: always
         _timed(lambda: a.findings.extend(_coverage(spec, coverage, wanted)), times, "coverage")
     order = {c: i for i, c in enumerate(CHECKS)}
     kept = [f for f in a.findings if f.code in wanted]  # a question can answer several checks
@@ -86,6 +120,34 @@ def analyse_spec(
     return findings, a.unknown
 
 
+ANSWERS: dict[str, frozenset[str]] = {
+    "vacuous-conflict": frozenset({"vacuous-conflict", "dead-rule"}),
+    "redundant": frozenset({"redundant"}),
+    "concern-raised": frozenset({"concern-raised"}),
+    "purpose-blocked": frozenset({"purpose-blocked"}),
+    "unselectable-clause": frozenset({"unselectable-clause"}),
+    "semantics-differ": frozenset({"semantics-differ"}),
+    "negative-deadline": frozenset({"negative-deadline"}),
+    "runtime-conflict": frozenset({"runtime-conflict", "situational-conflict"}),
+}
+"""The checks each step of the analysis answers (the vacuous-conflict questions find dead
+rules too; the runtime conflicts are where situational conflicts are looked for)."""
+
+
+def _steps(a: Analysis, wanted: set[str]) -> list[tuple[str, Callable[[], None]]]:
+    """Every step of the analysis, in the order they run (see :data:`ANSWERS`)."""
+    return [
+        ("vacuous-conflict", a.vacuous_conflicts),
+        ("redundant", a.redundancies),
+        ("concern-raised", lambda: a.situations("concern")),
+        ("purpose-blocked", lambda: a.situations("purpose")),
+        ("unselectable-clause", lambda: clauses.unselectable(a)),
+        ("semantics-differ", lambda: clauses.semantics_differ(a)),
+        ("negative-deadline", lambda: clauses.negative_deadlines(a)),
+        ("runtime-conflict", lambda: a.runtime_conflicts("situational-conflict" in wanted)),
+    ]
+
+
 def analyse_file(
     path: str | Path,
     settings: Settings,
@@ -94,24 +156,43 @@ def analyse_file(
     legos_compat: bool = False,
     infer_defs: bool = False,
     coverage: Coverage | None = None,
+    deadline: Deadline | None = None,
 ) -> FileReport:
-    """Check, then analyse, one rule file."""
+    """Check, then analyse, one rule file; once ``deadline`` passes, the report is partial
+    (:attr:`FileReport.undecided` names what is left), and a file whose turn comes after it
+    is not even read."""
     t0 = time.perf_counter()
+    wanted = list(checks)
+    if deadline is not None and deadline.passed():
+        return FileReport(path=str(path), source="", undecided=dict.fromkeys(_in_order(set(wanted))))
     result = check_file(path, legos_compat=legos_compat, infer_defs=infer_defs)
     report = FileReport(path=str(path), source=result.source, diagnostics=list(result.diagnostics))
     if not result.ok or result.spec is None or result.symbols is None:
         return report
     report.findings, report.unknown = analyse_spec(
-        result.spec, dict(result.symbols.constant_values), settings, checks, coverage, report.seconds
+        result.spec,
+        dict(result.symbols.constant_values),
+        settings,
+        wanted,
+        coverage,
+        report.seconds,
+        deadline=deadline,
+        undecided=report.undecided,
     )
     report.seconds["total"] = time.perf_counter() - t0
     return report
 
 
+def _in_order(codes: set[str]) -> list[str]:
+    return [c for c in CHECKS if c in codes]
+
+
 def _timed(fn: Callable[[], None], seconds: dict[str, float], key: str) -> None:
     t0 = time.perf_counter()
-    fn()
-    seconds[key] = seconds.get(key, 0.0) + time.perf_counter() - t0
+    try:
+        fn()
+    finally:  # a step the deadline stopped took its time too
+        seconds[key] = seconds.get(key, 0.0) + time.perf_counter() - t0
 
 
 def _coverage(spec: Specification, cov: Coverage, wanted: set[str]) -> list[Finding]:

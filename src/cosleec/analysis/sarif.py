@@ -2,7 +2,8 @@
 
 One run, tool ``cosleec analyse`` with one rule per check; one result per finding with its
 location (file, line, column), the rules involved as related locations, the proof status
-and witness in ``properties``. A file with errors becomes a notification, not a result.
+and witness in ``properties``. A file with errors becomes a notification, not a result; so
+does each check the deadline cut short, and the run is then not ``executionSuccessful``.
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ def sarif(reports: Iterable[FileReport], checks: Iterable[str] = CHECKS) -> dict
     codes = list(CHECKS)
     results: list[dict[str, Any]] = []
     notes: list[dict[str, Any]] = []
+    reports = list(reports)
+    complete = all(r.complete for r in reports)  # False: a partial run (--deadline)
     for r in reports:
         uri = Path(r.path).as_posix()
         if r.failed:
@@ -36,6 +39,15 @@ def sarif(reports: Iterable[FileReport], checks: Iterable[str] = CHECKS) -> dict
                             "locations": [_location(uri, d.span)],
                         }
                     )
+        for code, subjects in r.undecided.items():  # the deadline cut the run short
+            left = "not run" if subjects is None else f"not decided for {', '.join(subjects)}"
+            notes.append(
+                {
+                    "level": "warning",
+                    "message": {"text": f"{code}: {left} (the deadline passed)"},
+                    "locations": [_location(uri, A.NO_SPAN)],
+                }
+            )
         for f in r.findings:
             results.append(_result(uri, f, codes))
     return {
@@ -53,7 +65,7 @@ def sarif(reports: Iterable[FileReport], checks: Iterable[str] = CHECKS) -> dict
                         ],
                     }
                 },
-                "invocations": [{"executionSuccessful": True, "toolExecutionNotifications": notes}],
+                "invocations": [{"executionSuccessful": complete, "toolExecutionNotifications": notes}],
                 "results": results,
             }
         ],

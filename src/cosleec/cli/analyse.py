@@ -1,7 +1,10 @@
 """``cosleec analyse``: conflicting, redundant and dead rules, found before the robot runs them.
 
-Exit codes: 0 nothing found, 1 something found (or a file has errors), 2 a usage or input
-error. Text output is compiler style (file:line:col, the line with a caret, notes at the
+Exit codes: 0 nothing found, 1 something found, 2 a usage or input error (a file with errors
+among them), 3 nothing found but the analysis is partial: ``--deadline`` passed before every
+check had decided every rule (what was not decided is listed; 1 wins over 3, a finding is
+proved whether or not the run finished). ``--timeout`` bounds each solver question,
+``--deadline`` the whole run. Text output is compiler style (file:line:col, the line with a caret, notes at the
 rules involved, a hint), then whether the finding is proved or holds up to a bound, and the
 witness as a timeline; ``--json`` prints one document; ``--sarif FILE`` writes SARIF 2.1.0;
 ``--witnesses DIR`` writes each witness as a trace ``cosleec conforms`` reads.
@@ -22,13 +25,25 @@ from types import ModuleType
 
 from rich.text import Text
 
-from cosleec.analysis import CHECKS, DEFAULT_BOUND, Coverage, FileReport, Settings, analyse_file, sarif
+from cosleec.analysis import (
+    CHECKS,
+    DEFAULT_BOUND,
+    MORE,
+    Coverage,
+    Deadline,
+    FileReport,
+    Settings,
+    analyse_file,
+    sarif,
+)
 from cosleec.cli.common import add_clause_options, add_priority_options, console, expand, input_file
 from cosleec.errors import UserError
 from cosleec.lang import HedgeSemantics, SleecError, cycle, load, parse_priority
 from cosleec.lang import analyse_file as check_file
 
 USAGE_ERROR = 2
+PARTIAL = 3
+"""Nothing found, but the deadline passed before the analysis was complete."""
 STYLE = {"error": "bold red", "warning": "yellow", "note": "cyan"}
 LEGOS_DEFECTS = frozenset({"scale-literal", "duplicate-rule", "duplicate-name"})
 """Errors of files LEGOS accepts: ``--legos-compat`` reads them as LEGOS does."""
@@ -41,7 +56,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         aliases=["analyze"],
         help="find conflicting, redundant and dead rules (z3), with minimal causes and witnesses",
         description="Analyse rule sets with z3 on the reference semantics. Exit 0: nothing found; 1: "
-        "something found; 2: a usage or input error. Checks: "
+        "something found; 2: a usage or input error; 3: nothing found, but --deadline passed before "
+        "the analysis was complete (what was not decided is listed). Checks: "
         + "; ".join(f"{k}: {v}" for k, v in CHECKS.items()),
     )
     p.add_argument(
@@ -68,7 +84,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         type=_seconds,
         default=5.0,
         metavar="S",
-        help="seconds each solver question may take (default 5); unanswered ones are listed",
+        help="seconds each solver question may take (default 5); unanswered ones are listed. "
+        "--deadline bounds the whole run",
+    )
+    p.add_argument(
+        "--deadline",
+        type=_seconds,
+        default=None,
+        metavar="S",
+        help="seconds the whole run may take, every file and check (default: no limit); when it passes, "
+        "the findings so far are printed with what was not decided, and the exit code is 3 if "
+        "nothing was found",
     )
     p.add_argument(
         "--untimed",
@@ -182,13 +208,14 @@ def run(args: argparse.Namespace) -> int:
         priority_semantics=args.priority_semantics,
     )
     reports = []
+    deadline = Deadline.after(args.deadline) if args.deadline is not None else None
     try:
         for f in files:
             coverage = _coverage(args, f)
             reports.append(
                 analyse_file(
                     f, settings, checks, legos_compat=args.legos_compat, infer_defs=args.infer_defs,
-                    coverage=coverage,
+                    coverage=coverage, deadline=deadline,
                 )
             )  # fmt: skip
         if args.witnesses:
@@ -212,7 +239,9 @@ def run(args: argparse.Namespace) -> int:
         _text(reports)
     if any(r.failed for r in reports):
         return USAGE_ERROR  # a rule file that cannot be analysed is an input error
-    return 1 if any(r.findings for r in reports) else 0
+    if any(r.findings for r in reports):
+        return 1
+    return PARTIAL if any(not r.complete for r in reports) else 0
 
 
 def _unknown_rules(given: list[tuple[str, str]], files: list[Path], legos_compat: bool) -> str:
@@ -327,6 +356,8 @@ def _json(reports: list[FileReport]) -> dict[str, object]:
                 "diagnostics": [d.to_json() for d in r.diagnostics if d.is_error],
                 "findings": [f.to_json() for f in r.findings],
                 "unknown": r.unknown,
+                "complete": r.complete,
+                "undecided": r.undecided,
                 "seconds": {k: round(v, 4) for k, v in r.seconds.items()},
             }
             for r in reports
@@ -367,6 +398,30 @@ def _text(reports: list[FileReport]) -> None:
         for u in r.unknown:
             label = "note" if "left to the declared priority" in u else "undecided"
             out.print(Text.assemble(f"{r.path}: ", (label, "yellow"), f": {u}"))
+        for line in _not_decided(r):
+            out.print(Text.assemble(f"{r.path}: ", ("undecided", "yellow"), f": {line}"))
         n = len(r.findings)
         summary = "no findings" if n == 0 else f"{n} finding{'s' if n != 1 else ''}"
-        out.print(Text(f"{r.path}: {summary} ({r.seconds.get('total', 0.0):.2f} s)"))
+        partial = "" if r.complete else ", partial: the deadline passed"
+        out.print(Text(f"{r.path}: {summary}{partial} ({r.seconds.get('total', 0.0):.2f} s)"))
+
+
+def _not_decided(r: FileReport, shown: int = 5) -> list[str]:
+    """What the deadline left open in ``r``, one line per check that began, one for the rest."""
+    lines = []
+    for code, subjects in r.undecided.items():
+        if subjects is not None:
+            listed = [x for x in subjects if x != MORE]
+            more = (
+                f" and {len(listed) - shown}{'+' if MORE in subjects else ''} more"
+                if len(listed) > shown
+                else ""
+            )
+            lines.append(
+                f"{code}: the deadline passed before {', '.join(listed[:shown])}{more} could be decided"
+            )
+    skipped = [code for code, subjects in r.undecided.items() if subjects is None]
+    if skipped:
+        what = "the file was not read" if not r.source else "not run"
+        lines.append(f"{', '.join(skipped)}: {what}, the deadline had passed")
+    return lines

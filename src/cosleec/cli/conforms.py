@@ -53,6 +53,8 @@ STYLE = {
     "warning": "yellow",
 }
 IMMEDIATE_S = 1.0
+PRINTED_AT_ONCE = 1000
+"""Lines of text output handed to rich together (one call a line is three times slower)."""
 """``untimed="immediate"``: the deadline the Manager gives an untimed response (its tolerance)."""
 
 
@@ -314,36 +316,39 @@ def _priorities_of(
 
 
 def _print(j: Judgement, chosen: _Chosen, recording: Recording) -> None:
-    out = console()
+    lines: list[Text] = []
     if chosen.said:
         line = recording.options.line if recording.options is not None else 0
-        out.print(_line("options", f"from the audit log (line {line}): {', '.join(chosen.said)}"))
+        lines.append(_line("options", f"from the audit log (line {line}): {', '.join(chosen.said)}"))
     for text in chosen.warnings:
-        out.print(_line("warning", text))
+        lines.append(_line("warning", text))
     for text in chosen.notes:
-        out.print(_line("note", text))
+        lines.append(_line("note", text))
     cancelled = [v for v in j.verdicts if v.status == "cancelled"]
     for v in j.breaches:
-        out.print(
+        lines.append(
             _line(
                 v.status, f"{_who(v)} at {_s(v.at if v.at is not None else j.end)} s: {_item(v)} -- {_why(v)}"
             )
         )
     for c in j.conflicts:
-        out.print(_line("conflict", _conflict(c)))
+        lines.append(_line("conflict", _conflict(c)))
     for v in cancelled:
         at = f" at {_s(v.at)} s" if v.at is not None else ""
         by = f" by {v.by}'s priority" if v.by else " by priority"
-        out.print(_line("cancelled", f"{_who(v)}{at}: {_item(v)} -- cancelled{by}"))
+        lines.append(_line("cancelled", f"{_who(v)}{at}: {_item(v)} -- cancelled{by}"))
     for v in j.pending:
-        out.print(_line("pending", f"{_who(v)}: {_item(v)} -- {_open(v)}"))
+        lines.append(_line("pending", f"{_who(v)}: {_item(v)} -- {_open(v)}"))
     for f in j.firings:
         if f.clause is None and f.missing:
             needs = ", ".join(f.missing)
-            out.print(_line("undecided", f"{f.rule} at {_s(f.time)} s: {f.event} -- no value for {needs}"))
+            lines.append(_line("undecided", f"{f.rule} at {_s(f.time)} s: {f.event} -- no value for {needs}"))
     for what in j.undetermined:
-        out.print(_line("undecided", clip(what, 300)))
-    out.print(Text(_summary(j, len(cancelled))))
+        lines.append(_line("undecided", clip(what, 300)))
+    lines.append(Text(_summary(j, len(cancelled))))
+    out = console()
+    for n in range(0, len(lines), PRINTED_AT_ONCE):  # in batches: a print a line took 3x as long
+        out.print(Text("\n").join(lines[n : n + PRINTED_AT_ONCE]))
 
 
 def _line(word: str, rest: str) -> Text:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from cosleec.errors import UserError
 from cosleec.runtime import RuleSet
-from cosleec.views import FORMATS, analysed_conflicts, build, render, to_dot, to_mermaid
+from cosleec.views import FORMATS, analysed_conflicts, build, check_drawable, render, to_dot, to_mermaid
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -64,8 +64,9 @@ def run(args: argparse.Namespace) -> int:
                 f"no rule {name!r} in {args.rules}",
                 hint=f"did you mean {close[0]!r}?" if close else f"rules: {', '.join(names)}",
             )
+    check_drawable(rules, args.rule or ())  # before the analysis: a picture too large is said at once
     conflicts = analysed_conflicts(args.rules) if args.analyse else None
-    graph = build(rules, args.rule or (), conflicts)
+    graph = build(rules, args.rule or (), conflicts, fmt=fmt)
     if fmt == "mmd":
         data = to_mermaid(graph).encode()
     else:

@@ -121,14 +121,32 @@ def event_references(spec: A.Specification) -> Iterator[tuple[str, A.Span]]:
 
 
 def names(e: A.Expr | None) -> Iterator[A.Name]:
-    """Every name an expression mentions (measures, constants, scale literals), in order."""
-    if isinstance(e, A.Name):
-        yield e
-    elif isinstance(e, A.Not):
-        yield from names(e.operand)
-    elif isinstance(e, A.BinOp | A.Compare):
-        yield from names(e.left)
-        yield from names(e.right)
+    """Every name an expression mentions (measures, constants, scale literals), in order.
+
+    Without recursion: a generated ``a and b and ...`` of 50,000 terms is as deep, and
+    nested generators would take time quadratic in it (issue 28)."""
+    todo = [e]
+    while todo:
+        x = todo.pop()
+        if isinstance(x, A.Name):
+            yield x
+        elif isinstance(x, A.Not):
+            todo.append(x.operand)
+        elif isinstance(x, A.BinOp | A.Compare):
+            todo += (x.right, x.left)  # the left first
+
+
+def terms(e: A.BinOp) -> Iterator[A.Expr]:
+    """The terms of the chain of ``e.op`` that ``e`` heads, left to right, without recursion:
+    ``a and b and c``, ``(a and b) and c`` and ``a and (b and c)`` alike give a, b, c. For
+    reading a chain of ``and`` or ``or`` as one n-ary operator however long it is."""
+    todo: list[A.Expr] = [e]
+    while todo:
+        x = todo.pop()
+        if isinstance(x, A.BinOp) and x.op == e.op:
+            todo += (x.right, x.left)
+        else:
+            yield x
 
 
 def rule_expressions(rule: A.Rule) -> Iterator[A.Expr]:

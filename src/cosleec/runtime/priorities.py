@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import difflib
 import math
-from collections.abc import Iterable, Iterator
+from collections.abc import Container, Iterable, Iterator
 from dataclasses import dataclass
 
 from cosleec.errors import show
@@ -187,13 +187,19 @@ class PossibleConflict:
         return f"{self.obliges} obliges {self.event}, {self.forbids} forbids it"
 
 
-def possible_conflicts(ruleset: RuleSet, priorities: Priorities) -> list[PossibleConflict]:
+def possible_conflicts(
+    ruleset: RuleSet, priorities: Priorities, *, among: Container[str] | None = None, limit: int | None = None
+) -> list[PossibleConflict]:
     """Every pair of response items that oblige and forbid the same event, across rules that
-    no declared priority orders (within one rule, across its clauses and fallbacks)."""
+    no declared priority orders (within one rule, across its clauses and fallbacks); only
+    between rules named in ``among`` when given, and at most ``limit`` pairs (there can be
+    as many as rules squared: ``cosleec graph`` of part of 100,000 rules asks for few)."""
     owed: dict[str, list[tuple[str, str]]] = {}
     forbidden: dict[str, list[tuple[str, str]]] = {}
     order: dict[str, None] = {}  # events in the order items first name them (warnings list so)
     for rule in ruleset.rules:
+        if among is not None and rule.name not in among:
+            continue
         for spec in rule.responses():
             for it in spec.walk():
                 if "/e" not in it.key:  # an `else` alternative is accepted, never enacted or enforced
@@ -209,4 +215,6 @@ def possible_conflicts(ruleset: RuleSet, priorities: Priorities) -> list[Possibl
             for r2, k2 in against:
                 if priorities.between(r1, r2) is None:
                     out.append(PossibleConflict(event, k1, k2, (r1, r2)))
+                    if limit is not None and len(out) >= limit:
+                        return out
     return out

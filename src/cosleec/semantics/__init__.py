@@ -1,8 +1,9 @@
 """The reference semantics of SLEEC: what a rule set requires of a timed trace.
 
-Small and slow on purpose: written from the language reference, sharing no code with
-:mod:`cosleec.runtime`, it is the oracle the runtime is tested against and what
-``cosleec conforms`` judges recorded runs with. Depends on :mod:`cosleec.lang` only.
+Small and simple rather than fast (though linear in a trace's length): written from the
+language reference, sharing no code with :mod:`cosleec.runtime`, it is the oracle the
+runtime is tested against and what ``cosleec conforms`` judges recorded runs with. Depends
+on :mod:`cosleec.lang` only.
 """
 
 from __future__ import annotations

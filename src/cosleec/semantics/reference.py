@@ -1,9 +1,11 @@
 """The reference semantics: a rule set's verdicts on a finite timed trace.
 
 Written straight from the language reference (``docs/reference/sleec-language.md`` §6, §7, §10, §13),
-sharing no code with :mod:`cosleec.runtime`, and slow on purpose: every step scans every
-obligation. It is the oracle the runtime is tested against and what ``cosleec conforms``
-runs. The conventions, each a decision of the reference:
+sharing no code with :mod:`cosleec.runtime`, and simple rather than fast: a step looks at
+every obligation it can settle, one by one (:mod:`cosleec.semantics.inforce` finds them by
+event, instance and deadline, so that a long trace costs time linear in its length: issue
+28). It is the oracle the runtime is tested against and what ``cosleec conforms`` runs.
+The conventions, each a decision of the reference:
 
 Time and order
     Times are seconds. Steps are taken in trace order; steps at the same time are in
@@ -71,7 +73,7 @@ from __future__ import annotations
 import itertools
 import operator
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 from cosleec.lang import (
@@ -81,9 +83,12 @@ from cosleec.lang import (
     HedgeSemantics,
     Specification,
     closure,
+    deeply,
     pairs,
+    visit,
 )
 from cosleec.lang import ast as A
+from cosleec.semantics.inforce import InForce, Item
 from cosleec.semantics.trace import Step, Value
 from cosleec.semantics.verdicts import (
     CANCELLED,
@@ -131,7 +136,10 @@ def judge(spec: Specification, trace: Iterable[Step], options: Options = Options
     """
     if options.priority_semantics not in PRIORITY_SEMANTICS:
         raise ValueError(f"priority_semantics must be one of {PRIORITY_SEMANTICS}")
-    return _Judge(spec, options).run(list(trace))
+    steps = list(trace)
+    # evaluation recurses once per level of an expression (but along an and/or chain), as
+    # the checker's passes do: an expression `cosleec check` accepts is judged in a deep thread
+    return deeply(lambda: _Judge(spec, options).run(steps))
 
 
 # ---------------------------------------------------------------------------- expressions
@@ -159,14 +167,17 @@ class _Eval:
             x = self.truth(e.operand, values)
             return None if x is None else not x
         if isinstance(e, A.BinOp) and e.op in ("and", "or"):
-            a, b = self.truth(e.left, values), self.truth(e.right, values)
-            if e.op == "and":
-                if a is False or b is False:
-                    return False
-                return None if a is None or b is None else True
-            if a is True or b is True:
-                return True
-            return None if a is None or b is None else False
+            # a chain `a and b and ...` read as one n-ary operator, without recursion: a
+            # generated condition of 50,000 terms is as deep (issue 28). Kleene: a false
+            # term decides `and`, a true one `or`; else an unknown term makes it unknown.
+            decides = e.op == "or"
+            unknown = False
+            for term in visit.terms(e):
+                x = self.truth(term, values)
+                if x is decides:
+                    return decides
+                unknown = unknown or x is None
+            return None if unknown else not decides
         try:
             return bool(self.value(e, values))
         except _Unknown:
@@ -231,15 +242,7 @@ class _Eval:
 
     def reads(self, e: A.Expr | None) -> set[str]:
         """The measures ``e`` reads."""
-        if e is None:
-            return set()
-        if isinstance(e, A.Name):
-            return {e.name} if e.name in self.measures else set()
-        if isinstance(e, A.Not):
-            return self.reads(e.operand)
-        if isinstance(e, A.BinOp | A.Compare):
-            return self.reads(e.left) | self.reads(e.right)
-        return set()
+        return {n.name for n in visit.names(e) if n.name in self.measures}
 
 
 def choose(values: Sequence[bool | None], semantics: HedgeSemantics) -> int | None:
@@ -262,25 +265,6 @@ def choose(values: Sequence[bool | None], semantics: HedgeSemantics) -> int | No
 
 
 # ---------------------------------------------------------------------------- the judge
-@dataclass(eq=False)
-class _Item:
-    """An obligation or prohibition in force: its verdict plus what the judge needs."""
-
-    v: Verdict
-    created: int  # causal position: occurrences after it count
-    otherwise: A.Response | None
-    branches: list[list[tuple[str, float, float | None]]] = field(default_factory=list)
-    met: list[set[int]] = field(default_factory=list)
-
-    @property
-    def deadline(self) -> float | None:
-        """When the item is judged if nothing settles it first (None: never)."""
-        his: list[float | None] = [self.v.window[1]]
-        for b in self.branches:
-            his += [hi for _, _, hi in b]
-        return None if any(h is None for h in his) else max(h for h in his if h is not None)
-
-
 class _Undetermined(Exception):
     def __init__(self, missing: set[str]) -> None:
         self.missing = missing
@@ -292,10 +276,17 @@ class _Judge:
         self.options = options
         self.eval = _Eval(spec)
         self.rules = {r.name: r for r in spec.rules}
+        self.triggered: dict[str, list[A.Rule]] = {}  # event -> the rules it triggers, in file order
+        for r in spec.rules:
+            self.triggered.setdefault(r.trigger.event, []).append(r)
         self.above = closure([*options.priorities, *pairs(spec)])
-        self.live: list[_Item] = []  # the items that were pending when last looked at, and newer ones
+        self.related: dict[str, list[str]] = {}  # rule -> the rules a priority orders it with
+        for high, low in sorted(self.above):
+            self.related.setdefault(high, []).append(low)
+            self.related.setdefault(low, []).append(high)
+        self.live = InForce()  # the items in force, indexed (each step touches only its own)
         self.values: dict[str, Value] = {}
-        self.items: list[_Item] = []
+        self.items: list[Item] = []
         self.seq = 0
         self.ids = itertools.count(1)
         self.instances = itertools.count(1)
@@ -321,11 +312,6 @@ class _Judge:
         self.out.verdicts = [i.v for i in self.items]
         return self.out
 
-    def pending(self) -> list[_Item]:
-        """The items still in force, oldest first (the list of live items is pruned as it goes)."""
-        self.live = [i for i in self.live if i.v.status == PENDING]
-        return list(self.live)
-
     # -------------------------------------------------------------- time passing
     def advance(self, now: float) -> None:
         """Everything that happens at times up to ``now`` before the step at ``now``, earliest
@@ -333,18 +319,17 @@ class _Judge:
         instant), and windows closing at times < now -- every window that ends at the same
         instant closes together, then the ``otherwise`` of each miss starts, in order."""
         while True:
-            ends = [d for i in self.pending() if (d := i.deadline) is not None and d < now]
-            first = min(ends) if ends else None
+            first = self.live.next_deadline(now)
             cuts = sorted((at, victim.v.id, victim, by) for at, victim, by in self.forced() if at <= now)
             if cuts and (first is None or cuts[0][0] <= first):
                 at, _, victim, by = cuts[0]
                 self.cancel(victim.v.instance, at, by)
             elif first is not None:
-                self.close([i for i in self.pending() if i.deadline == first], first)
+                self.close(self.live.due(first), first)
             else:
                 return
 
-    def close(self, items: list[_Item], d: float) -> None:
+    def close(self, items: list[Item], d: float) -> None:
         """The windows of ``items`` ended at ``d`` and time has passed it."""
         missed = []
         for item in items:
@@ -360,19 +345,26 @@ class _Judge:
                 v = item.v
                 self.start(item.otherwise, d, self.seq, v.instance, v.rule, v.clause, v.depth + 1)
 
-    def forced(self) -> list[tuple[float, _Item, str]]:
+    def forced(self) -> list[tuple[float, Item, str]]:
         """Conflict-aware: (time, an item of the lower instance, the higher rule) for every
         obligation whose deadline finds it forbidden by a prioritised rule's prohibition."""
         if self.options.priority_semantics != CONFLICT_AWARE or not self.above:
             return []
         out = []
-        live = self.pending()
-        for o in live:
+        for event in self.live.events():  # an obligation and a prohibition of one event in force
+            out += self.forced_on(event)
+        return out
+
+    def forced_on(self, event: str) -> list[tuple[float, Item, str]]:
+        """:meth:`forced` for the obligations and prohibitions of ``event``."""
+        out = []
+        bans = self.live.of_event(event, True)
+        for o in self.live.of_event(event, False):
             d = o.v.window[1]
-            if o.v.negated or d is None or o.branches:
+            if d is None or o.branches:
                 continue
-            for p in live:
-                if not p.v.negated or p.v.event != o.v.event or p.v.instance == o.v.instance:
+            for p in bans:
+                if p.v.instance == o.v.instance:
                     continue
                 lo, hi = p.v.window
                 if not (lo <= d and (hi is None or d <= hi)):
@@ -385,16 +377,15 @@ class _Judge:
         return out
 
     def cancel(self, instance: int, at: float, by: str) -> None:
-        for i in self.pending():
-            if i.v.instance == instance:
-                i.v.status, i.v.at, i.v.by = CANCELLED, at, by
+        for i in self.live.of_instance(instance):
+            i.v.status, i.v.at, i.v.by = CANCELLED, at, by
 
     # -------------------------------------------------------------- occurrences
     def occur(self, step: int, now: float, event: str) -> None:
         self.seq += 1
         seq = self.seq
         broken = []
-        for item in self.pending():
+        for item in self.live.touched_by(event):  # the others: nothing an occurrence of it changes
             if item.created >= seq:
                 continue
             v = item.v
@@ -419,9 +410,8 @@ class _Judge:
             v = item.v
             if item.otherwise is not None:
                 self.start(item.otherwise, now, seq, v.instance, v.rule, v.clause, v.depth + 1)
-        for rule in self.spec.rules:
-            if rule.trigger.event == event:
-                self.fire(step, now, seq, rule)
+        for rule in self.triggered.get(event, ()):  # in file order
+            self.fire(step, now, seq, rule)
 
     def fire(self, step: int, now: float, seq: int, rule: A.Rule) -> None:
         fired = self.eval.truth(rule.trigger.condition, self.values)
@@ -473,7 +463,7 @@ class _Judge:
             return
         self.add(planned, now, seq, instance, rule, clause, depth)
 
-    def plan(self, response: A.Response | None, key: str, now: float) -> list[tuple[str, _Item]]:
+    def plan(self, response: A.Response | None, key: str, now: float) -> list[tuple[str, Item]]:
         """The items ``response`` imposes when it starts at ``now`` (inner clauses chosen now).
 
         ``key`` is the runtime's name for the response (``R1``, ``R1.2``); an ``otherwise``
@@ -509,7 +499,7 @@ class _Judge:
                 id=0, instance=0, rule="", clause=0, key=k, event=occ.event, negated=occ.negated,
                 start=now, window=(lo, hi),
             )  # fmt: skip
-            out.append((k, _Item(verdict, 0, it.otherwise, branches, [set() for _ in branches])))
+            out.append((k, Item(verdict, 0, it.otherwise, branches, [set() for _ in branches])))
         return out
 
     def branch(
@@ -557,7 +547,7 @@ class _Judge:
 
     def add(
         self,
-        planned: list[tuple[str, _Item]],
+        planned: list[tuple[str, Item]],
         now: float,
         seq: int,
         instance: int,
@@ -573,7 +563,7 @@ class _Judge:
             )  # fmt: skip
             item.created = seq
             self.items.append(item)
-            self.live.append(item)
+            self.live.add(item)
             fresh.append(item)
         for item in fresh:  # a window that ends before it starts is already closed
             hi = item.deadline
@@ -592,11 +582,14 @@ class _Judge:
                 self.conflicts(item, now, seq)
 
     def prioritise(self, instance: int, rule: str, now: float) -> None:
-        """Cancellation-based priority: a new instance meets every active one."""
-        active = {i.v.instance for i in self.pending()}
-        if instance not in active:
-            return  # it imposes nothing: it is not active
-        for other in sorted(active - {instance}):
+        """Cancellation-based priority: a new instance meets every active one (of a rule a
+        priority orders it with: the others it leaves alone)."""
+        related = self.related.get(rule)
+        if not related or not self.live.of_instance(instance):
+            return  # no priority orders it with another rule, or it imposes nothing (not active)
+        for other in self.live.active(related):
+            if other == instance:
+                continue
             orule = self.instance_rule[other]
             if (rule, orule) in self.above:
                 self.settled(instance, other, now, rule)
@@ -608,7 +601,7 @@ class _Judge:
 
     def settled(self, a: int, b: int, now: float, winner: str) -> None:
         """Record the conflicts a cancellation settles: the clashes between instances ``a`` and ``b``."""
-        both = [i for i in self.pending() if i.v.instance in (a, b)]
+        both = sorted([*self.live.of_instance(a), *self.live.of_instance(b)], key=lambda i: i.v.id)
         for o in both:
             for p in both:
                 if (
@@ -631,18 +624,17 @@ class _Judge:
                         )
                     )
 
-    def conflicts(self, item: _Item, now: float, seq: int) -> None:
+    def conflicts(self, item: Item, now: float, seq: int) -> None:
         """A new item against those in force: an obligation whose whole window is forbidden."""
         if item.v.negated:
-            for o in self.pending():
-                if not o.v.negated and o.v.event == item.v.event and o is not item:
-                    self.clash(o, item, now, seq)
+            for o in self.live.of_event(item.v.event, False):
+                self.clash(o, item, now, seq)
         else:
-            for p in self.pending():
-                if p.v.negated and p.v.event == item.v.event and item.v.status == PENDING:
+            for p in self.live.of_event(item.v.event, True):
+                if item.v.status == PENDING:
                     self.clash(item, p, now, seq)
 
-    def clash(self, o: _Item, p: _Item, now: float, seq: int) -> None:
+    def clash(self, o: Item, p: Item, now: float, seq: int) -> None:
         if o.v.status != PENDING or not _covers(o, p, now):
             return  # some instant of the obligation's window is allowed: the robot can wait
         pair = (o.v.rule, p.v.rule)
@@ -667,7 +659,7 @@ class _Judge:
             self.start(o.otherwise, now, seq, o.v.instance, o.v.rule, o.v.clause, o.v.depth + 1)
 
 
-def _covers(o: _Item, p: _Item, now: float) -> bool:
+def _covers(o: Item, p: Item, now: float) -> bool:
     """Does prohibition ``p`` forbid every instant left of obligation ``o``'s window?"""
     if o.branches:
         return False  # an `else` alternative may still meet it

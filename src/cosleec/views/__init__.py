@@ -4,7 +4,16 @@
 ``lang``, ``runtime``, ``analysis`` and ``nodes`` (an MCAP recording's reader); nothing
 below imports it."""
 
-from cosleec.views.graph import FORMATS, RuleGraph, analysed_conflicts, build, render, to_dot, to_mermaid
+from cosleec.views.graph import (
+    FORMATS,
+    RuleGraph,
+    analysed_conflicts,
+    build,
+    check_drawable,
+    render,
+    to_dot,
+    to_mermaid,
+)
 from cosleec.views.timeline import Timeline
 from cosleec.views.timeline_layout import TIMELINE_FORMATS, Layout, layout
 from cosleec.views.timeline_marks import Band, Bar, Link, Marker, MarkerKind, Outcome, Series
@@ -26,6 +35,7 @@ __all__ = [
     "Timeline",
     "analysed_conflicts",
     "build",
+    "check_drawable",
     "layout",
     "render",
     "timeline_html",

@@ -16,16 +16,18 @@ canonical printer's), shortened past :data:`LABEL_WIDTH` characters a line.
 
 from __future__ import annotations
 
+import functools
 import json
 import shutil
 import subprocess
 import textwrap
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import NoReturn
 
-from cosleec.analysis import Settings, analyse_file
+from cosleec.analysis import Deadline, Settings, analyse_file
 from cosleec.errors import UserError
-from cosleec.lang import Printer, pairs, visit
+from cosleec.lang import Printer, deeply, pairs, visit
 from cosleec.lang import ast as A
 from cosleec.runtime import Priorities, RuleSet, possible_conflicts
 
@@ -36,6 +38,15 @@ MAX_LINES = 6
 """Lines a label keeps; the rest is cut, marked with an ellipsis."""
 
 FORMATS = ("svg", "png", "dot", "mmd")
+
+MAX_RULES = 5_000
+"""Rules one picture draws (``--rule`` picks some of a larger file). Past that nobody reads
+it, and the possible conflicts to draw can grow with the rules squared (issue 28)."""
+
+MAX_SIZE = {"svg": 10_000, "png": 10_000, "dot": 100_000, "mmd": 100_000}
+"""Boxes and arrows one picture holds, by format. Graphviz's layout grows faster than the
+picture (measured by ``benchmarks/scale_limits.py``: 4,600 boxes and arrows in 3 s, 9,800
+in 18 s, 14,400 in 74 s); DOT and Mermaid text is written in time linear in it."""
 
 
 @dataclass(frozen=True)
@@ -73,19 +84,38 @@ def _wrap(text: str) -> tuple[str, ...]:
     return tuple(lines)
 
 
+def check_drawable(rules: RuleSet, only: Sequence[str] = ()) -> None:
+    """UserError when the picture of ``rules`` (or of those named in ``only``) would draw
+    more than :data:`MAX_RULES` rules: said before anything is built or analysed."""
+    count = len(set(only)) if only else len(rules.rules)
+    if count > MAX_RULES:
+        raise UserError(
+            f"{count:,} rules are more than one picture draws (at most {MAX_RULES:,})",
+            where=rules.spec.path,
+            hint="draw some of them: --rule R (repeatable) draws R with the events and measures it touches",
+        )
+
+
 def build(
-    rules: RuleSet, only: Sequence[str] = (), conflicts: Iterable[tuple[str, str, str]] | None = None
+    rules: RuleSet,
+    only: Sequence[str] = (),
+    conflicts: Iterable[tuple[str, str, str]] | None = None,
+    *,
+    fmt: str = "dot",
 ) -> RuleGraph:
     """The picture of ``rules`` (every rule, or those named in ``only``, with what they touch).
 
     ``conflicts`` are the red edges, ``(rule, rule, label)``: by default the quick pairwise
     check the Manager warns with at start (a response obliges an event another forbids, no
     priority between them); :func:`analysed_conflicts` gives those ``cosleec analyse``
-    finds, proved or up to its bound."""
+    finds, proved or up to its bound. UserError when the picture is larger than ``fmt``
+    can hold (:data:`MAX_RULES`, :data:`MAX_SIZE`), naming the limit and the way out."""
+    check_drawable(rules, only)
     spec = rules.spec
     printer = Printer(spec, A.Dialect.TK)
     measures = {m.name: m for m in spec.measures}
-    chosen = [r for r in rules.rules if not only or r.name in only]
+    wanted = set(only)
+    chosen = [r for r in rules.rules if not only or r.name in wanted]
     clusters: list[tuple[str, tuple[Box, ...]]] = []
     edges: list[Edge] = []
     used_events: dict[str, None] = {}
@@ -109,48 +139,94 @@ def build(
 
     for r in chosen:
         ast = r.ast
-        head, _ = printer.response_parts(A.Response(ast.response.items, ()))
-        trigger = printer.trigger(ast.trigger)
+        trigger, head, layers = deeply(functools.partial(_texts, printer, ast))
         base = Box(r.name, (r.name, *_wrap(f"when {trigger}"), *_wrap(f"then {head}")), "rule")
         boxes = [base]
         used_events[ast.trigger.event] = None
         edges.append(Edge(f"e:{ast.trigger.event}", r.name, "triggers"))
         reads(ast.trigger.condition, r.name)
         obliges(ast.response, r.name, inner=False)
-        for clause, d in zip(r.clauses, ast.response.defeaters):
-            text = printer.defeater(d)
+        for clause, d, text in zip(r.clauses, ast.response.defeaters, layers):
             boxes.append(Box(clause.layer, (f"layer {clause.layer}", *_wrap(text)), "layer"))
             edges.append(Edge(r.name, clause.layer, "layer"))
             reads(d.condition, clause.layer)
             obliges(d.response, clause.layer, inner=True)
         clusters.append((r.name, tuple(boxes)))
-    names = {r.name for r in chosen}
-    prio = Priorities.build((r.name for r in rules.rules), pairs(spec))
-    for high, low in prio.declared:
-        if high in names and low in names:
-            edges.append(Edge(high, low, "priority", "over"))
-    if conflicts is None:
-        conflicts = [(*c.rules, c.event) for c in possible_conflicts(rules, prio)]
+    limit = MAX_SIZE.get(fmt, MAX_SIZE["dot"])
+    edges += _between(rules, [r.name for r in chosen], conflicts, fmt, limit)
+    shared = [Box(f"e:{e}", (e,), "event") for e in used_events]
+    for m in used_measures:  # `measure m : type` without the keyword
+        shared.append(Box(f"m:{m}", (printer.definition(measures[m]).removeprefix("measure "),), "measure"))
+    size = sum(len(boxes) for _, boxes in clusters) + len(shared) + len(edges)
+    if size > limit:
+        _too_big(f"{size:,} boxes and arrows for the {len(chosen):,} rules", spec, fmt, limit)
+    return RuleGraph(tuple(clusters), tuple(shared), tuple(edges))
+
+
+def _between(
+    rules: RuleSet, drawn: list[str], conflicts: Iterable[tuple[str, str, str]] | None, fmt: str, limit: int
+) -> list[Edge]:
+    """The edges between the rules ``drawn``: declared priorities, then ``conflicts`` (by
+    default the quick pairwise check among them, refused past ``limit``)."""
+    names = set(drawn)
+    prio = Priorities.build((r.name for r in rules.rules), pairs(rules.spec))
+    edges = [Edge(h, low, "priority", "over") for h, low in prio.declared if h in names and low in names]
+    if conflicts is None:  # among the rules drawn only, and no more than the picture can hold
+        found = possible_conflicts(rules, prio, among=names, limit=limit + 1)
+        if len(found) > limit:
+            what = f"more than {limit:,} possible conflicts between the {len(drawn):,} rules"
+            _too_big(what, rules.spec, fmt, limit)
+        conflicts = [(*c.rules, c.event) for c in found]
     seen: set[tuple[str, str, str]] = set()
     for a, b, label in conflicts:
         if a in names and b in names and a != b and (a, b, label) not in seen:
             seen.add((a, b, label))
             edges.append(Edge(a, b, "conflict", label))
-    shared = [Box(f"e:{e}", (e,), "event") for e in used_events]
-    for m in used_measures:  # `measure m : type` without the keyword
-        shared.append(Box(f"m:{m}", (printer.definition(measures[m]).removeprefix("measure "),), "measure"))
-    return RuleGraph(tuple(clusters), tuple(shared), tuple(edges))
+    return edges
+
+
+def _too_big(what: str, spec: A.Specification, fmt: str, limit: int) -> NoReturn:
+    """Refuse a picture larger than ``fmt`` holds, with the limit and the way out."""
+    raise UserError(
+        f"the picture would need {what}: more than a picture in {fmt.upper()} holds "
+        f"(at most {limit:,} boxes and arrows)",
+        where=spec.path,
+        hint="draw fewer rules with --rule R (repeatable), or declare priorities between the rules"
+        + ("" if fmt in ("dot", "mmd") else f"; DOT or Mermaid text holds up to {MAX_SIZE['dot']:,}"),
+    )
+
+
+def _texts(printer: Printer, ast: A.Rule) -> tuple[str, str, list[str]]:
+    """A rule's trigger, default response and clauses as the printer writes them (the
+    printer recurses once per level of an expression: :func:`deeply` runs this)."""
+    head, _ = printer.response_parts(A.Response(ast.response.items, ()))
+    return printer.trigger(ast.trigger), head, [printer.defeater(d) for d in ast.response.defeaters]
 
 
 CONFLICT_CHECKS = ("runtime-conflict", "situational-conflict", "vacuous-conflict")
 """The ``cosleec analyse`` checks whose findings :func:`analysed_conflicts` draws."""
 
 
-def analysed_conflicts(path: str, settings: Settings | None = None) -> list[tuple[str, str, str]]:
+ANALYSIS_S = 60.0
+"""Seconds :func:`analysed_conflicts` gives ``cosleec analyse`` (its ``--deadline``)."""
+
+
+def analysed_conflicts(
+    path: str, settings: Settings | None = None, seconds: float = ANALYSIS_S
+) -> list[tuple[str, str, str]]:
     """The conflicts ``cosleec analyse`` finds in the rule file ``path`` (z3; seconds per
     file), as red edges: each pair of rules a finding involves, labelled with its check and
-    proof (``runtime-conflict, proved``)."""
-    report = analyse_file(path, settings or Settings(), CONFLICT_CHECKS)
+    proof (``runtime-conflict, proved``). UserError when the analysis does not finish
+    within ``seconds``: a picture missing conflicts would say there are none."""
+    report = analyse_file(path, settings or Settings(), CONFLICT_CHECKS, deadline=Deadline.after(seconds))
+    if not report.complete:
+        raise UserError(
+            f"cosleec analyse did not finish within {seconds:g} s, so the conflicts it proves cannot all be "
+            "drawn",
+            where=path,
+            hint="draw without --analyse (the quick pairwise check), or draw fewer rules in a file of their "
+            "own; `cosleec analyse --deadline S FILE` shows how far it gets",
+        )
     out = []
     for f in report.findings:
         involved = [r for r in f.rules if not r.startswith("relation ")]

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pytest
 
+from cosleec.errors import UserError
 from cosleec.runtime import RuleSet
 from cosleec.testing.corpus import corpus_dir
 from cosleec.views import RuleGraph, build, render, to_dot, to_mermaid
@@ -160,3 +161,65 @@ def test_with_analyse_the_red_edges_are_what_cosleec_analyse_proves() -> None:
     quick = {(e.src, e.dst) for e in build(rules).edges if e.kind == "conflict"}
     assert quick == {("R10", "R6")} or quick == {("R6", "R10")}  # the pairwise check: the same pair
     assert not {e for e in build(rules, ("R1",), found).edges if e.kind == "conflict"}  # R6 not drawn
+
+
+# ---------------------------------------------------------------------------- bounded (issue 28)
+def clashing(n: int) -> str:
+    """``n`` rules on one trigger, every other one forbidding what the rest oblige: every
+    obliging rule can conflict with every forbidding one (``n**2 / 4`` possible conflicts)."""
+    rules = "\n".join(f"R{i} when E then {'not ' if i % 2 else ''}A within 5 seconds" for i in range(n))
+    return f"def_start event E event A def_end\nrule_start\n{rules}\nrule_end\n"
+
+
+def test_a_picture_of_too_many_rules_is_refused_before_it_is_built(tmp_path: Path) -> None:
+    """`cosleec graph` of 100,000 rules ran for minutes into gigabytes: 5,001 rules that
+    can conflict pairwise (6 million possible conflicts) are refused at once, naming the
+    limit and the way out, and a few of them (--rule) draw with only their own conflicts."""
+    path = tmp_path / "many.sleec"
+    path.write_text(clashing(5_001), encoding="utf-8")
+    refused = cosleec("graph", str(path), cwd=tmp_path)
+    assert refused.returncode == 1 and "Traceback" not in refused.stderr
+    assert "5,001 rules are more than one picture draws (at most 5,000)" in refused.stderr
+    assert "many.sleec" in refused.stderr and "--rule R" in refused.stderr
+    some = cosleec("graph", str(path), "--rule", "R1", "--rule", "R2", "-o", "some.dot", cwd=tmp_path)
+    assert some.returncode == 0, some.stderr
+    dot = (tmp_path / "some.dot").read_text(encoding="utf-8")
+    red = [
+        line.split("[")[0].strip() for line in dot.splitlines() if "dir=both" in line and "legend" not in line
+    ]
+    assert red in (['"R1" -> "R2"'], ['"R2" -> "R1"'])  # their own conflict, none of the 5,000 others
+
+
+def test_graphviz_is_not_asked_for_more_than_it_lays_out_in_seconds() -> None:
+    rules = RuleSet.from_text(clashing(300))  # 150 x 150 possible conflicts: 22,500 red edges
+    with pytest.raises(UserError) as refused:
+        build(rules, fmt="svg")
+    said = refused.value.render()
+    assert "more than 10,000 possible conflicts between the 300 rules" in said
+    assert "at most 10,000 boxes and arrows" in said and "DOT or Mermaid text holds up to 100,000" in said
+    g = build(rules, fmt="dot")  # as text: 22,500 red edges is within what DOT holds
+    assert sum(1 for e in g.edges if e.kind == "conflict") == 150 * 150
+    apart = "\n".join(f"R{i} when E{i} then A{i} within 5 seconds" for i in range(2_100))
+    events = " ".join(f"event E{i} event A{i}" for i in range(2_100))
+    separate = RuleSet.from_text(f"def_start {events} def_end\nrule_start\n{apart}\nrule_end\n")
+    with pytest.raises(
+        UserError, match=r"10,500 boxes and arrows for the 2,100 rules: more than a picture in SVG"
+    ):
+        build(separate, fmt="svg")  # no conflict: 5 boxes and arrows a rule
+    assert len(build(separate, fmt="mmd").edges) == 2 * 2_100
+
+
+def test_with_analyse_an_analysis_out_of_time_is_refused_not_drawn_in_part(tmp_path: Path) -> None:
+    from cosleec.views import analysed_conflicts
+
+    clauses = "\n".join(f"  unless m > {i} then A within {i + 1} seconds" for i in range(3_000))
+    path = tmp_path / "long.sleec"
+    path.write_text(
+        f"def_start event E event A measure m : numeric def_end\nrule_start\nR1 when E then A within 9 seconds\n"
+        f"{clauses}\nrule_end\n",
+        encoding="utf-8",
+    )
+    with pytest.raises(UserError) as refused:
+        analysed_conflicts(str(path), seconds=0.3)  # a picture without the conflicts would say there are none
+    said = refused.value.render()
+    assert "did not finish within 0.3 s" in said and "long.sleec" in said and "without --analyse" in said
