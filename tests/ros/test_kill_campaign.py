@@ -28,6 +28,7 @@ the Manager committed was run by the task node, or a ``task-interrupted`` record
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import random
@@ -134,8 +135,36 @@ class Campaign:
         self.sent = 0
         # a simulator's clock goes on (the Manager's from its journal may be later: a tick committed)
         self.now = max(self.now, float(self.driver.status["manager"].get("time", 0.0)))
-        self.send("clock", {"t": self.now})
+        self.first_message()
         self.quiet()
+
+    def first_message(self) -> None:
+        """Send a new life the current time until it has it.
+
+        ``ready`` cannot tell that the new life's subscriptions have matched the driver's
+        publishers: these still count the killed lives' subscriptions until their DDS lease
+        ends, so the first message may reach the node late (seen: 1 s) or never (seen:
+        ``received`` 0 for 30 s). A message the node never received is the middleware's loss:
+        the time is sent again (an absolute time: harmless) while the node has received
+        nothing. One held back arrives as the node's subscription is matched, with the one
+        that got through, or never: what the node counts a moment later is what it had.
+        """
+
+        def received() -> int:
+            return int(self.driver.status["manager"]["counters"]["received"])
+
+        for _ in range(20):
+            self.send("clock", {"t": self.now})
+            try:
+                self.driver.wait(lambda: received() >= 1, 1.0, "the clock")
+                break
+            except TimeoutError:
+                continue
+        else:
+            raise AssertionError(f"the Manager node never received a clock message: {self.errors()}")
+        with contextlib.suppress(TimeoutError):  # (then the others were lost)
+            self.driver.wait(lambda: received() >= self.sent, 0.5, "every clock message")
+        self.sent = received()
 
     def restart(self, rng: random.Random, during_restore: bool) -> None:
         """Start the Manager again (killing it once more while it restores, if asked) and wait for it."""
@@ -152,11 +181,14 @@ class Campaign:
         self.driver.raw(name, dumps(message))
 
     def quiet(self) -> None:
-        """Wait until the Manager handled every message sent to it and the task node took every obligation."""
+        """Wait until the Manager handled every message sent to it, handed on every decision (a
+        restarted one holds them until the task nodes can hear it: ``holding``), and the task
+        node took every obligation. (Obligations sent again to a subscriber matched late, ``resent``,
+        may add to what the task node took, never to ``obligations``.)"""
 
         def settled() -> bool:
             m, t = self.driver.status.get("manager"), self.driver.status.get("task")
-            if m is None or t is None or m["counters"]["received"] != self.sent:
+            if m is None or t is None or m["counters"]["received"] != self.sent or m.get("holding", 0):
                 return False
             taken = t.get("handled", 0) + t["counters"].get("duplicates", 0) - self.base
             return bool(taken >= m["counters"].get("obligations", 0))

@@ -60,6 +60,10 @@ from cosleec.runtime import (
 #: how long the subscribers of ``obligations`` must stay the same before a restarted Manager
 #: node publishes again what it decided but perhaps never published (discovery settles)
 REPUBLISH_SETTLE_S = 1.0
+#: how long they must then stay the same before what it published again counts as heard (it
+#: leaves the journal's outbox); until then a subscriber matched later gets it again: DDS
+#: matches each subscriber on its own, and a task node's may come seconds after a driver's
+REPUBLISH_WINDOW_S = 10.0
 
 #: the longest event name (or request id) the Manager node takes; SLEEC names are identifiers
 MAX_NAME = 256
@@ -119,6 +123,10 @@ class ManagerNode(Node):
         self.active = active
         self._republish: list[dict[str, Any]] = []  # decisions held until the task nodes can hear them
         self._matched: tuple[int, float] | None = None  # obligations' subscriber count, and since when
+        # published again, perhaps not yet heard by every task node (REPUBLISH_WINDOW_S), and
+        # how many subscribers had been matched when they were last sent
+        self._unconfirmed: list[dict[str, Any]] = []
+        self._sent_to = 0
         # while starting (and, if decisions are held then, until the task nodes' subscriptions
         # have settled), decisions are held rather than published to no one
         self._settled = False
@@ -158,6 +166,7 @@ class ManagerNode(Node):
         # decided before a crash, perhaps never published: published again once a task node listens
         self._republish = [{**d, "_again": True} for d in self.manager.undelivered]
         self.manager.undelivered.clear()
+        self._unconfirmed, self._matched = [], None
         self.manager.start(check=False, timer=not self.sim_time)  # may decide fallbacks: held, as above
         with self._hand_lock:
             # nothing held (a first start, a clean stop): publish as decided from now on; else
@@ -422,6 +431,7 @@ class ManagerNode(Node):
                 rules_hash=m.rules_hash,
                 active=m.active_layers(),
                 time=self.clock.now(),
+                holding=len(self._republish),  # decided, not yet handed on: the task nodes cannot hear yet
                 **extra,
             )
 
@@ -528,44 +538,70 @@ class ManagerNode(Node):
             self.recorder.write(ev.kind, ev.time, d)
 
     def _publish_again(self) -> None:
-        """Publish the decisions a journal held as perhaps never published, once someone listens.
+        """Publish the decisions a journal held as perhaps never published, once someone listens;
+        again to subscribers matched later; then let them leave the journal's outbox.
 
         A restarted node's publisher is new: what it sends before the task nodes have matched
-        it would be lost. The heartbeat calls this until they have.
+        it would be lost. The heartbeat calls this until they have: until the subscriber count
+        is not 0 and stayed the same for :data:`REPUBLISH_SETTLE_S`. That count may be a
+        driver's or a recorder's while a task node is still being discovered, so what went out
+        is sent again (counted ``resent``; task nodes run each action once) whenever the count
+        grows and settles, until it stayed the same for :data:`REPUBLISH_WINDOW_S`: only then
+        is it delivered (a restart before that publishes it again). A transport that cannot
+        count subscribers publishes at once and delivers at once.
         """
         with self._hand_lock:
-            if self._settled:
+            if self._settled and not self._unconfirmed:
                 return
             count = getattr(self.transport, "subscribers", None)
-            if count is not None:  # wait until subscribers appeared and stayed the same for a second
+            n, stable = 0, math.inf
+            if count is not None:
                 now, n = time.monotonic(), count(self.topic("obligations"))
                 if n == 0 or self._matched is None or self._matched[0] != n:
                     self._matched = (n, now)
                     return
-                if now - self._matched[1] < REPUBLISH_SETTLE_S:
+                stable = now - self._matched[1]
+                if stable < REPUBLISH_SETTLE_S:
                     return
-            self._settled = True
-            todo, self._republish = self._republish, []
-            for d in todo:
-                self._count("republished" if d.get("_again") else "obligations_held")
-                self._send(d)
+            if not self._settled:
+                self._settled = True
+                self._unconfirmed, self._republish = self._republish, []
+                for d in self._unconfirmed:
+                    self._count("republished" if d.get("_again") else "obligations_held")
+                    self._send(d, deliver=False)
+                self._sent_to = n
+            elif n > self._sent_to:  # matched since they went out (a task node discovered late)
+                for d in self._unconfirmed:
+                    self._send(d, deliver=False, counter="resent")
+                self._sent_to = n
+            if stable >= REPUBLISH_WINDOW_S:
+                for d in self._unconfirmed:
+                    self.manager.delivered(int(d["id"]))
+                self._unconfirmed = []
 
     def _hand_on(self, d: dict[str, Any]) -> None:
-        """Publish a decision to the task nodes -- held until they can hear it after a start."""
+        """Publish a decision to the task nodes -- held until they can hear it after a start, and
+        while what was published again is not yet heard, sent again with it (:meth:`_publish_again`)."""
         with self._hand_lock:
             if not self._settled:  # a new publisher: what it sent now could reach no one
                 self._republish.append(d)
                 return
+            if self._unconfirmed:  # a task node may not be matched yet: it gets this too, later
+                self._unconfirmed.append(d)
+                self._send(d, deliver=False)
+                return
         self._send(d)
 
-    def _send(self, d: dict[str, Any]) -> None:
-        """Publish a decision that chose a clause to the task nodes, then tell the Manager it left."""
+    def _send(self, d: dict[str, Any], *, deliver: bool = True, counter: str = "obligations") -> None:
+        """Publish a decision that chose a clause to the task nodes (counted in ``counter``), then
+        tell the Manager it left (``deliver``: not yet for one published again, :meth:`_publish_again`)."""
         d = {k: v for k, v in d.items() if k != "_again"}
         if d["clause"] is not None:  # the task nodes first: they are on the critical path
-            self._count("obligations")
-            # task nodes run each (session, id) once: a duplicate on the wire is not re-run
+            self._count(counter)
+            # task nodes run each (session, id, action) once: a duplicate on the wire is not re-run
             self.publish("obligations", {**d, "session": self.session})
-        self.manager.delivered(int(d["id"]))
+        if deliver:
+            self.manager.delivered(int(d["id"]))
 
     def close(self) -> None:
         """Stop the Manager (timer, audit log) and finish the recording; the transport is the caller's."""
