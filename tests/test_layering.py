@@ -18,7 +18,7 @@ from pathlib import Path
 SRC = Path(__file__).resolve().parent.parent / "src" / "cosleec"
 
 ALLOWED: dict[str, set[str]] = {
-    "": set(),  # the root package: a docstring and the version
+    "": {"errors", "runtime"},  # the root package: the version, and the short form (lazy)
     "errors": set(),
     "bulk": set(),
     "lang": {"errors", "bulk"},

@@ -6,7 +6,7 @@
 from __future__ import annotations
 
 from cosleec.demo.assistive_care.tasks import CurtainTask, Robot
-from cosleec.runtime import Manager
+from cosleec import Manager
 
 
 def install(manager: Manager) -> Robot:
