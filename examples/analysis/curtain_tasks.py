@@ -5,8 +5,8 @@
 
 from __future__ import annotations
 
-from cosleec.demo.assistive_care.tasks import CurtainTask, Robot
 from cosleec import Manager
+from cosleec.demo.assistive_care.tasks import CurtainTask, Robot
 
 
 def install(manager: Manager) -> Robot:
