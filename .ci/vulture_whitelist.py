@@ -106,3 +106,5 @@ did_change  #
 did_save  #
 did_close  #
 servers  # views/web_server.Server: uvicorn's Server reads it when it shuts down
+__getattr__  # cosleec/__init__: the module's lazy exports (PEP 562), called by Python
+__dir__  # cosleec/__init__: dir(cosleec) lists the lazy exports (PEP 562)
