@@ -6,7 +6,7 @@ floor 3   ros  demo  views  lsp       adapters and front ends (ros runs the demo
                                       lsp serves editors)
 floor 2   nodes  testing              the paper's nodes; public test helpers
 floor 1   runtime                     on lang and cop
-floor 0   errors  bulk  lang  cop     cop imports nothing of ours
+floor 0   errors  bulk  records  lang  cop     cop imports nothing of ours
 """
 
 from __future__ import annotations
@@ -19,21 +19,23 @@ SRC = Path(__file__).resolve().parent.parent / "src" / "cosleec"
 
 ALLOWED: dict[str, set[str]] = {
     "": {"errors", "runtime"},  # the root package: the version, and the short form (lazy)
+    "records": {"errors"},  # the audit records: runtime writes them, semantics reads them
     "errors": set(),
     "bulk": set(),
     "lang": {"errors", "bulk"},
     "cop": set(),
-    "semantics": {"errors", "bulk", "lang"},
-    "analysis": {"errors", "bulk", "lang", "semantics"},
-    "runtime": {"errors", "bulk", "lang", "cop"},
-    "nodes": {"errors", "lang", "runtime"},
-    "testing": {"errors", "lang", "cop", "runtime", "nodes"},
-    "views": {"errors", "lang", "semantics", "analysis", "runtime", "nodes"},
-    "lsp": {"errors", "lang", "semantics", "analysis"},
-    "demo": {"errors", "lang", "runtime", "nodes", "testing"},
-    "ros": {"errors", "lang", "runtime", "nodes", "testing", "demo"},
+    "semantics": {"errors", "bulk", "lang", "records"},
+    "analysis": {"errors", "records", "bulk", "lang", "semantics"},
+    "runtime": {"errors", "bulk", "lang", "records", "cop"},
+    "nodes": {"errors", "records", "lang", "runtime"},
+    "testing": {"errors", "records", "lang", "cop", "runtime", "nodes"},
+    "views": {"errors", "records", "lang", "semantics", "analysis", "runtime", "nodes"},
+    "lsp": {"errors", "records", "lang", "semantics", "analysis"},
+    "demo": {"errors", "records", "lang", "runtime", "nodes", "testing"},
+    "ros": {"errors", "records", "lang", "runtime", "nodes", "testing", "demo"},
     "cli": {
         "errors",
+        "records",
         "lang",
         "cop",
         "semantics",

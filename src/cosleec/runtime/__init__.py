@@ -14,6 +14,7 @@ How a rule becomes layers: :mod:`cosleec.runtime.model`; how the context picks t
 """
 
 from cosleec.lang import HedgeSemantics, Unknowns
+from cosleec.records import RuntimeEvent
 from cosleec.runtime.audit import AuditLog, read_audit
 from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
 from cosleec.runtime.context import Context
@@ -22,7 +23,7 @@ from cosleec.runtime.errors import BindingError, ConfigurationError, ContextErro
 from cosleec.runtime.implementations import Capability, Implementations, Ran
 from cosleec.runtime.journal import Journal, JournalError
 from cosleec.runtime.layers import LayerManager, LayerState, LayerSwitch
-from cosleec.runtime.manager import Manager, Permission, Reloaded, RuntimeEvent, UnknownEvents
+from cosleec.runtime.manager import Manager, Permission, Reloaded, UnknownEvents
 from cosleec.runtime.model import MAX_WINDOW_S, CompiledRule, DeadlineError, Obligation
 from cosleec.runtime.obligations import Tracked
 from cosleec.runtime.priorities import PossibleConflict, Priorities, possible_conflicts

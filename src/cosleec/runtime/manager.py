@@ -82,6 +82,7 @@ from cosleec.lang import (
 )
 from cosleec.lang import ast as A
 from cosleec.lang import pairs as priority_pairs
+from cosleec.records import RuntimeEvent
 from cosleec.runtime.audit import AuditLog
 from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
 from cosleec.runtime.context import Context
@@ -123,32 +124,6 @@ def _option(kind: type[E], value: object, name: str) -> E:
             pass
     choices = ", ".join(repr(str(k)) for k in kind)
     raise ConfigurationError(f"{name} must be one of {choices}, not {show(value)}")
-
-
-@dataclass(frozen=True)
-class RuntimeEvent:
-    """What observers (terminal display, ROS publishers, the audit log, tests) are told, in order.
-
-    ``kind`` is one of options, event, context, layers, semantics, decision, obligation,
-    refused, rejected, conflict, cancelled, held, dispatch, withheld, task-done, task-failed,
-    task-interrupted, restored, reloaded, reload-attempt, dropped, uncommitted, audit-mismatch,
-    journal-reset. ``seq`` numbers the records of one Manager (continued across restarts with a journal, or from
-    the audit log it appends to); 0 when nothing records.
-    """
-
-    kind: str
-    time: float
-    data: dict[str, Any] = field(default_factory=dict)
-    seq: int = 0
-
-    @classmethod
-    def made(cls, kind: str, time: float, data: dict[str, Any], seq: int) -> RuntimeEvent:
-        """The same as the constructor with every field given, for the Manager's hot path
-        (a frozen dataclass sets each field through ``object.__setattr__``; a decision with
-        observers makes several records)."""
-        ev = object.__new__(cls)
-        ev.__dict__.update(kind=kind, time=time, data=data, seq=seq)
-        return ev
 
 
 @dataclass(frozen=True)
