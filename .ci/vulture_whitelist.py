@@ -89,7 +89,7 @@ _.window_start  #
 _.previous  #
 _.executor_alive  #
 _.hardware_id  #
-# rclpy's LifecycleNode calls these on each transition (ros2._lifecycle_node)
+# rclpy's LifecycleNode calls these on each transition (ros.lifecycle.lifecycle_node)
 _.on_configure  #
 _.on_activate  #
 _.on_deactivate  #
@@ -108,3 +108,7 @@ did_close  #
 servers  # views/web_server.Server: uvicorn's Server reads it when it shuts down
 __getattr__  # cosleec/__init__: the module's lazy exports (PEP 562), called by Python
 __dir__  # cosleec/__init__: dir(cosleec) lists the lazy exports (PEP 562)
+INTERNALS  # cosleec.runtime.INTERNALS: the face's internals, read by tests/unit/runtime/test_face.py
+_.__doc__  # runtime/core.InForce sets its instance's __doc__: help() and documentation tools read it
+_.task_failures  # runtime/stats.Stats counters are read by name (Stats.__getitem__, to_json)
+task_failures  #

@@ -17,6 +17,7 @@ from cosleec.demo import run
 from cosleec.demo.assistive_care.scenario import STEPS
 from cosleec.runtime import Manager, VirtualClock
 from cosleec.testing import CHROMIUM, CHROMIUM_ARGS
+from cosleec.views import AttachedView
 
 ARGS = list(CHROMIUM_ARGS)
 FALL = next(i for i, (kind, arg, _) in enumerate(STEPS) if kind == "event" and arg == "UserFallen")
@@ -30,14 +31,14 @@ DAY = [
 ]
 
 
-def shoot(manager: Manager, out: Path) -> None:
-    """Open the page in headless Chromium once it shows the Manager's last state, and save it."""
-    assert isinstance(manager.clock, VirtualClock) and manager.web_url
+def shoot(manager: Manager, url: str | None, out: Path) -> None:
+    """Open the page at ``url`` in headless Chromium once it shows the Manager's last state, and save it."""
+    assert isinstance(manager.clock, VirtualClock) and url
     with sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS, headless=True)
         try:
             page = browser.new_page(viewport={"width": 1440, "height": 1000}, device_scale_factor=1)
-            page.goto(manager.web_url)
+            page.goto(url)
             page.wait_for_function("document.body.dataset.version !== undefined")
             page.wait_for_selector(".obligation[data-deadline]")
             page.wait_for_timeout(300)  # a heartbeat: the countdowns show the virtual clock's time
@@ -50,7 +51,8 @@ def shoot(manager: Manager, out: Path) -> None:
 def main() -> int:
     """Run the day with the view and save the picture to the path given (argv[1])."""
     out = Path(sys.argv[1])
-    run(DAY, web=0, before_close=lambda m: shoot(m, out))
+    web = AttachedView(0)  # the web view on a free port: the demo attaches it before its Manager starts
+    run(DAY, view=web.attach, before_close=lambda m: shoot(m, web.url, out))
     print(f"saved {out}")
     return 0
 

@@ -126,7 +126,7 @@ def semantics_differ(a: Analysis) -> None:
                 witness=witness(
                     enc,
                     model,
-                    a.settings.options,
+                    a.settings.reading,
                     confirm=functools.partial(
                         _picked, clause=pick_lw if sem == HedgeSemantics.LAST_WINS else pick_ne
                     ),

@@ -16,9 +16,9 @@ import z3
 
 from cosleec.analysis.encoding import Encoding, as_float
 from cosleec.analysis.findings import Witness
-from cosleec.lang import Specification, visit
+from cosleec.lang import Reading, Specification, visit
 from cosleec.lang import ast as A
-from cosleec.semantics import Judgement, Options, Step, Value, judge
+from cosleec.semantics import Judgement, Step, Value, judge
 
 
 def smallest(enc: Encoding, assumptions: list[Any]) -> Any:
@@ -73,11 +73,11 @@ def steps(enc: Encoding, model: Any, also: Any = None) -> list[Step]:
     return out
 
 
-def then(enc: Encoding, history: Any, last: Any, options: Options) -> Witness:
+def then(enc: Encoding, history: Any, last: Any, reading: Reading) -> Witness:
     """A history the rules allow (a model without the ``last`` slot, whose time, order and
     values it pins), then the ``last`` trigger: the reference semantics must find a breach."""
     trace = steps(enc, history, also=last)
-    j = judge(enc.spec, trace, options)
+    j = judge(enc.spec, trace, reading)
     return Witness(tuple(trace), tuple(timeline(enc.spec, trace, j)), bool(final_breaches(enc.spec, j)))
 
 
@@ -222,7 +222,7 @@ def _show(v: object) -> str:
 def witness(
     enc: Encoding,
     model: Any,
-    options: Options,
+    reading: Reading,
     *,
     confirm: Callable[[Judgement], bool] | None = None,
     shows: Iterable[A.Rule] = (),
@@ -231,11 +231,11 @@ def witness(
     the judgement shows what the witness should (default: the rules hold on it); each rule of
     ``shows`` (a concern or purpose read as a rule) must fire and be met at least once."""
     trace = steps(enc, model)
-    j = judge(enc.spec, trace, options)
+    j = judge(enc.spec, trace, reading)
     ok = confirm(j) if confirm is not None else not final_breaches(enc.spec, j)
     for rule in shows:
         probe = Specification(enc.spec.definitions, (rule,), path=enc.spec.path)
-        pj = judge(probe, trace, Options(semantics=options.semantics, untimed=0.0))
+        pj = judge(probe, trace, Reading(semantics=reading.semantics, untimed=0.0))
         fired = {f.instance for f in pj.firings if f.fired and f.instance is not None}
         waiting = {v.id for v in pj.pending}
         good = [

@@ -37,8 +37,17 @@ from cosleec.analysis import (
     sarif,
 )
 from cosleec.cli.common import add_clause_options, add_priority_options, console, expand, input_file
-from cosleec.errors import UserError
-from cosleec.lang import HedgeSemantics, SleecError, cycle, load, parse_priority
+from cosleec.errors import ConfigurationError, UserError
+from cosleec.lang import (
+    HedgeSemantics,
+    PrioritySemantics,
+    SleecError,
+    Untimed,
+    cycle,
+    load,
+    parse_priority,
+    parse_untimed,
+)
 from cosleec.lang import analyse_file as check_file
 
 USAGE_ERROR = 2
@@ -71,6 +80,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument("--json", action="store_true", help="print one JSON document instead of text")
     p.add_argument("--sarif", metavar="FILE", help="also write the findings as SARIF 2.1.0 to FILE")
     p.add_argument("--witnesses", metavar="DIR", help="write each witness as a JSON Lines trace in DIR")
+    _add_limits(p)
+    p.add_argument(
+        "--untimed",
+        default="none",
+        metavar="none|S",
+        help="an untimed obligation: none = must happen some time (default), or within S seconds "
+        "(0: at the same instant, as LEGOS/N-Check)",
+    )
+    add_clause_options(p, unknown=False)
+    add_priority_options(p)
+    _add_inputs(p)
+    p.set_defaults(run=run)
+
+
+def _add_limits(p: argparse.ArgumentParser) -> None:
+    """``--bound``, ``--timeout`` and ``--deadline``: how far the search goes, how long it may take."""
     p.add_argument(
         "--bound",
         type=_positive,
@@ -96,15 +121,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "the findings so far are printed with what was not decided, and the exit code is 3 if "
         "nothing was found",
     )
-    p.add_argument(
-        "--untimed",
-        default="none",
-        metavar="none|S",
-        help="an untimed obligation: none = must happen some time (default), or within S seconds "
-        "(0: at the same instant, as LEGOS/N-Check)",
-    )
-    add_clause_options(p, unknown=False)
-    add_priority_options(p)
+
+
+def _add_inputs(p: argparse.ArgumentParser) -> None:
+    """How the files are read, and what else the rules are held against (tasks, a mapping)."""
     p.add_argument(
         "--infer-defs", action="store_true", help="infer declarations for files without a def block"
     )
@@ -121,7 +141,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument(
         "--mapping", metavar="YAML", help="a Context Listener mapping: report inputs it never produces"
     )
-    p.set_defaults(run=run)
 
 
 def _positive(text: str) -> int:
@@ -166,16 +185,16 @@ def _checks(text: str | None) -> list[str]:
     return out
 
 
-def _untimed(text: str) -> float | None:
-    if text == "none":
-        return None
+def _untimed(text: str) -> Untimed | float:
+    """``--untimed``: none or a finite, non-negative number of seconds (:func:`parse_untimed`
+    without ``immediate``: the analysis reads a run's rules, not its tolerance)."""
     try:
-        x = float(text)
-    except ValueError:
-        x = math.nan
-    if not math.isfinite(x) or x < 0:
+        value: Untimed | float | None = parse_untimed(text)
+    except ConfigurationError:
+        value = None
+    if value is None or value == Untimed.IMMEDIATE:
         raise UserError(f"--untimed {text[:40]!r} is neither none nor a non-negative number of seconds")
-    return x
+    return value
 
 
 def run(args: argparse.Namespace) -> int:
@@ -205,31 +224,10 @@ def run(args: argparse.Namespace) -> int:
         bound=args.bound,
         timeout=args.timeout,
         priorities=frozenset(given),
-        priority_semantics=args.priority_semantics,
+        priority_semantics=PrioritySemantics(args.priority_semantics),
     )
-    reports = []
-    deadline = Deadline.after(args.deadline) if args.deadline is not None else None
     try:
-        for f in files:
-            coverage = _coverage(args, f)
-            reports.append(
-                analyse_file(
-                    f, settings, checks, legos_compat=args.legos_compat, infer_defs=args.infer_defs,
-                    coverage=coverage, deadline=deadline,
-                )
-            )  # fmt: skip
-        if args.witnesses:
-            _write_witnesses(Path(args.witnesses), reports)
-        if args.sarif:
-            try:
-                text = json.dumps(sarif(reports, checks), indent=2) + "\n"
-                Path(args.sarif).write_text(text, encoding="utf-8")
-            except OSError as e:
-                raise UserError(
-                    f"cannot write the SARIF file: {e.strerror or e}",
-                    where=args.sarif,
-                    hint="give a path in a directory that exists and that you can write",
-                ) from None
+        reports = _analyse(args, files, settings, checks)
     except UserError as e:  # an input error (a module, a mapping, an output path): exit 2
         print(f"cosleec: {e.render()}", file=sys.stderr)
         return USAGE_ERROR
@@ -242,6 +240,36 @@ def run(args: argparse.Namespace) -> int:
     if any(r.findings for r in reports):
         return 1
     return PARTIAL if any(not r.complete for r in reports) else 0
+
+
+def _analyse(
+    args: argparse.Namespace, files: list[Path], settings: Settings, checks: list[str]
+) -> list[FileReport]:
+    """Every file's report, under one ``--deadline``; then the witnesses and the SARIF file
+    written when asked (UserError: a module, a mapping or an output path that fails)."""
+    reports = []
+    deadline = Deadline.after(args.deadline) if args.deadline is not None else None
+    for f in files:
+        coverage = _coverage(args, f)
+        reports.append(
+            analyse_file(
+                f, settings, checks, legos_compat=args.legos_compat, infer_defs=args.infer_defs,
+                coverage=coverage, deadline=deadline,
+            )
+        )  # fmt: skip
+    if args.witnesses:
+        _write_witnesses(Path(args.witnesses), reports)
+    if args.sarif:
+        try:
+            text = json.dumps(sarif(reports, checks), indent=2) + "\n"
+            Path(args.sarif).write_text(text, encoding="utf-8")
+        except OSError as e:
+            raise UserError(
+                f"cannot write the SARIF file: {e.strerror or e}",
+                where=args.sarif,
+                hint="give a path in a directory that exists and that you can write",
+            ) from None
+    return reports
 
 
 def _unknown_rules(given: list[tuple[str, str]], files: list[Path], legos_compat: bool) -> str:

@@ -18,27 +18,31 @@ or ``"nan"``.
 from __future__ import annotations
 
 import argparse
-import difflib
 import json
 import math
 import sys
-from collections.abc import Sequence
-from dataclasses import dataclass, field
 from typing import Any, TypeGuard
 
 from rich.text import Text
 
 from cosleec.cli.common import add_clause_options, add_priority_options, console
-from cosleec.errors import UserError, clip
-from cosleec.lang import HedgeSemantics, SleecError, Specification, cycle, load, pairs, parse_priority
+from cosleec.errors import ConfigurationError, UserError, clip
+from cosleec.lang import (
+    IMMEDIATE_S,
+    HedgeSemantics,
+    PrioritySemantics,
+    SleecError,
+    Untimed,
+    load,
+    parse_untimed,
+)
 from cosleec.semantics import (
-    CANCEL,
     Conflict,
     Judgement,
-    Options,
     Recording,
     Verdict,
     check_trace,
+    conformance,
     fit_trace,
     judge,
     read_recording,
@@ -52,10 +56,8 @@ STYLE = {
     "conflict": "magenta",
     "warning": "yellow",
 }
-IMMEDIATE_S = 1.0
 PRINTED_AT_ONCE = 1000
 """Lines of text output handed to rich together (one call a line is three times slower)."""
-"""``untimed="immediate"``: the deadline the Manager gives an untimed response (its tolerance)."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -99,21 +101,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.set_defaults(run=run, semantics=None, priority_semantics=None, priority_lead=None)
 
 
-OPTIONS = ("semantics", "priorities", "priority_semantics", "priority_lead", "untimed")
-"""The options a Manager's audit log records, by their JSON names, in the order they are shown."""
-
-
-@dataclass
-class _Chosen:
-    """The options a trace is judged with, and what the user is told about them."""
-
-    options: Options
-    from_audit: list[str] = field(default_factory=list)  # the options taken from the log (OPTIONS)
-    said: list[str] = field(default_factory=list)  # those options as the text line shows them
-    notes: list[str] = field(default_factory=list)
-    warnings: list[str] = field(default_factory=list)
-
-
 def run(args: argparse.Namespace) -> int:
     """Judge the trace and print the verdicts; returns 0, 1 or 2 (see the module docstring).
 
@@ -122,13 +109,7 @@ def run(args: argparse.Namespace) -> int:
     same way.
     """
     try:
-        lead: float | None = args.priority_lead  # float(), as the Manager node's: check it here
-        if lead is not None and not (math.isfinite(lead) and lead >= 0):
-            raise UserError(
-                f"--priority-lead {lead}: not a finite number of seconds >= 0",
-                where="--priority-lead",
-                hint="give how long before the forcing deadline the lower rule is cancelled, e.g. 5",
-            )
+        given = _given(args)
         spec = load(args.rules, legos_compat=args.legos_compat)
         recording = read_recording(args.trace)  # once: a pipe cannot be read twice
         if not recording.steps:  # checking nothing must not look like a pass
@@ -143,33 +124,61 @@ def run(args: argparse.Namespace) -> int:
         else:
             check_trace(spec, recording.steps, path=recording.source)
             steps = recording.steps
-        chosen = _choose(args, spec, recording)
-        chosen.notes[:0] = notes
-        judgement = judge(spec, steps, chosen.options)
+        choice = conformance.choose_reading(spec, recording, given)
+        choice.notes[:0] = notes
+        judgement = judge(spec, steps, choice.reading)
     except UserError as e:
         print(e.render() if isinstance(e, SleecError) else f"cosleec: {e.render()}", file=sys.stderr)
         return USAGE_ERROR
-    options = chosen.options
     if args.json:
-        doc = {
-            "rules": str(args.rules),
-            "trace": recording.source,
-            "options": {
-                "semantics": str(options.semantics),
-                "untimed": options.untimed,
-                "priorities": [list(pair) for pair in sorted(options.priorities)],
-                "priority_semantics": options.priority_semantics,
-                "priority_lead": options.lead,
-                "from_audit": chosen.from_audit,
-            },
-            "notes": chosen.notes,
-            "warnings": chosen.warnings,
-            **judgement.to_json(),
-        }
-        print(json.dumps(json_safe(doc), indent=2, allow_nan=False))
+        print(json.dumps(json_safe(_document(args, recording, choice, judgement)), indent=2, allow_nan=False))
     else:
-        _print(judgement, chosen, recording)
+        _print(judgement, choice, recording)
     return 0 if judgement.conforms else 1
+
+
+def _given(args: argparse.Namespace) -> conformance.Given:
+    """The options the command line gives (None: not given); UserError for a ``--priority-lead``
+    that is no finite number of seconds >= 0 (argparse took any float, as the Manager node's)."""
+    lead: float | None = args.priority_lead
+    if lead is not None and not (math.isfinite(lead) and lead >= 0):
+        raise UserError(
+            f"--priority-lead {lead}: not a finite number of seconds >= 0",
+            where="--priority-lead",
+            hint="give how long before the forcing deadline the lower rule is cancelled, e.g. 5",
+        )
+    return conformance.Given(
+        semantics=None if args.semantics is None else HedgeSemantics(args.semantics),
+        priorities=tuple(args.priority),
+        priority_semantics=None
+        if args.priority_semantics is None
+        else PrioritySemantics(args.priority_semantics),
+        priority_lead=lead,
+        untimed=args.untimed,
+    )
+
+
+def _document(
+    args: argparse.Namespace, recording: Recording, choice: conformance.Choice, judgement: Judgement
+) -> dict[str, Any]:
+    """The ``--json`` document: the files, the options judged under (``untimed`` in seconds,
+    null for none), the notes and warnings, then the judgement."""
+    reading = choice.reading
+    return {
+        "rules": str(args.rules),
+        "trace": recording.source,
+        "options": {
+            "semantics": str(reading.semantics),
+            "untimed": reading.untimed_seconds,
+            "priorities": [list(pair) for pair in sorted(reading.priorities)],
+            "priority_semantics": reading.priority_semantics,
+            "priority_lead": reading.priority_lead,
+            "from_audit": choice.from_audit,
+        },
+        "notes": choice.notes,
+        "warnings": choice.warnings,
+        **judgement.to_json(),
+    }
 
 
 def json_safe(x: Any) -> Any:
@@ -184,145 +193,18 @@ def json_safe(x: Any) -> Any:
     return x
 
 
-def _choose(args: argparse.Namespace, spec: Specification, recording: Recording) -> _Chosen:
-    """The options: those given on the command line, else the audit log's, else the defaults."""
-    given: dict[str, Any] = {
-        "semantics": args.semantics,
-        "priority_semantics": args.priority_semantics,
-        "priority_lead": args.priority_lead,
-        "untimed": args.untimed,
-    }
-    log = recording.options
-    chosen = _Chosen(Options())
-    said: dict[str, str] = {}
-    if log is None:
-        priorities = _priorities_of(spec, args.priority)
-    else:
-        logged = {
-            "semantics": log.semantics,
-            "priority_semantics": log.priority_semantics,
-            "priority_lead": log.priority_lead,
-            "untimed": log.untimed,
-        }
-        for key, value in logged.items():
-            if given[key] is None:
-                given[key] = value
-                said[key] = f"{key.replace('_', '-')} {_said(value)}"
-        if args.priority:
-            priorities = _priorities_of(spec, args.priority)
-        else:
-            where = f"{recording.source}:{log.line}"
-            priorities = _priorities_of(spec, [], logged=log.priorities, where=where, notes=chosen.notes)
-            shown = [f"priority {h} > {lo}" for h, lo in log.priorities if (h, lo) in priorities]
-            said["priorities"] = ", ".join(shown) or "no priority"
-    chosen.from_audit = [key for key in OPTIONS if key in said]
-    chosen.said = [said[key] for key in chosen.from_audit]
-    chosen.options = Options(
-        semantics=HedgeSemantics(given["semantics"] or HedgeSemantics.LAST_WINS),
-        untimed=_untimed_seconds("none" if given["untimed"] is None else given["untimed"]),
-        priorities=frozenset(priorities),
-        priority_semantics=given["priority_semantics"] or CANCEL,
-        lead=0.0 if given["priority_lead"] is None else float(given["priority_lead"]),
-    )
-    if recording.audit and log is None:
-        chosen.notes.append(
-            "the audit log records no options (a Manager from before they were recorded): "
-            "options not given here are the defaults"
-        )
-    if log is not None and recording.options_differ and chosen.from_audit:
-        chosen.warnings.append(
-            f"the log has runs with different options: those of the last (line {log.line}) are used"
-        )
-    if log is not None and log.unknown not in (None, "undetermined"):
-        chosen.warnings.append(
-            f"the run read a condition over a measure with no value as {log.unknown} (unknown={log.unknown}); "
-            "the reference semantics leaves such a firing undetermined, so verdicts may differ"
-        )
-    other = {s: n for s, n in recording.decision_semantics.items() if s != str(chosen.options.semantics)}
-    if other:
-        made = ", ".join(f"{clip(s, 40)} ({_count(n, 'decision')})" for s, n in sorted(other.items()))
-        how = " (given on the command line)" if args.semantics is not None else ""
-        chosen.warnings.append(
-            f"the log's decisions were made with semantics {made}; "
-            f"judged with {chosen.options.semantics}{how}"
-        )
-    return chosen
-
-
-def _priorities_of(
-    spec: Specification,
-    given: Sequence[str],
-    *,
-    logged: Sequence[tuple[str, str]] = (),
-    where: str = "--priority",
-    notes: list[str] | None = None,
-) -> list[tuple[str, str]]:
-    """The file's priorities, those given with ``--priority`` and those an audit log's options
-    record (``logged``, found at ``where``); UserError for an unknown rule name on the command
-    line, a rule over itself, or a cycle (``A > B`` and ``B > A``).
-
-    A logged pair naming a rule these rules do not have (they are a newer version) is left
-    out, with a line in ``notes``.
-    """
-    rules = [r.name for r in spec.rules]
-    out = list(pairs(spec))
-    for text in given:
-        try:
-            given_pairs = parse_priority(text)
-        except UserError as e:
-            e.where = e.where or f"--priority {clip(text, 80)!r}"
-            raise
-        for pair in given_pairs:
-            for name in pair:
-                if name not in rules:
-                    close = difflib.get_close_matches(name, rules, n=1) if len(name) < 200 else []
-                    raise UserError(
-                        f"no rule named {clip(name, 80)!r} in {spec.path}",
-                        where=f"--priority {clip(text, 80)!r}",
-                        hint=f"did you mean {close[0]!r}?"
-                        if close
-                        else f"the rules are {clip(', '.join(rules), 200)}",
-                    )
-        out += given_pairs
-    known = [(h, lo) for h, lo in logged if h in rules and lo in rules]
-    gone = [f"{h} > {lo}" for h, lo in logged if (h, lo) not in known]
-    if gone and notes is not None:
-        notes.append(
-            f"priorities of the log over rules not in these rules, ignored: {clip(', '.join(gone), 300)}"
-        )
-    out += [pair for pair in known if pair not in out]
-    hint = (
-        "these are the audit log's priorities with the rule file's: choose others with --priority"
-        if logged
-        else ""
-    )
-    circle = cycle(out)
-    if circle and len(circle) == 2:
-        raise UserError(
-            f"rule {clip(circle[0], 80)!r} is declared above itself",
-            where=where,
-            hint=hint or "a priority orders two different rules",
-        )
-    if circle:
-        raise UserError(
-            f"the priorities go round in a circle: {clip(' > '.join(circle), 200)}",
-            where=where,
-            hint=hint or "a rule cannot prevail over a rule that prevails over it; drop one of them",
-        )
-    return out
-
-
 # ---------------------------------------------------------------------------- human output
 
 
-def _print(j: Judgement, chosen: _Chosen, recording: Recording) -> None:
+def _print(j: Judgement, choice: conformance.Choice, recording: Recording) -> None:
     lines: list[Text] = []
-    if chosen.said:
+    said = _said_options(choice, recording)
+    if said:
         line = recording.options.line if recording.options is not None else 0
-        lines.append(_line("options", f"from the audit log (line {line}): {', '.join(chosen.said)}"))
-    for text in chosen.warnings:
+        lines.append(_line("options", f"from the audit log (line {line}): {', '.join(said)}"))
+    for text in choice.warnings:
         lines.append(_line("warning", text))
-    for text in chosen.notes:
+    for text in choice.notes:
         lines.append(_line("note", text))
     cancelled = [v for v in j.verdicts if v.status == "cancelled"]
     for v in j.breaches:
@@ -435,35 +317,34 @@ def _s(x: float) -> str:
     return str(int(x)) if x == int(x) else f"{x:.3f}".rstrip("0").rstrip(".")
 
 
+def _said_options(choice: conformance.Choice, recording: Recording) -> list[str]:
+    """The options taken from the audit log as the options line shows them: ``semantics
+    nested``, ``priority Rule21 > Rule3`` (those of the log's priorities in force), ``untimed
+    immediate (1 s)``."""
+    reading = choice.reading
+    out = []
+    for key in choice.from_audit:
+        if key == "priorities":
+            logged = recording.options.priorities if recording.options is not None else ()
+            declared = set(reading.priorities)
+            shown = [f"priority {h} > {lo}" for h, lo in logged if (h, lo) in declared]
+            out.append(", ".join(shown) or "no priority")
+        else:
+            out.append(f"{key.replace('_', '-')} {_said(getattr(reading, key))}")
+    return out
+
+
 def _said(value: object) -> str:
     """An option's value on the options line: ``nested``, ``60``, ``immediate (1 s)``."""
-    if value == "immediate":
+    if value == Untimed.IMMEDIATE:
         return f"immediate ({_s(IMMEDIATE_S)} s)"
     return _s(value) if isinstance(value, float) else str(value)
 
 
-def _untimed(text: str) -> str | float:
-    """``--untimed``: ``none``, ``immediate`` or a finite, non-negative number of seconds (argparse
-    reports anything else, exit 2)."""
-    if text in ("none", "immediate"):
-        return text
+def _untimed(text: str) -> Untimed | float:
+    """``--untimed``: ``none``, ``immediate`` or a finite, non-negative number of seconds
+    (:func:`~cosleec.lang.parse_untimed`; argparse reports anything else, exit 2)."""
     try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"{clip(text, 40)!r} is not none, immediate or a number of seconds"
-        ) from None
-    if not math.isfinite(value) or value < 0:
-        raise argparse.ArgumentTypeError(
-            f"{clip(text, 40)!r} is not a finite, non-negative number of seconds"
-        )
-    return value
-
-
-def _untimed_seconds(value: str | float) -> float | None:
-    """The reference's ``Options.untimed`` for the Manager's option: none -> None, immediate -> 1 s."""
-    if value == "none":
-        return None
-    if value == "immediate":
-        return IMMEDIATE_S
-    return float(value)
+        return parse_untimed(text)
+    except ConfigurationError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None

@@ -6,12 +6,14 @@ import argparse
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from cosleec import demo
 from cosleec.cli import timeline
 from cosleec.cli.common import add_clause_options, output_file, port
 from cosleec.errors import UserError
-from cosleec.views import Timeline
+from cosleec.runtime import Manager
+from cosleec.views import Timeline, View, load_view
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -75,6 +77,13 @@ def pace(text: str) -> float:
     return value
 
 
+def _web_view(web_port: int) -> Callable[[Manager], View]:
+    """``--web PORT``: how the demo attaches the live web view to its Manager. The view is
+    found now, so a missing ``web`` extra is said before the demo opens a file or prints."""
+    factory = load_view("web")
+    return lambda manager: factory(manager, web_port)
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the embedded demo (:func:`cosleec.demo.main`).
 
@@ -108,8 +117,8 @@ def run(args: argparse.Namespace) -> int:
         plot = draw
     if args.pace is not None and args.web is None:
         raise UserError("--pace needs --web", hint="the day is paced for someone watching the live web view")
-    web = (
-        {"web": args.web, "pace": demo.PACE_S if args.pace is None else args.pace}
+    web: dict[str, Any] = (
+        {"view": _web_view(args.web), "pace": demo.PACE_S if args.pace is None else args.pace}
         if args.web is not None
         else {}
     )

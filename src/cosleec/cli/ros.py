@@ -15,6 +15,7 @@ import math
 import os
 import re
 import sys
+from collections.abc import Callable
 from typing import Any
 
 from cosleec import ros
@@ -28,11 +29,13 @@ from cosleec.nodes import (
     ListenerNode,
     ManagerNode,
     Mapping,
+    Route,
     TaskNode,
     load_routes,
     route,
 )
-from cosleec.runtime import RuleSet, Unknowns
+from cosleec.runtime import Manager, RuleSet, Unknowns
+from cosleec.views import AttachedView
 
 #: the options of each node kind that are also ROS parameters (argparse dests). Not the
 #: namespace: it names the node, which exists before its parameters can be read (ROS 2 has
@@ -116,18 +119,33 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     )
     nodes = p.add_subparsers(dest="node", metavar="NODE")
     nodes.required = True
+    for add in (_add_manager, _add_layers, _add_listener, _add_task, _add_guard):
+        _add_common(add(nodes), backend)
+    lp = nodes.add_parser("launch", help="start the nodes of a launch file; stop them on SIGINT/SIGTERM")
+    lp.add_argument("file", metavar="FILE", help="the launch file (YAML: backend, namespace, nodes)")
+    lp.set_defaults(run=run, backend=backend)
+    d = nodes.add_parser(
+        "demo", help="the assistive-care scenario over real middleware, in separate processes"
+    )
+    d.add_argument("--json", action="store_true", help="print runtime events as JSON lines")
+    _add_common(d, backend)
 
-    def common(q: argparse.ArgumentParser) -> None:
-        q.add_argument("--namespace", default="/cosleec", help="the topics' namespace (default /cosleec)")
-        q.add_argument(
-            "--wire",
-            choices=("typed", "json"),
-            default="typed",
-            help="typed: cosleec_interfaces messages (default); json: JSON text in std_msgs/String, "
-            "for tools without the types (every node of a system must use the same)",
-        )
-        q.set_defaults(run=run, backend=backend)
 
+def _add_common(q: argparse.ArgumentParser, backend: str) -> None:
+    """The options every node (and the demo) takes, after its own: the namespace and the wire."""
+    q.add_argument("--namespace", default="/cosleec", help="the topics' namespace (default /cosleec)")
+    q.add_argument(
+        "--wire",
+        choices=("typed", "json"),
+        default="typed",
+        help="typed: cosleec_interfaces messages (default); json: JSON text in std_msgs/String, "
+        "for tools without the types (every node of a system must use the same)",
+    )
+    q.set_defaults(run=run, backend=backend)
+
+
+def _add_manager(nodes: argparse._SubParsersAction[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+    """``manager``: the rules, where the Manager writes, and what it lets others make it do."""
     m = nodes.add_parser("manager", help="rules, context, decisions, obligations")
     m.add_argument("rules", nargs="?", help="the rule file (or the `rules` parameter)")
     add_clause_options(m)
@@ -175,15 +193,27 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
         help="ROS 2: stay unconfigured until a lifecycle manager configures and activates the node "
         "(default: configure and activate at once)",
     )
-    common(m)
+    return m
+
+
+def _add_layers(nodes: argparse._SubParsersAction[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+    """``layers``: the COP Layer Manager, from the same rules and clause options as the Manager."""
     la = nodes.add_parser("layers", help="the COP Layer Manager: publishes active layers (latched)")
     la.add_argument("rules", nargs="?", help="the rule file (or the `rules` parameter)")
     add_clause_options(la)  # as the manager's, or the two choose different layers
-    common(la)
+    return la
+
+
+def _add_listener(nodes: argparse._SubParsersAction[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+    """``listener``: the Context Listener, from a mapping file."""
     li = nodes.add_parser("listener", help="the Context Listener: robot topics -> measures and events")
     li.add_argument("mapping", nargs="?", help="the mapping file (or the `mapping` parameter)")
     li.add_argument("--rules", help="check the mapping against these rules")
-    common(li)
+    return li
+
+
+def _add_task(nodes: argparse._SubParsersAction[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+    """``task``: a task node, its module of tasks, and what it does when the Manager is away."""
     t = nodes.add_parser("task", help="a task node: layered implementations of rules")
     t.add_argument("rules", nargs="?", help="the rule file (or the `rules` parameter)")
     t.add_argument(
@@ -213,7 +243,11 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
         metavar="SECONDS",
         help="how long a task's request waits for the Manager's answer (default 2)",
     )
-    common(t)
+    return t
+
+
+def _add_guard(nodes: argparse._SubParsersAction[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+    """``guard``: the topics it guards (a mapping's ``guards``, or one route given here)."""
     g = nodes.add_parser(
         "guard",
         help="forward a topic's messages (any type) only while the event they stand for is permitted",
@@ -240,15 +274,7 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
         metavar="SECONDS",
         help="how long a message waits for the Manager's answer before it is dropped (default 0.5)",
     )
-    common(g)
-    lp = nodes.add_parser("launch", help="start the nodes of a launch file; stop them on SIGINT/SIGTERM")
-    lp.add_argument("file", metavar="FILE", help="the launch file (YAML: backend, namespace, nodes)")
-    lp.set_defaults(run=run, backend=backend)
-    d = nodes.add_parser(
-        "demo", help="the assistive-care scenario over real middleware, in separate processes"
-    )
-    d.add_argument("--json", action="store_true", help="print runtime events as JSON lines")
-    common(d)
+    return g
 
 
 def node_name(namespace: str, kind: str) -> str:
@@ -296,6 +322,21 @@ def run(args: argparse.Namespace) -> int:
     if node == "demo":
         return ros.run_demo(backend, args.namespace, args.json, wire=args.wire)
     ros_args = list(getattr(args, "ros_args", []) or [])
+    _refuse_on_ros1(args, backend, node, ros_args)
+    _check_files(args, node)
+    _check_types(backend, _robot_types(args, node))
+    if node == "task" and args.module:  # imported now: a module without install(node) is said at once
+        ros.load_module(args.module, args.path)
+    name = node_name(args.namespace, node if node != "task" else args.name)
+    lifecycle = backend == "ros2" and node == "manager"
+    make = _maker(args, node, lifecycle)
+    if backend == "ros2" and not os.environ.get("ROS_DOMAIN_ID"):
+        print("cosleec: note: ROS_DOMAIN_ID is not set (domain 0)", file=sys.stderr)
+    return ros.serve(backend, node, make, name, wire=args.wire, ros_args=ros_args, lifecycle=lifecycle)
+
+
+def _refuse_on_ros1(args: argparse.Namespace, backend: str, node: str, ros_args: list[str]) -> None:
+    """What ROS 1 has not: ROS 2's ``--ros-args`` (parameters are ``_name:=value``), lifecycle nodes."""
     if backend == "ros1" and (
         "--ros-args" in ros_args or any(a in ("-p", "--params-file") for a in ros_args)
     ):
@@ -308,26 +349,35 @@ def run(args: argparse.Namespace) -> int:
             "--no-autostart: ROS 1 has no lifecycle nodes", hint="the ROS 1 Manager enforces from its start"
         )
 
-    # files given as arguments are read before the middleware starts: a mistake is reported at once
+
+def _check_files(args: argparse.Namespace, node: str) -> None:
+    """The rule file read, and the Manager's files and directories checked, before the middleware
+    starts: a mistake is reported at once."""
     if (node in ("layers", "task") and args.rules) or (node == "manager" and args.rules and args.autostart):
         RuleSet.from_file(args.rules)  # (a managed Manager reads its rules when configured)
-    if node == "manager":  # written by the node: the directory must exist (none is created)
-        for option, what, path in (
-            ("--audit", "the audit log", args.audit),
-            ("--journal", "the journal", args.journal),
-            ("--record", "the recording", args.record),
-        ):
-            if path:
-                output_file(path, what, option)
-        if args.reset_journal and not args.journal:
-            raise UserError("--reset-journal needs --journal", hint="give the journal to start afresh from")
-        if args.reload_dir and not os.path.isdir(args.reload_dir):
-            raise UserError(
-                f"--reload-dir {args.reload_dir!r} is not a directory",
-                hint="give an existing directory of rule files that only the operator can write to",
-            )
+    if node != "manager":
+        return
+    for option, what, path in (  # written by the node: the directory must exist (none is created)
+        ("--audit", "the audit log", args.audit),
+        ("--journal", "the journal", args.journal),
+        ("--record", "the recording", args.record),
+    ):
+        if path:
+            output_file(path, what, option)
+    if args.reset_journal and not args.journal:
+        raise UserError("--reset-journal needs --journal", hint="give the journal to start afresh from")
+    if args.reload_dir and not os.path.isdir(args.reload_dir):
+        raise UserError(
+            f"--reload-dir {args.reload_dir!r} is not a directory",
+            hint="give an existing directory of rule files that only the operator can write to",
+        )
+
+
+def _robot_types(args: argparse.Namespace, node: str) -> list[tuple[str, str, str]]:
+    """(where, what, message type) of the robot's topics a listener or guard reads, from the
+    mapping (checked against the rules, if given) or the command line; read and checked now."""
     early = RuleSet.from_file(args.rules) if node in ("listener", "guard") and args.rules else None
-    typed: list[tuple[str, str, str]] = []  # (where, what, message type) of the robot's topics
+    typed: list[tuple[str, str, str]] = []
     if node == "listener" and args.mapping:
         mapping = Mapping.load(
             input_file(args.mapping, "the mapping", text=True),
@@ -340,54 +390,31 @@ def run(args: argparse.Namespace) -> int:
             input_file(args.mapping, "the mapping", text=True), early.events if early else None
         )
         typed += [(args.mapping, f"guards.{r.source}", r.type) for r in routes]
-    if node == "guard" and (args.source or args.target or args.msg_type or args.event):
-        spec = {"to": args.target, "type": args.msg_type, "event": args.event}
-        r = route(str(args.source or ""), spec, "--from/--to/--type/--event", early.events if early else None)
+    if node == "guard" and _one_route(args):
+        r = _command_line_route(args, early.events if early else None)
         typed.append(("--type", f"the guard of {r.source}", r.type))
-    _check_types(backend, typed)
-    if node == "task" and args.module:  # imported now: a module without install(node) is said at once
-        ros.load_module(args.module, args.path)
-    name = node_name(args.namespace, node if node != "task" else args.name)
-    lifecycle = backend == "ros2" and node == "manager"
+    return typed
+
+
+def _one_route(args: argparse.Namespace) -> bool:
+    """Does the command line give the guard its one route (``--from``, ``--to``, ``--type``, ``--event``)?"""
+    return bool(args.source or args.target or args.msg_type or args.event)
+
+
+def _command_line_route(args: argparse.Namespace, events: frozenset[str] | None) -> Route:
+    """The guard's one route, from ``--from``, ``--to``, ``--type`` and ``--event``."""
+    spec = {"to": args.target, "type": args.msg_type, "event": args.event}
+    return route(str(args.source or ""), spec, "--from/--to/--type/--event", events)
+
+
+def _maker(args: argparse.Namespace, node: str, lifecycle: bool) -> Callable[[Any], Any]:
+    """``make(transport)``, which builds the node once the middleware is up, as :func:`cosleec.ros.serve`
+    wants it: the node's ROS parameters win over the options, and the files they name are read then."""
 
     def make(t: Any) -> Any:
         o = options(t, args, node)
         if node == "manager":
-            path = _required(o.rules, "a rule file: rules", node)
-            sim = bool(o.sim_time) or bool(getattr(t, "use_sim_time", lambda: False)())
-            # a reset is for the first Manager of this process only: a lifecycle node configured
-            # again restores the journal the first one wrote
-            reset = [bool(args.reset_journal)]
-
-            def build(active: bool) -> ManagerNode:
-                node = ManagerNode(
-                    t,
-                    RuleSet.from_file(path),  # a lifecycle node reads it when configured
-                    namespace=o.namespace,
-                    semantics=o.semantics,
-                    sim_time=sim,
-                    audit=o.audit,
-                    record=o.record,
-                    status_each=o.status_each,
-                    unknown=o.unknown,
-                    journal=o.journal,
-                    priorities=o.priority,
-                    priority_semantics=o.priority_semantics,
-                    priority_lead=o.priority_lead,
-                    rules_path=o.rules,
-                    active=active,
-                    web=args.web,
-                    reload_dir=args.reload_dir,
-                    decide=args.decide,
-                    reset_journal=bool(reset and reset.pop()),
-                )
-                if node.manager.web_url:
-                    print(f"cosleec: live web view at {node.manager.web_url}", file=sys.stderr, flush=True)
-                return node
-
-            if not lifecycle:
-                return build(True)
-            return ManagedManager(t, build, path, autostart=o.autostart)
+            return _manager(t, o, args, lifecycle)
         rules = (
             RuleSet.from_file(_required(o.rules, "a rule file: rules", node))
             if node in ("layers", "task") or o.rules
@@ -396,7 +423,7 @@ def run(args: argparse.Namespace) -> int:
         if node == "layers":
             assert rules is not None
             return LayersNode(
-                t, rules, namespace=o.namespace, semantics=o.semantics, unknowns=Unknowns(o.unknown)
+                t, rules, namespace=o.namespace, semantics=o.semantics, unknown=Unknowns(o.unknown)
             )
         if node == "listener":
             mapping = Mapping.load(
@@ -406,36 +433,92 @@ def run(args: argparse.Namespace) -> int:
             )
             return ListenerNode(t, mapping, namespace=o.namespace)
         if node == "guard":
-            events = rules.events if rules else None
-            if args.source or args.target or args.msg_type or args.event:
-                spec = {"to": args.target, "type": args.msg_type, "event": args.event}
-                routes = [route(str(args.source or ""), spec, "--from/--to/--type/--event", events)]
-            else:
-                routes = load_routes(_required(o.mapping, "a mapping file: mapping", node), events)
-            return GuardNode(
-                t,
-                routes,
-                manager=o.manager or "/" + node_name(o.namespace, "manager"),
-                namespace=o.namespace,
-                timeout=o.timeout,
-            )
+            return _guard(t, o, args, rules)
         assert rules is not None
-        tn = TaskNode(
-            t,
-            rules,
-            namespace=o.namespace,
-            name=o.name,
-            status_each=o.status_each,
-            when_manager_down=o.when_manager_down,
-            request_timeout=o.request_timeout,
-        )
-        ros.load_module(_required(o.module, "a task module: --module", node), o.path).install(tn)
-        only = o.only.split(",") if o.only else None
-        return tn.start(only)
+        return _task(t, o, rules)
 
-    if backend == "ros2" and not os.environ.get("ROS_DOMAIN_ID"):
-        print("cosleec: note: ROS_DOMAIN_ID is not set (domain 0)", file=sys.stderr)
-    return ros.serve(backend, node, make, name, wire=args.wire, ros_args=ros_args, lifecycle=lifecycle)
+    return make
+
+
+def _manager(t: Any, o: argparse.Namespace, args: argparse.Namespace, lifecycle: bool) -> Any:
+    """The Manager node; on ROS 2 a lifecycle node (:class:`cosleec.ros.ManagedManager`) that
+    builds it when configured. The live web view's address, if any, is printed on stderr."""
+    path = _required(o.rules, "a rule file: rules", "manager")
+    sim = bool(o.sim_time) or bool(getattr(t, "use_sim_time", lambda: False)())
+    # a reset is for the first Manager of this process only: a lifecycle node configured
+    # again restores the journal the first one wrote
+    reset = [bool(args.reset_journal)]
+    # --web: the view is found now (a missing extra is said at once); the node attaches it to
+    # each Manager it builds, before it starts, and closes it before that Manager closes
+    web = AttachedView(args.web) if args.web is not None else None
+
+    def attach_web(manager: Manager) -> Callable[[], None] | None:
+        if web is None:
+            return None
+        web.attach(manager)
+        return web.close
+
+    def build(active: bool) -> ManagerNode:
+        node = ManagerNode(
+            t,
+            RuleSet.from_file(path),  # a lifecycle node reads it when configured
+            namespace=o.namespace,
+            semantics=o.semantics,
+            sim_time=sim,
+            audit=o.audit,
+            record=o.record,
+            status_each=o.status_each,
+            unknown=o.unknown,
+            journal=o.journal,
+            priorities=o.priority,
+            priority_semantics=o.priority_semantics,
+            priority_lead=o.priority_lead,
+            rules_path=o.rules,
+            active=active,
+            on_manager=attach_web,
+            reload_dir=args.reload_dir,
+            decide=args.decide,
+            reset_journal=bool(reset and reset.pop()),
+        )
+        if web is not None and web.url:
+            print(f"cosleec: live web view at {web.url}", file=sys.stderr, flush=True)
+        return node
+
+    if not lifecycle:
+        return build(True)
+    return ros.ManagedManager(t, build, path, autostart=o.autostart)
+
+
+def _guard(t: Any, o: argparse.Namespace, args: argparse.Namespace, rules: RuleSet | None) -> GuardNode:
+    """The guard node: its one route from the command line, else the routes of its mapping."""
+    events = rules.events if rules else None
+    if _one_route(args):
+        routes = [_command_line_route(args, events)]
+    else:
+        routes = load_routes(_required(o.mapping, "a mapping file: mapping", "guard"), events)
+    return GuardNode(
+        t,
+        routes,
+        manager=o.manager or "/" + node_name(o.namespace, "manager"),
+        namespace=o.namespace,
+        timeout=o.timeout,
+    )
+
+
+def _task(t: Any, o: argparse.Namespace, rules: RuleSet) -> Any:
+    """A task node, with the tasks its module installs, serving the rules of ``--only`` (or all)."""
+    tn = TaskNode(
+        t,
+        rules,
+        namespace=o.namespace,
+        name=o.name,
+        status_each=o.status_each,
+        when_manager_down=o.when_manager_down,
+        request_timeout=o.request_timeout,
+    )
+    ros.load_module(_required(o.module, "a task module: --module", "task"), o.path).install(tn)
+    only = o.only.split(",") if o.only else None
+    return tn.start(only)
 
 
 def _check_types(backend: str, typed: list[tuple[str, str, str]]) -> None:
@@ -459,80 +542,3 @@ def _check_types(backend: str, typed: list[tuple[str, str, str]]) -> None:
                 or "give the type as package/msg/Type (std_msgs/msg/Bool); "
                 f"`{'ros2 interface list' if backend == 'ros2' else 'rosmsg list'}` lists those installed",
             ) from None
-
-
-class ManagedManager:
-    """The Manager node as a ROS 2 lifecycle node: configure, activate, deactivate, clean up.
-
-    configure reads and checks the rule file (a broken file fails the transition and
-    leaves the node unconfigured) and builds the Manager, inactive; a configure after a
-    cleanup starts a new Manager from the file (nothing of the old one's state is kept,
-    unless a journal holds it); activate starts enforcing; deactivate and cleanup stop
-    it: every request is refused. With ``autostart`` (the default) it
-    configures and activates itself at once, as a plain node would start.
-    """
-
-    def __init__(self, t: Any, build: Any, rules_path: str, *, autostart: bool = True) -> None:
-        self.t = t
-        self.build = build
-        self.rules_path = rules_path
-        self.node: ManagerNode | None = None
-        t.managed(
-            configure=self.configure,
-            activate=self.activate,
-            deactivate=self.deactivate,
-            cleanup=self.cleanup,
-            shutdown=self.shutdown,
-        )
-        if autostart and not (t.transition("configure") and t.transition("activate")):
-            raise UserError("the Manager could not configure and activate itself (see the log above)")
-
-    def configure(self) -> bool:
-        """Load and check the rules; build the Manager (inactive), or start it afresh after a cleanup."""
-        if self.node is None:
-            self.node = self.build(False)
-            return True
-        try:
-            self.node.reset(RuleSet.from_file(self.rules_path))  # a broken file fails the transition
-        except UserError as e:
-            print(f"cosleec: configure: {e.render()}", file=sys.stderr)
-            return False
-        return True
-
-    def cleanup(self) -> bool:
-        """Stop enforcing; the next configure starts from the rule file afresh."""
-        return self.deactivate()
-
-    def activate(self) -> bool:
-        """Start enforcing."""
-        assert self.node is not None
-        self.node.activate()
-        return True
-
-    def deactivate(self) -> bool:
-        """Stop enforcing: requests refused, events rejected."""
-        if self.node is not None:
-            self.node.deactivate()
-        return True
-
-    def shutdown(self) -> bool:
-        """Stop enforcing before the node goes."""
-        return self.deactivate()
-
-    def status(self, **extra: Any) -> None:
-        """The heartbeat: the Manager's status once configured (nothing before)."""
-        if self.node is not None:
-            self.node.status(**extra)
-
-    def reload(
-        self, path: str | None = None, *, via: str = "call", caller: str | None = None
-    ) -> dict[str, Any]:
-        """SIGHUP: as :meth:`ManagerNode.reload`, once configured."""
-        if self.node is None:
-            return {"success": False, "message": "not configured yet: nothing to reload"}
-        return self.node.reload(path, via=via, caller=caller)
-
-    def close(self) -> None:
-        """Close the Manager, if it was ever configured."""
-        if self.node is not None:
-            self.node.close()

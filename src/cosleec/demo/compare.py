@@ -9,8 +9,10 @@ so records of one instant can be written in another order. :func:`outcomes` keep
 a run *decided and what came of it*, and puts the records of each instant into one
 canonical order, so that two runs compare record by record and any difference is real.
 
-Records are the Manager's runtime events in audit form (``{"kind", "time", **data}``):
-the lines of a Manager's ``--audit`` file, or :meth:`cosleec.demo.Run.records`.
+Records are the Manager's runtime events in audit form (``{"kind", "time", **data}``, kinds
+and fields as :mod:`cosleec.records` defines them): the records of a Manager's ``--audit``
+file as the one reader reads them (:func:`cosleec.runtime.read_audit`), or
+:meth:`cosleec.demo.Run.records`.
 """
 
 from __future__ import annotations
@@ -24,19 +26,20 @@ from typing import Any
 
 from cosleec.demo.player import Step
 from cosleec.demo.runner import run
+from cosleec.records import HEADER, Kind
 
 #: record kinds that end an instant: the driver changed the context (and so the layers)
-BARRIERS = ("context", "layers")
+BARRIERS = (Kind.CONTEXT, Kind.LAYERS)
 #: record kinds only the embedded Manager makes: it runs the tasks, a Manager node does not
 #: (task nodes count what they ran in their status); what a task failed to do shows up as
 #: a violation anyway
-EMBEDDED_ONLY = ("task-done", "task-failed")
+EMBEDDED_ONLY = (Kind.TASK_DONE, Kind.TASK_FAILED)
 #: record kinds that describe the run rather than its outcomes (the options it ran with)
-SETTINGS = ("options",)
+SETTINGS = (Kind.OPTIONS,)
 #: fields of a record of another kind that are not compared: the Manager's numbering of
 #: its inputs (the order in which reports arrived), the process it ran in, and the audit
-#: log's header (wall and monotonic time, run id, rule digest)
-VOLATILE = ("seq", "causal", "session", "wall", "mono", "run", "rules")
+#: log's header (seq, wall and monotonic time, run id, rule digest)
+VOLATILE = ("causal", "session", *(k for k in HEADER if k not in ("kind", "time")))
 
 
 @dataclass(frozen=True)
@@ -73,7 +76,7 @@ class Outcome:
         if self.id is not None:
             parts.append(f"#{self.id}")
         parts += [v for v in (self.rule, self.event) if v is not None]
-        if self.kind == "decision":
+        if self.kind == Kind.DECISION:
             parts.append(f"clause={self.clause} layer={self.layer}")
         if self.status is not None:
             parts.append(self.status + (f" at {self.at:g}" if self.at is not None else ""))
@@ -91,7 +94,7 @@ class Outcome:
     @property
     def violation(self) -> bool:
         """A first violation of an obligation, as the Manager counts it (not a later ``late`` report)."""
-        return self.kind == "obligation" and self.status == "violated" and not self.late
+        return self.kind == Kind.OBLIGATION and self.status == "violated" and not self.late
 
 
 def _canon(value: Any) -> str:
@@ -117,7 +120,7 @@ def normalise(record: Mapping[str, Any]) -> Outcome | None:
     t = float(record["time"])
     if kind in EMBEDDED_ONLY or kind in SETTINGS:
         return None
-    if kind == "decision":
+    if kind == Kind.DECISION:
         return Outcome(
             kind,
             t,
@@ -138,7 +141,7 @@ def normalise(record: Mapping[str, Any]) -> Outcome | None:
                 }
             ),
         )
-    if kind == "obligation":
+    if kind == Kind.OBLIGATION:
         return Outcome(
             kind,
             t,
@@ -162,28 +165,28 @@ def normalise(record: Mapping[str, Any]) -> Outcome | None:
                 }
             ),
         )
-    if kind == "context":
+    if kind == Kind.CONTEXT:
         return Outcome(
             kind,
             t,
             id=_opt_int(record.get("version")),
             detail=_canon({"values": record["values"], "stale": record.get("stale", [])}),
         )
-    if kind == "layers":
+    if kind == Kind.LAYERS:
         return Outcome(
             kind,
             t,
             id=int(record["version"]),
             detail=_canon({"active": record["active"], "switches": record["switches"]}),
         )
-    if kind == "refused":
+    if kind == Kind.REFUSED:
         return Outcome(
             kind,
             t,
             event=record["event"],
             detail=_canon({"by": record["by"], "obligations": record["obligations"]}),
         )
-    if kind == "event":  # an occurrence the Manager was told of
+    if kind == Kind.OCCURRENCE:  # an occurrence the Manager was told of
         return Outcome(kind, t, event=record["event"])
     rest = {k: v for k, v in record.items() if k not in ("kind", "time", *VOLATILE)}
     return Outcome(kind, t, detail=_canon(rest))
@@ -196,9 +199,9 @@ def _order(o: Outcome) -> tuple[float, int, int, int, str]:
     (pending, its outcome, each late report); then every other record by its content
     (occurrences by name, refusals, rejections).
     """
-    if o.kind == "decision":
+    if o.kind == Kind.DECISION:
         return (float(o.id or 0), 0, 0, 0, "")
-    if o.kind == "obligation":
+    if o.kind == Kind.OBLIGATION:
         stage = 0 if o.status == "pending" else 1 + len(o.late)
         return (float(o.decision or 0), 1, o.id or 0, stage, "")
     return (math.inf, 2, 0, 0, f"{o.kind} {o.event} {o.detail}")
@@ -276,13 +279,13 @@ def summary(stream: Iterable[Outcome]) -> dict[str, int]:
     """Counts of a normalised stream: decisions, violations (as the Manager counts them), late events, refusals."""
     s = {"decisions": 0, "violations": 0, "late": 0, "refused": 0}
     for o in stream:
-        if o.kind == "decision":
+        if o.kind == Kind.DECISION:
             s["decisions"] += 1
         elif o.violation:
             s["violations"] += 1
-        elif o.kind == "obligation" and o.late:
+        elif o.kind == Kind.OBLIGATION and o.late:
             s["late"] += 1
-        elif o.kind == "refused":
+        elif o.kind == Kind.REFUSED:
             s["refused"] += 1
     return s
 

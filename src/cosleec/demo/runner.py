@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from importlib import resources
 from typing import Any
@@ -18,7 +18,7 @@ from rich.text import Text
 
 from cosleec.demo.assistive_care import scenario, tasks
 from cosleec.demo.player import Step, play
-from cosleec.demo.watch import PACE_S, Watch
+from cosleec.demo.watch import PACE_S, Served, Watch
 from cosleec.runtime import AuditLog, Manager, RuntimeEvent, VirtualClock
 
 
@@ -60,7 +60,7 @@ def run(
     reset_journal: bool = False,
     on_step: Callable[[float, Step], None] | None = None,
     on_event: Callable[[RuntimeEvent], None] | None = None,
-    web: int | Mapping[str, Any] | None = None,
+    view: Callable[[Manager], Served] | None = None,
     on_start: Callable[[Manager], None] | None = None,
     before_close: Callable[[Manager], None] | None = None,
 ) -> Run:
@@ -72,8 +72,9 @@ def run(
     every runtime event; ``audit`` names a JSON Lines audit trail and ``journal`` the
     Manager's SQLite journal (state kept across runs and crashes: a journal a previous run
     left is restored first; ``reset_journal`` starts afresh from one the Manager refused).
-    ``web`` serves the live web view (``Manager(web=...)``);
-    ``on_start(manager)`` runs once it is started (the view's URL is known then) and
+    ``view(manager)`` attaches a live view before the Manager starts (``cosleec demo --web``
+    gives the web view's, :meth:`Watch.attach`) and the view is closed before the Manager;
+    ``on_start(manager)`` runs once it is started and
     ``before_close(manager)`` after the last step (the web demo serves on there). The Manager
     is closed before returning, even when a step or a hook raises (Ctrl-C).
     """
@@ -85,14 +86,9 @@ def run(
         audit=AuditLog(audit) if audit else None,
         journal=journal,
         reset_journal=reset_journal,
-        web=web,
     )
     robot = tasks.install(manager)
-    try:
-        manager.start()
-    except BaseException:
-        manager.close()  # a view that started is stopped, its port freed
-        raise
+    served = _start(manager, view)
     result = Run(manager, robot)
 
     def observe(ev: RuntimeEvent) -> None:
@@ -101,32 +97,55 @@ def run(
             on_event(ev)
 
     manager.subscribe(observe)
+    try:
+        if on_start is not None:
+            on_start(manager)
+        play(scenario.STEPS if steps is None else steps, _actions(manager, robot, clock), clock.now, on_step)
+        if before_close is not None:
+            before_close(manager)
+    finally:
+        _close(served, manager)
+    return result
+
+
+def _start(manager: Manager, view: Callable[[Manager], Served] | None) -> Served | None:
+    """Attach the live view, if any (before the start: it hears start's records), then start
+    the Manager; when either fails, the view is stopped (its port freed) and the Manager closed."""
+    served = None
+    try:
+        served = view(manager) if view is not None else None
+        manager.start()
+    except BaseException:
+        _close(served, manager)
+        raise
+    return served
+
+
+def _close(view: Served | None, manager: Manager) -> None:
+    """Stop the live view, if any (its port is free again), then close the Manager."""
+    try:
+        if view is not None:
+            view.close()
+    finally:
+        manager.close()
+
+
+def _actions(manager: Manager, robot: tasks.Robot, clock: VirtualClock) -> dict[str, Callable[[Any], object]]:
+    """What each kind of scenario step does to the demo's Manager and robot (``advance``: the
+    virtual clock moves on, then a tick)."""
 
     def advance(seconds: float) -> None:
         clock.advance(seconds)
         manager.tick()
 
-    try:
-        if on_start is not None:
-            on_start(manager)
-        play(
-            steps if steps is not None else scenario.STEPS,
-            {
-                "set": manager.update,
-                "event": manager.event,
-                "advance": advance,
-                "request": manager.request,
-                "fail": robot.failing.add,
-                "recover": robot.failing.discard,
-            },
-            clock.now,
-            on_step,
-        )
-        if before_close is not None:
-            before_close(manager)
-    finally:
-        manager.close()
-    return result
+    return {
+        "set": manager.update,
+        "event": manager.event,
+        "advance": advance,
+        "request": manager.request,
+        "fail": robot.failing.add,
+        "recover": robot.failing.discard,
+    }
 
 
 # ---------------------------------------------------------------------- terminal display
@@ -213,7 +232,7 @@ def main(
     audit: str | None = None,
     journal: str | None = None,
     reset_journal: bool = False,
-    web: int | None = None,
+    view: Callable[[Manager], Served] | None = None,
     pace: float = PACE_S,
     on_done: Callable[[Run], None] | None = None,
 ) -> int:
@@ -221,20 +240,24 @@ def main(
 
     ``on_done`` is called with the finished :class:`Run` (``cosleec demo --plot`` draws it).
 
-    ``web`` serves the live web view on that port (0: a free one) and paces the day (a step
-    every ``pace`` seconds), then serves on until Ctrl-C (:mod:`cosleec.demo.watch`).
+    ``view(manager)`` attaches the live web view (the CLI gives ``cosleec.views``' factory for
+    ``--web PORT``) and paces the day (a step every ``pace`` seconds), then serves on until
+    Ctrl-C (:mod:`cosleec.demo.watch`).
     Returns 0: checking the decisions against ``scenario.EXPECTED`` is the tests' job.
     """
-    watch = Watch(pace, lambda line: print(line, file=sys.stderr if as_json else sys.stdout, flush=True))
     hooks: dict[str, Any] = {"reset_journal": True} if reset_journal else {}
-    if web is not None:
-        hooks |= {"web": web, "on_start": watch.started, "before_close": watch.linger}
+    watch = None
+    if view is not None:
+        watch = Watch(
+            pace, lambda line: print(line, file=sys.stderr if as_json else sys.stdout, flush=True), view
+        )
+        hooks |= {"view": watch.attach, "on_start": watch.started, "before_close": watch.linger}
     if as_json:
 
         def emit(ev: RuntimeEvent) -> None:
             print(json.dumps({"kind": ev.kind, "time": ev.time, **ev.data}, default=str), flush=True)
 
-        paced = watch.step if web is not None else None
+        paced = watch.step if watch is not None else None
         done = run(semantics=semantics, audit=audit, journal=journal, on_step=paced, on_event=emit, **hooks)
         if on_done is not None:
             on_done(done)
@@ -248,13 +271,20 @@ def main(
 
     def step(t: float, s: Step) -> None:
         display.step(t, s)
-        if web is not None:
+        if watch is not None:
             watch.step(t, s)
 
     result = run(
         semantics=semantics, audit=audit, journal=journal, on_step=step, on_event=display.event, **hooks
     )
-    m = result.manager
+    _summary(console, result.manager, audit)
+    if on_done is not None:
+        on_done(result)
+    return 0
+
+
+def _summary(console: Console, m: Manager, audit: str | None) -> None:
+    """The last lines of the terminal display: what the day came to, and where its audit trail is."""
     console.print()
     s = m.stats
     console.print(
@@ -266,6 +296,3 @@ def main(
     )
     if audit:
         console.print(Text(f"audit trail: {audit}", style="dim"))
-    if on_done is not None:
-        on_done(result)
-    return 0

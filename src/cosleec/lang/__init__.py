@@ -11,6 +11,9 @@ Typical use::
 Rule priorities (cosleec's extension, a file's ``priority_start`` block) are
 ``spec.priorities``; priorities from elsewhere go through ``parse_priority("Rule21 > Rule3")``,
 and ``closure`` and ``cycle`` answer questions about any set of pairs (priorities.py).
+How rules are read -- clause semantics, unknowns, untimed responses, priorities -- is one
+value, :class:`Reading` (reading.py): the runtime, the reference semantics, ``conforms`` and
+``analyse`` take it, and it is the audit log's ``options`` record.
 
 Other packages import from here only; the pipeline itself is in frontend.py.
 """
@@ -34,17 +37,20 @@ from cosleec.lang.priorities import (
     CANCEL,
     CONFLICT_AWARE,
     PRIORITY_SEMANTICS,
+    PrioritySemantics,
     closure,
     cycle,
     pairs,
     parse_priority,
 )
+from cosleec.lang.reading import IMMEDIATE_S, Reading, Untimed, one_of, parse_untimed
 
 __all__ = [
     "CANCEL",
     "CONFLICT_AWARE",
     "CONTEXTUAL_KEYWORDS",
     "DIALECTS",
+    "IMMEDIATE_S",
     "KEYWORDS",
     "PAPER_KEYWORDS",
     "PRIORITY_SEMANTICS",
@@ -58,12 +64,15 @@ __all__ = [
     "Options",
     "PaperPrinter",
     "Printer",
+    "PrioritySemantics",
+    "Reading",
     "Reuse",
     "Severity",
     "SleecError",
     "Specification",
     "SymbolTable",
     "Unknowns",
+    "Untimed",
     "analyse",
     "analyse_file",
     "ast",
@@ -80,9 +89,11 @@ __all__ = [
     "legos_features",
     "legos_misreads",
     "load",
+    "one_of",
     "pairs",
     "parse",
     "parse_priority",
+    "parse_untimed",
     "priorities",
     "read_source",
     "visit",

@@ -19,15 +19,20 @@ comes after the front end gets LEGOS-SLEEC's meaning in ordinary cosleec terms:
   value, ``true`` or ``false``;
 - a second rule (concern, purpose) of a name is kept under a new name, :func:`fresh_name`.
 
-May import: the lang modules ast and diagnostics.
+:class:`LegosReader` is the checker's side: handed each such defect, it works out that reading,
+warns, and records it in a :class:`LegosReading`.
+
+May import: the lang modules ast, diagnostics and scope.
 """
 
 from __future__ import annotations
 
-from collections.abc import Collection
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field, replace
 
 from cosleec.lang import ast as A
+from cosleec.lang.diagnostics import QUOTE_LIMIT, clip
+from cosleec.lang.scope import Scope
 
 
 def fresh_name(name: str, nth: int, taken: Collection[str]) -> str:
@@ -89,6 +94,150 @@ class LegosReading:
     def replace(self, old: A.Expr, new: A.Expr) -> None:
         """Read the expression node ``old`` (the very node, not an equal one) as ``new``."""
         self.exprs[id(old)] = (old, new)
+
+
+class LegosReader:
+    """How the checker reads, under ``legos_compat``, what LEGOS-SLEEC lets through.
+
+    LEGOS-SLEEC reads a scale literal as its position in its own scale and a scale measure
+    as its position in its scale, and compares positions as integers. Each method is handed
+    one such comparison (or a second definition of a name), reads it that way, warns,
+    records the reading in :attr:`reading` and returns True; it returns False (the caller
+    reports the error) where LEGOS-SLEEC has no reading.
+    """
+
+    def __init__(self, scope: Scope) -> None:
+        self.scope = scope
+        self.sink = scope.sink
+        self.reading = LegosReading()
+        self._taken: dict[int, set[str]] = {}  # id(a renames map of reading) -> names in use there
+
+    def position(self, lit: str) -> int | None:
+        """``lit``'s position in LEGOS-SLEEC's one table of literals: its index in its scale,
+        the same in every scale that has it (or None: LEGOS-SLEEC's table asserts that)."""
+        found = set()
+        for owner in self.scope.owners_of.get(lit, ()):
+            t = self.scope.table.measures[owner].type
+            assert isinstance(t, A.ScaleType)
+            found.add(t.literals.index(lit))
+        return found.pop() if len(found) == 1 else None
+
+    def literal(self, e: A.Compare, node: A.Expr, lit: str, measure: str, scale: A.ScaleType) -> bool:
+        """``{measure} op lit`` with ``lit`` (the expression ``node`` of ``e``) a literal of
+        another scale."""
+        p = self.position(lit)
+        if p is None:
+            return False
+        owners = self.scope.owners(lit)
+        head = (
+            f"`{clip(lit)}` is not in the scale of `{clip(measure)}` "
+            f"({clip(', '.join(scale.literals), 4 * QUOTE_LIMIT)}); LEGOS-SLEEC reads a scale "
+            f"literal as its position in its own scale, and `{clip(lit)}` is the {ordinal(p)} of "
+            f"`{owners}`'s"
+        )
+        if p < len(scale.literals):
+            new = scale.literals[p]
+            self.reading.replace(node, _renamed(node, new))
+            self.sink.warning(
+                "scale-literal",
+                f"{head}, so cosleec reads it as `{clip(new)}`, the {ordinal(p)} of `{clip(measure)}`'s",
+                node.span,
+                hint=f"write `{clip(new)}` if that is what is meant",
+            )
+            return True
+        op = e.op if node is e.right else mirrored(e.op)  # with the measure on the left
+        value = holds(op, 0, p)  # every position of the scale is below p
+        self._constant(e, value)
+        self.sink.warning(
+            "scale-literal",
+            f"{head}, beyond the {len(scale.literals)} of `{clip(measure)}`'s: LEGOS-SLEEC compares "
+            f"the positions, so the comparison is always {str(value).lower()}, and cosleec reads it "
+            f"as `{str(value).lower()}`",
+            node.span,
+            hint=f"compare with a literal of `{clip(measure)}`: "
+            f"{clip(', '.join(scale.literals), 4 * QUOTE_LIMIT)}",
+        )
+        return True
+
+    def number(self, node: A.Expr, lit: str) -> bool:
+        """A scale literal (the expression ``node``) compared with a number (a numeric measure, say)."""
+        p = self.position(lit)
+        if p is None:
+            return False
+        parens = node.parenthesized
+        self.reading.replace(node, A.IntLit(p, parenthesized=parens, span=node.span))
+        self.sink.warning(
+            "type",
+            f"scale literal `{clip(lit)}` (of `{self.scope.owners(lit)}`) is compared with a number; "
+            f"LEGOS-SLEEC reads a scale literal as its position in its scale, so cosleec reads it "
+            f"as {p}",
+            node.span,
+            hint="compare a number with a number, a scale measure with its own literals",
+        )
+        return True
+
+    def scale_number(self, e: A.Compare, measure: str, number: A.Expr, op: str, c: int) -> bool:
+        """Scale measure ``measure`` compared by ``e`` with ``number``, whose constant value is
+        ``c`` (``op``: the comparison with the measure on the left)."""
+        scale = self.scope.table.measures[measure].type
+        assert isinstance(scale, A.ScaleType)
+        shown = f"`{clip(number.name)}` = {c}" if isinstance(number, A.Name) else f"{c}"
+        head = (
+            f"`{e.op}` compares the scale of `{clip(measure)}` with a number ({shown}); LEGOS-SLEEC "
+            f"compares the measure's position in its scale (0 to {len(scale.literals) - 1}) with it"
+        )
+        hint = (
+            f"compare with a literal of `{clip(measure)}`: {clip(', '.join(scale.literals), 4 * QUOTE_LIMIT)}"
+        )
+        if 0 <= c < len(scale.literals):
+            new = scale.literals[c]
+            self.reading.replace(number, A.Name(new, parenthesized=number.parenthesized, span=number.span))
+            self.sink.warning(
+                "type",
+                f"{head}, so cosleec reads {c} as `{clip(new)}`, the {ordinal(c)} of `{clip(measure)}`'s",
+                e.span,
+                hint=hint,
+            )
+            return True
+        value = holds(op, 0, c)  # every position is on the same side of c
+        self._constant(e, value)
+        self.sink.warning(
+            "type",
+            f"{head}: always {str(value).lower()}, and cosleec reads it as `{str(value).lower()}`",
+            e.span,
+            hint=hint,
+        )
+        return True
+
+    def _constant(self, e: A.Compare, value: bool) -> None:
+        self.reading.replace(e, A.BoolLit(value, parenthesized=e.parenthesized, span=e.span))
+
+    def rename(
+        self,
+        renames: dict[int, str],
+        i: int,
+        name: str,
+        nth: dict[str, int],
+        items: Sequence[A.Rule] | Sequence[A.Situation],
+    ) -> str:
+        """The new name of item ``i`` of ``items``, a later definition of ``name``: recorded
+        in ``renames`` (one of :attr:`reading`'s maps), :func:`fresh_name`, clear of every
+        name of ``items`` and of the new names given so far; ``nth`` counts the definitions
+        of each name."""
+        taken = self._taken.get(id(renames))
+        if taken is None:
+            taken = self._taken[id(renames)] = {x.name for x in items}
+        nth[name] = nth.get(name, 1) + 1
+        new = fresh_name(name, nth[name], taken)
+        taken.add(new)
+        renames[i] = new
+        return new
+
+
+def _renamed(node: A.Expr, name: str) -> A.Name:
+    """A scale literal ``node`` (a Name) read as the literal ``name``, written as it was."""
+    assert isinstance(node, A.Name)
+    return A.Name(name, parenthesized=node.parenthesized, span=node.span)
 
 
 def apply(spec: A.Specification, reading: LegosReading) -> A.Specification:

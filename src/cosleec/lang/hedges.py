@@ -52,7 +52,7 @@ class Unknowns(StrEnum):
 def choose(
     values: Sequence[bool | None],
     semantics: HedgeSemantics = HedgeSemantics.LAST_WINS,
-    unknowns: Unknowns = Unknowns.UNDETERMINED,
+    unknown: Unknowns = Unknowns.UNDETERMINED,
 ) -> int | None:
     """The clause that applies: 0 for the default, i for clause i, None if undetermined.
 
@@ -66,7 +66,7 @@ def choose(
         choose([True, True, False], HedgeSemantics.NESTED)  # 2
     """
     # == rather than `is`: the options are StrEnums, and a plain "nested" must mean the same
-    values = _read(values, unknowns)
+    values = _read(values, unknown)
     if semantics == HedgeSemantics.LAST_WINS:
         for i in range(len(values) - 1, -1, -1):
             v = values[i]
@@ -116,13 +116,13 @@ def decisive(
     values: Sequence[bool | None],
     clause: int | None,
     semantics: HedgeSemantics = HedgeSemantics.LAST_WINS,
-    unknowns: Unknowns = Unknowns.UNDETERMINED,
+    unknown: Unknowns = Unknowns.UNDETERMINED,
 ) -> tuple[int, ...]:
     """The clauses (1-based) whose condition values decided ``clause``, for explanations.
 
     A value is decisive when forgetting it would leave the choice undetermined; the result
     is found with :func:`choose` itself, so it follows whatever the semantics are. Under
-    an ``unknowns`` policy that reads unknown values as true or false, an unknown value
+    an ``unknown`` policy that reads unknown values as true or false, an unknown value
     that decided the choice is decisive like any other. For an undetermined choice: the
     clauses whose value is unknown.
     """
@@ -133,15 +133,15 @@ def decisive(
         # chosen and every later one (known false) decided it, the earlier ones did not;
         # with none chosen, every value did (a test checks this against the search)
         return tuple(range(clause or 1, len(values) + 1))
-    return _decisive_by_search(values, clause, semantics, unknowns)
+    return _decisive_by_search(values, clause, semantics, unknown)
 
 
 def _decisive_by_search(
-    values: Sequence[bool | None], clause: int, semantics: HedgeSemantics, unknowns: Unknowns
+    values: Sequence[bool | None], clause: int, semantics: HedgeSemantics, unknown: Unknowns
 ) -> tuple[int, ...]:
     """:func:`decisive` for any semantics: forget each value in turn, keep it forgotten
     unless the choice changes."""
-    known = list(_read(values, unknowns))  # decide on the values as the policy read them
+    known = list(_read(values, unknown))  # decide on the values as the policy read them
     for i in range(len(known)):
         kept = known[i]
         known[i] = None
@@ -153,15 +153,15 @@ def _decisive_by_search(
 _UNKNOWNS = frozenset(Unknowns)
 
 
-def _read(values: Sequence[bool | None], unknowns: Unknowns) -> Sequence[bool | None]:
-    """The values as the ``unknowns`` policy reads them (unchanged under UNDETERMINED)."""
-    if unknowns == Unknowns.UNDETERMINED:
+def _read(values: Sequence[bool | None], unknown: Unknowns) -> Sequence[bool | None]:
+    """The values as the ``unknown`` policy reads them (unchanged under UNDETERMINED)."""
+    if unknown == Unknowns.UNDETERMINED:
         return values
-    if unknowns not in _UNKNOWNS:
+    if unknown not in _UNKNOWNS:
         raise ConfigurationError(
-            f"unknown policy {unknowns!r} for unknown values; expected one of {', '.join(Unknowns)}"
+            f"unknown policy {unknown!r} for unknown values; expected one of {', '.join(Unknowns)}"
         )
-    read = unknowns == Unknowns.TRUE
+    read = unknown == Unknowns.TRUE
     return [read if v is None else v for v in values]
 
 

@@ -7,6 +7,8 @@ higher rule impossible, §13.2 and §13.3). Priorities reach cosleec three ways:
 is the one home of what they share:
 
 - :func:`parse_priority` reads the command-line form (``"Rule21 > Rule3"``, ``"A > B > C"``);
+- :class:`PrioritySemantics` says how a priority resolves a clash (``cancel`` or
+  ``conflict-aware``; :data:`CANCEL` and :data:`CONFLICT_AWARE` are its members);
 - :func:`pairs` gives a specification's declared pairs; :func:`closure` and :func:`cycle`
   answer the questions every consumer asks of a set of pairs (does H outrank L, even
   indirectly? is the order contradictory?);
@@ -22,6 +24,7 @@ import difflib
 import re
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from enum import StrEnum
 from itertools import pairwise
 
 from cosleec.errors import ConfigurationError
@@ -32,6 +35,7 @@ __all__ = [
     "CANCEL",
     "CONFLICT_AWARE",
     "PRIORITY_SEMANTICS",
+    "PrioritySemantics",
     "check_priorities",
     "closure",
     "cycle",
@@ -40,10 +44,26 @@ __all__ = [
 ]
 
 Pair = tuple[str, str]
-CANCEL = "cancel"  # SLEEC-TK's cancellation-based priority (§13.2)
-CONFLICT_AWARE = "conflict-aware"  # SLEEC-TK's conflict-aware priority (§13.3)
-PRIORITY_SEMANTICS = (CANCEL, CONFLICT_AWARE)
 """``(higher, lower)``: rule ``higher`` takes precedence over rule ``lower``."""
+
+
+class PrioritySemantics(StrEnum):
+    """How a priority ``H > L`` resolves a clash between an instance of H and one of L.
+
+    One of the options every reading of rules takes (the Manager's ``priority_semantics``,
+    ``--priority-semantics``, the audit log's ``options`` record). A member equals its
+    string (``PrioritySemantics.CANCEL == "cancel"``), so a value given as text compares as
+    the member does.
+    """
+
+    CANCEL = "cancel"  # SLEEC-TK's cancellation-based priority (§13.2): L is cancelled at once
+    CONFLICT_AWARE = "conflict-aware"  # SLEEC-TK's conflict-aware priority (§13.3): L kept while it can be
+
+
+CANCEL = PrioritySemantics.CANCEL
+CONFLICT_AWARE = PrioritySemantics.CONFLICT_AWARE
+PRIORITY_SEMANTICS = tuple(s.value for s in PrioritySemantics)
+"""The choices as plain strings, for messages and ``argparse`` choices."""
 
 _NAME = re.compile(r"\^?([A-Za-z_][A-Za-z0-9_]*)")  # a SLEEC name; SLEEC-TK's `^` escape dropped
 _HINT = "write it as HIGHER > LOWER, e.g. `Rule21 > Rule3` (a chain `A > B > C` declares A > B and B > C)"

@@ -10,8 +10,9 @@ Each node is built from a :class:`~cosleec.runtime.RuleSet`
 from cosleec.nodes.base import LogLimiter, MessageError, Node
 from cosleec.nodes.guard_node import GuardError, GuardNode, Route, load_routes, route
 from cosleec.nodes.layers_node import LayersNode
-from cosleec.nodes.listener import ListenerNode, Mapping, MappingError
+from cosleec.nodes.listener import ListenerNode
 from cosleec.nodes.manager_node import DECIDE, DEFAULT_DECIDE, ManagerNode
+from cosleec.nodes.mapping import Mapping, MappingError
 from cosleec.nodes.qos import Qos, QosError
 from cosleec.nodes.recording import McapRecorder, read_recording
 from cosleec.nodes.task_node import ManagerUnavailable, TaskNode

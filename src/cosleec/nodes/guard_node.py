@@ -35,7 +35,7 @@ from typing import Any
 
 from cosleec.errors import UserError
 from cosleec.nodes.base import Answering, Node
-from cosleec.nodes.listener import MappingError, read_yaml
+from cosleec.nodes.mapping import MappingError, read_yaml
 from cosleec.nodes.qos import Qos, QosError
 from cosleec.nodes.transport import DEFAULT_NAMESPACE
 

@@ -38,13 +38,13 @@ class LayersNode(Node):
         *,
         namespace: str = DEFAULT_NAMESPACE,
         semantics: HedgeSemantics = HedgeSemantics.LAST_WINS,
-        unknowns: Unknowns = Unknowns.UNDETERMINED,
+        unknown: Unknowns = Unknowns.UNDETERMINED,
     ) -> None:
         super().__init__(transport, namespace)
         self.ruleset = rules
         self.context = Context(rules.measures)
         self.layer_manager = LayerManager(
-            rules, semantics, unknowns
+            rules, semantics, unknown
         )  # as the Manager node's, or they disagree
         self.advertise("layers")
         self.on("context", self._context)

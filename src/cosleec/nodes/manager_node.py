@@ -91,6 +91,10 @@ class ManagerNode(Node):
     ``reload_dir`` is a directory whose files :meth:`reload` may read besides that one
     (None: no other file); ``decide`` is what ``~/decide`` takes (:data:`DECIDE`, off by
     default); ``active=False`` starts it inactive (a lifecycle node before ``activate``).
+    ``on_manager(manager)`` is called with each Manager the node builds, just before it
+    starts (a live view attached there hears start's records: the CLI's ``--web``, since
+    ``nodes`` names no view); what it returns, if anything, is called before that Manager
+    closes, or at once if its start fails.
     """
 
     name = "manager"
@@ -111,6 +115,7 @@ class ManagerNode(Node):
         active: bool = True,
         reload_dir: str | None = None,
         decide: str = DEFAULT_DECIDE,
+        on_manager: Callable[[Manager], Callable[[], None] | None] | None = None,
         **manager_kw: Any,
     ) -> None:
         if decide not in DECIDE:
@@ -134,7 +139,7 @@ class ManagerNode(Node):
         # status after every message lets a harness know when the system is quiet; in
         # deployment the heartbeat (every 0.5 s) is enough and keeps the hot path short
         self.status_each = status_each
-        self.sim_time = sim_time
+        self.sim_time, self._on_manager = sim_time, on_manager
         self._options = {"semantics": semantics, "audit": audit, "dispatch": False, **manager_kw}
         self.recorder = McapRecorder(record) if record else None
         for t in ("decisions", "obligations", "violations", "conflicts", "refusals", "request_reply"):
@@ -167,7 +172,12 @@ class ManagerNode(Node):
         self._republish = [{**d, "_again": True} for d in self.manager.undelivered]
         self.manager.undelivered.clear()
         self._unconfirmed, self._matched = [], None
-        self.manager.start(check=False, timer=not self.sim_time)  # may decide fallbacks: held, as above
+        self._release_attached = self._on_manager(self.manager) if self._on_manager is not None else None
+        try:
+            self.manager.start(check=False, timer=not self.sim_time)  # may decide fallbacks: held, as above
+        except BaseException:
+            self._release()  # a start that failed serves no view
+            raise
         with self._hand_lock:
             # nothing held (a first start, a clean stop): publish as decided from now on; else
             # what is decided later waits behind the held decisions, in order
@@ -179,9 +189,16 @@ class ManagerNode(Node):
         configure): the Manager is closed (its audit log ends) and a new one takes over. With a
         journal the new one restores what the journal holds -- obligations outlive a cleanup."""
         self.active = False
+        self._release()
         self.manager.close()
         self._start(rules)
         self.status()
+
+    def _release(self) -> None:
+        """Call, once, what ``on_manager`` returned for the Manager now running: before it closes."""
+        release, self._release_attached = self._release_attached, None
+        if release is not None:
+            release()
 
     def activate(self) -> None:
         """Start enforcing: triggers are decided and requests answered from now on."""
@@ -604,8 +621,12 @@ class ManagerNode(Node):
             self.manager.delivered(int(d["id"]))
 
     def close(self) -> None:
-        """Stop the Manager (timer, audit log) and finish the recording; the transport is the caller's."""
-        self.manager.close()
+        """Stop what ``on_manager`` attached, then the Manager (timer, audit log), and finish the
+        recording; the transport is the caller's."""
+        try:
+            self._release()
+        finally:
+            self.manager.close()
         if self.recorder is not None:
             self.recorder.close()
 

@@ -1,7 +1,9 @@
 """Record the decision stream to an MCAP file that Foxglove opens (JSON channels).
 
-Each runtime event kind gets a channel ``/cosleec/<kind>`` with a JSON schema; the message
-time is the runtime's clock. Needs the ``mcap`` package (``pip install mcap``).
+Each runtime event kind gets a channel ``/cosleec/<kind>`` with a JSON schema; a message is
+the record as one object without the audit log's header (``{"kind", "time", **data}``:
+:func:`cosleec.records.as_object`; kinds and fields as :mod:`cosleec.records` defines them),
+its time the runtime's clock. Needs the ``mcap`` package (``pip install mcap``).
 
 A recording survives a crash: records are written unchunked, straight to the file, and
 the file is flushed at most once a second (by a background thread, so a quiet second is
@@ -19,7 +21,7 @@ import time
 from pathlib import Path
 from typing import Any, BinaryIO
 
-KINDS = ("context", "layers", "decision", "obligation", "refused", "rejected", "task-failed")
+from cosleec.records import Kind, as_object
 
 
 class McapRecorder:
@@ -63,14 +65,14 @@ class McapRecorder:
             self._channels[kind] = ch
         return ch
 
-    def write(self, kind: str, t: float, data: dict[str, Any]) -> None:
+    def write(self, kind: Kind | str, t: float, data: dict[str, Any]) -> None:
         """Append one runtime event of ``kind`` that happened at clock time ``t`` (seconds).
 
         A ``t`` below 1e9 (monotonic or virtual time) is stamped relative to the moment the
         recorder was created; a larger one is taken as Unix time. Ignored once closed.
         """
         stamp = self._t0 + int(t * 1e9) if t < 1e9 else int(t * 1e9)
-        payload = json.dumps({"kind": kind, "time": t, **data}, default=str).encode()
+        payload = json.dumps(as_object(kind, t, data), default=str).encode()
         with self._lock:
             if self._closed.is_set():
                 return

@@ -297,7 +297,7 @@ class TaskNode(Node):
                 return
             try:
                 rule = self.ruleset.rule(d.rule)
-                if d.event == "otherwise":  # a fallback after a missed deadline
+                if d.fallback:  # a fallback after a missed deadline
                     self.implementations.dispatch_fallback(rule, d)
                 else:
                     self.implementations.dispatch(rule, d)

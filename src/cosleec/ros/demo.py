@@ -15,6 +15,7 @@ import tempfile
 from typing import Any
 
 from cosleec.demo import Display, expected, first_difference, outcomes, rules_path, scenario, summary
+from cosleec.records import Kind
 from cosleec.ros import env as rosenv
 from cosleec.ros.launch import node_command, start, stop
 from cosleec.runtime import RuntimeEvent, read_audit
@@ -144,8 +145,11 @@ def main(backend: str, namespace: str = "/cosleec", as_json: bool = False, wire:
                         display.step(now, step)
 
                 def flush() -> None:
-                    for kind, src in (("decision", driver.decisions), ("obligation", driver.violations)):
-                        key = "decisions" if kind == "decision" else "violations"
+                    for kind, src in (
+                        (Kind.DECISION, driver.decisions),
+                        (Kind.OBLIGATION, driver.violations),
+                    ):
+                        key = "decisions" if kind == Kind.DECISION else "violations"
                         for d in src[seen[key] :]:
                             if as_json:
                                 print(json.dumps({"kind": kind, **d}))

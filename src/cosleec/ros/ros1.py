@@ -16,16 +16,14 @@ from collections.abc import Callable
 from typing import Any
 
 from cosleec.errors import UserError
-from cosleec.nodes import Handler, MessageError, Qos
+from cosleec.nodes import Handler, Qos
 from cosleec.ros.diagnostics import Diagnostics
 from cosleec.ros.guard import CallbackGuard
-from cosleec.ros.interfaces import (
-    Once,
-    failure,
-    record_of,
-)
+from cosleec.ros.interfaces import Once, record_of
 from cosleec.ros.messages import message_class, to_dict
 from cosleec.ros.parameters import check_overrides, coerce
+from cosleec.ros.publishers import Publishers
+from cosleec.ros.service import OfferedService, Rejected
 from cosleec.ros.wire import Wire, is_status
 
 log = logging.getLogger("cosleec.ros")
@@ -68,12 +66,10 @@ class Ros1Transport:
         remaps = [a for a in args if not (a.startswith("_") and not a.startswith("__"))]
         rospy.init_node(node_name, anonymous=False, disable_signals=True, argv=["cosleec", *remaps])
         self.node_name = rospy.get_name()
-        self._pubs: dict[str, Any] = {}
+        self._pubs = Publishers()
         self._subs: list[Any] = []
         self._services: list[Any] = []
         self._clients: dict[str, Any] = {}
-        self._latched: set[str] = set()
-        self._lock = threading.Lock()
         self._guard = CallbackGuard()
         self.diagnostics = Diagnostics(node_name, self._publish_diagnostics)
 
@@ -111,14 +107,12 @@ class Ros1Transport:
 
         Thread-safe.
         """
-        with self._lock:
-            if latched:
-                self._latched.add(topic)
-            if topic not in self._pubs:
-                name, cls, _ = self._wire.route(topic)
-                self._pubs[topic] = self._rospy.Publisher(
-                    name, cls, queue_size=1000, latch=topic in self._latched, tcp_nodelay=True
-                )
+
+        def create(latch: bool) -> Any:
+            name, cls, _ = self._wire.route(topic)
+            return self._rospy.Publisher(name, cls, queue_size=1000, latch=latch, tcp_nodelay=True)
+
+        self._pubs.advertise(topic, latched, create)
 
     def publish(self, topic: str, message: dict[str, Any] | str) -> None:
         """Publish a record on ``topic`` in this wire's form, advertising it (not latched) on first use.
@@ -179,12 +173,10 @@ class Ros1Transport:
     def advertise_raw(self, topic: str, type_name: str, qos: Qos | None = None) -> Any:
         """Create the publisher :meth:`publish_raw` sends on (at start: ROS 1 delivers nothing to a
         subscriber before its connection is made)."""
-        key = f"{topic}#{type_name}#raw"
-        with self._lock:
-            pub = self._pubs.get(key)
-            if pub is None:
-                pub = self._pubs[key] = self._rospy.Publisher(topic, message_class(type_name), queue_size=100)
-        return pub
+        return self._pubs.make(
+            f"{topic}#{type_name}#raw",
+            lambda: self._rospy.Publisher(topic, message_class(type_name), queue_size=100),
+        )
 
     def publish_raw(self, topic: str, type_name: str, data: Any, qos: Qos | None = None) -> None:
         """Publish a message object as it came from :meth:`subscribe_raw`."""
@@ -195,10 +187,10 @@ class Ros1Transport:
         self, topic: str, type_name: str, fields: dict[str, Any], qos: Qos | None = None
     ) -> None:
         """Publish a typed message (simulators, tests): ``std_msgs/Bool``, ``{"data": True}``."""
-        key = f"{topic}#{type_name}"
-        pub = self._pubs.get(key)
-        if pub is None:
-            pub = self._pubs[key] = self._rospy.Publisher(topic, message_class(type_name), queue_size=100)
+        pub = self._pubs.make(
+            f"{topic}#{type_name}",
+            lambda: self._rospy.Publisher(topic, message_class(type_name), queue_size=100),
+        )
         pub.publish(message_class(type_name)(**fields))
 
     def typed_subscribers(self, topic: str, type_name: str) -> int:
@@ -223,9 +215,10 @@ class Ros1Transport:
         name: str,
         kind: str,
         handler: Callable[[dict[str, Any]], dict[str, Any]],
-        rejected: Callable[[str, Exception, str | None], None] | None = None,
+        rejected: Rejected | None = None,
     ) -> None:
-        """Offer service ``name`` (``~/request`` is under this node's name) of ``kind``; as on ROS 2.
+        """Offer service ``name`` (``~/request`` is under this node's name) of ``kind``; as on ROS 2
+        (:class:`~cosleec.ros.service.OfferedService`).
 
         ROS 1 tells who called: the caller's node name (its ``callerid``, which the caller
         states itself -- nothing on ROS 1 checks it) joins the request as ``_caller``, and
@@ -233,28 +226,12 @@ class Ros1Transport:
         """
         services = self._wire.services()
         cls = services.service_type(kind)
+        service = OfferedService(name, kind, services, handler, rejected, self._guard)
 
         def call(req: Any) -> Any:
             header = getattr(req, "_connection_header", None)
             caller = header.get("callerid") if isinstance(header, dict) else None
-            caller = caller if isinstance(caller, str) else None
-            try:
-                fields = services.read_request(kind, req)
-            except MessageError as e:  # the caller's mistake (a kind that is no value): said, not a bug
-                if rejected is not None:
-                    try:
-                        rejected(name, e, caller)
-                    except Exception as bug:  # the caller still gets its answer
-                        self._guard.failed(name, bug)
-                return services.fill_response(kind, cls._response_class(), failure(kind, e))
-            if caller is not None:
-                fields["_caller"] = caller
-            try:
-                answer = handler(fields)
-            except Exception as e:
-                self._guard.failed(name, e)
-                answer = failure(kind, e)
-            return services.fill_response(kind, cls._response_class(), answer)
+            return service.answer(req, cls._response_class, caller if isinstance(caller, str) else None)
 
         self._services.append(self._rospy.Service(self._resolve(name), cls, call))
 
@@ -322,10 +299,9 @@ class Ros1Transport:
     def _publish_diagnostics(self, fields: dict[str, Any]) -> None:
         from diagnostic_msgs.msg import DiagnosticArray
 
-        key = "/diagnostics#"
-        pub = self._pubs.get(key)
-        if pub is None:
-            pub = self._pubs[key] = self._rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=10)
+        pub = self._pubs.make(
+            "/diagnostics#", lambda: self._rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=10)
+        )
         pub.publish(self._wire.diagnostics(fields))
 
     # ------------------------------------------------------------------ end
@@ -337,7 +313,7 @@ class Ros1Transport:
         """Unregister every subscriber, publisher and service, then shut rospy down for this process."""
         for s in self._subs:
             s.unregister()
-        for p in self._pubs.values():
+        for p in self._pubs.all():
             p.unregister()
         for v in self._services:
             v.shutdown()

@@ -21,16 +21,16 @@ from collections.abc import Callable
 from typing import Any
 
 from cosleec.errors import UserError
-from cosleec.nodes import Handler, MessageError, Qos
+from cosleec.nodes import Handler, Qos
 from cosleec.ros.diagnostics import Diagnostics
 from cosleec.ros.guard import CallbackGuard
-from cosleec.ros.interfaces import (
-    Once,
-    failure,
-    record_of,
-)
+from cosleec.ros.interfaces import Once, ServiceCodec, record_of
+from cosleec.ros.lifecycle import lifecycle_node
 from cosleec.ros.messages import message_class, to_dict
 from cosleec.ros.parameters import ParameterError, check_overrides, coerce
+from cosleec.ros.publishers import Publishers
+from cosleec.ros.ros2_qos import QosEvents, profile, topic_profile
+from cosleec.ros.service import OfferedService, Rejected
 from cosleec.ros.wire import Wire, is_status
 
 log = logging.getLogger("cosleec.ros")
@@ -82,50 +82,22 @@ class Ros2Transport:
     ) -> None:
         check_network()
         import rclpy
-        from rclpy.executors import SingleThreadedExecutor
         from std_msgs.msg import String
 
         self._rclpy = rclpy
-        self._wire = Wire(wire, String, self._stamp, self._seconds)
-        if not rclpy.ok():
-            from rclpy.signals import SignalHandlerOptions
-
-            # the node's own loop owns SIGINT/SIGTERM: a signal during start-up must not
-            # invalidate the context under our feet
-            # args=[]: the node takes its ROS arguments itself (cli_args); rclpy must not
-            # parse this process's command line, which is cosleec's
-            rclpy.init(args=[], signal_handler_options=SignalHandlerOptions.NO)
-        args = ["--ros-args", *ros_args] if ros_args and ros_args[0] != "--ros-args" else (ros_args or [])
+        self._wire = Wire(wire, String, _stamp, _seconds)
         self._hooks: dict[str, Callable[[], bool]] = {}
-        try:
-            if lifecycle:
-                self.node = _lifecycle_node(node_name, args, self._hooks)
-            else:
-                self.node = rclpy.create_node(node_name, cli_args=args or None)
-        except Exception as e:  # rcl refuses malformed or unknown --ros-args: the user's to fix
-            if not type(e).__module__.startswith("rclpy"):
-                raise
-            raise UserError(
-                f"ROS 2 cannot use these ROS arguments {args}: {type(e).__name__}: {e}",
-                hint="ROS arguments come last: `... --ros-args -p name:=value [--params-file FILE]`",
-            ) from None
+        self.node = _start_node(node_name, ros_args, self._hooks if lifecycle else None)
         self.lifecycle = lifecycle
-        self._pubs: dict[str, Any] = {}
+        self._pubs = Publishers()
         self._subs: list[Any] = []
         self._services: list[Any] = []
         self._clients: dict[str, Any] = {}
-        self._latched: set[str] = set()
-        self._lock = threading.Lock()
         self._guard = CallbackGuard()
-        self._lost = 0
-        self.incompatible = 0  # QoS-incompatible publishers or subscribers that appeared
-        self._closing = False
-        self.spin_error: BaseException | None = None
+        self._events = QosEvents()
         self.diagnostics = Diagnostics(node_name, self._publish_diagnostics)
-        self.executor = SingleThreadedExecutor()
-        self.executor.add_node(self.node)
-        self._thread = threading.Thread(target=self._spin, name=f"{node_name}-spin", daemon=True)
-        self._thread.start()
+        self._spin = _Spin(self.node, node_name)
+        self.executor = self._spin.executor
 
     @property
     def wire(self) -> str:
@@ -136,64 +108,21 @@ class Ros2Transport:
     def wire(self, mode: str) -> None:
         self._wire.mode = mode
 
-    # ------------------------------------------------------------------ time
-    def _stamp(self, t: float) -> Any:
-        from builtin_interfaces.msg import Time
-
-        sec, nanosec = divmod(round(t * 1e9), 1_000_000_000)
-        return Time(sec=sec, nanosec=nanosec)
-
-    @staticmethod
-    def _seconds(stamp: Any) -> float:
-        return float(stamp.sec) + float(stamp.nanosec) * 1e-9
-
     # ------------------------------------------------------------------ health
-    def _spin(self) -> None:
-        try:
-            self.executor.spin()
-        except Exception as e:
-            if not self._closing:  # not a shutdown race: the node has gone deaf, say why
-                self.spin_error = e
-                log.error("the ROS 2 executor stopped: %s: %s", type(e).__name__, e, exc_info=e)
-        if not self._closing and self.spin_error is None:
-            log.error("the ROS 2 executor stopped (rclpy shut down?)")
+    @property
+    def spin_error(self) -> BaseException | None:
+        """What ended the spin thread, if something did (None while it runs, and when :meth:`close` ended it)."""
+        return self._spin.error
 
     @property
     def lost(self) -> int:
         """Messages DDS reports lost on this transport's subscriptions (the middleware's own count)."""
-        return self._lost
+        return self._events.lost
 
-    def _sub_events(self, topic: str) -> Any:
-        """QoS event callbacks of a subscription: count what DDS lost, warn of incompatible publishers."""
-        from rclpy.event_handler import SubscriptionEventCallbacks
-
-        def lost(status: Any) -> None:
-            with self._lock:
-                self._lost += int(status.total_count_change)
-
-        return SubscriptionEventCallbacks(
-            message_lost=lost, incompatible_qos=lambda s: self._incompatible(topic, "publisher", s)
-        )
-
-    def _pub_events(self, topic: str) -> Any:
-        from rclpy.event_handler import PublisherEventCallbacks
-
-        return PublisherEventCallbacks(incompatible_qos=lambda s: self._incompatible(topic, "subscriber", s))
-
-    def _incompatible(self, topic: str, who: str, status: Any) -> None:
-        """A peer whose QoS cannot match ours appeared: it will never be heard (or never hear us)."""
-        from rclpy.qos import qos_policy_name_from_kind
-
-        with self._lock:
-            self.incompatible += int(getattr(status, "total_count_change", 1)) or 1
-        policy = qos_policy_name_from_kind(status.last_policy_kind)
-        log.warning(
-            "%s: a %s with incompatible QoS appeared (policy %s): it is not connected; "
-            "set `qos:` for this topic in the mapping (e.g. sensor_data for a best-effort driver)",
-            topic,
-            who,
-            policy,
-        )
+    @property
+    def incompatible(self) -> int:
+        """QoS-incompatible publishers or subscribers that appeared (node status: ``qos_incompatible``)."""
+        return self._events.incompatible
 
     @property
     def errors(self) -> int:
@@ -205,27 +134,10 @@ class Ros2Transport:
 
         Node status reports it as ``executor_alive``.
         """
-        return self._thread.is_alive()
+        return self._spin.alive()
 
-    # ------------------------------------------------------------------ QoS
-    @staticmethod
-    def profile(qos: Qos) -> Any:
-        """The rclpy ``QoSProfile`` of a :class:`~cosleec.nodes.qos.Qos` (keep-last history)."""
-        from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-
-        return QoSProfile(
-            depth=qos.depth,
-            history=HistoryPolicy.KEEP_LAST,
-            reliability=ReliabilityPolicy.RELIABLE
-            if qos.reliability == "reliable"
-            else ReliabilityPolicy.BEST_EFFORT,
-            durability=DurabilityPolicy.TRANSIENT_LOCAL
-            if qos.durability == "transient_local"
-            else DurabilityPolicy.VOLATILE,
-        )
-
-    def _qos(self, latched: bool) -> Any:
-        return self.profile(Qos.LATCHED if latched else Qos("reliable", "volatile", 1000))
+    #: the rclpy ``QoSProfile`` of a :class:`~cosleec.nodes.qos.Qos` (:func:`cosleec.ros.ros2_qos.profile`)
+    profile = staticmethod(profile)
 
     # ------------------------------------------------------------------ cosleec topics
     def advertise(self, topic: str, latched: bool = False) -> None:
@@ -233,14 +145,14 @@ class Ros2Transport:
 
         The first call for a topic fixes its QoS. Thread-safe.
         """
-        with self._lock:
-            if latched:
-                self._latched.add(topic)
-            if topic not in self._pubs:
-                name, cls, _ = self._wire.route(topic)
-                self._pubs[topic] = self.node.create_publisher(
-                    cls, name, self._qos(topic in self._latched), event_callbacks=self._pub_events(name)
-                )
+
+        def create(latch: bool) -> Any:
+            name, cls, _ = self._wire.route(topic)
+            return self.node.create_publisher(
+                cls, name, topic_profile(latch), event_callbacks=self._events.publisher(name)
+            )
+
+        self._pubs.advertise(topic, latched, create)
 
     def publish(self, topic: str, message: dict[str, Any] | str) -> None:
         """Publish a record on ``topic`` in this wire's form, advertising it (not latched) on first use.
@@ -269,8 +181,8 @@ class Ros2Transport:
             cls,
             name,
             self._guard.wrap(name, deliver),
-            self._qos(is_latched),
-            event_callbacks=self._sub_events(name),
+            topic_profile(is_latched),
+            event_callbacks=self._events.subscription(name),
         )
         self._subs.append(sub)
 
@@ -288,8 +200,8 @@ class Ros2Transport:
             cls,
             topic,
             self._guard.wrap(topic, lambda m: handler(to_dict(m))),
-            self.profile(qos) if qos is not None else self._qos(False),
-            event_callbacks=self._sub_events(topic),
+            _profile(qos),
+            event_callbacks=self._events.subscription(topic),
         )
         self._subs.append(sub)
 
@@ -302,8 +214,8 @@ class Ros2Transport:
             cls,
             topic,
             self._guard.wrap(topic, handler),
-            self.profile(qos) if qos is not None else self._qos(False),
-            event_callbacks=self._sub_events(topic),
+            _profile(qos),
+            event_callbacks=self._events.subscription(topic),
             raw=True,
         )
         self._subs.append(sub)
@@ -311,17 +223,12 @@ class Ros2Transport:
     def advertise_raw(self, topic: str, type_name: str, qos: Qos | None = None) -> Any:
         """Create the publisher :meth:`publish_raw` sends on (at start, so that subscribers have
         matched it before the first message goes out); the first call for a topic decides."""
-        key = f"{topic}#{type_name}#raw"
-        with self._lock:
-            pub = self._pubs.get(key)
-            if pub is None:
-                pub = self._pubs[key] = self.node.create_publisher(
-                    message_class(type_name),
-                    topic,
-                    self.profile(qos) if qos is not None else self._qos(False),
-                    event_callbacks=self._pub_events(topic),
-                )
-        return pub
+        return self._pubs.make(
+            f"{topic}#{type_name}#raw",
+            lambda: self.node.create_publisher(
+                message_class(type_name), topic, _profile(qos), event_callbacks=self._events.publisher(topic)
+            ),
+        )
 
     def publish_raw(self, topic: str, type_name: str, data: Any, qos: Qos | None = None) -> None:
         """Publish a serialized ``type_name`` message as it came from :meth:`subscribe_raw`."""
@@ -332,12 +239,10 @@ class Ros2Transport:
         self, topic: str, type_name: str, fields: dict[str, Any], qos: Qos | None = None
     ) -> None:
         """Publish a typed message (simulators, tests): ``std_msgs/Bool``, ``{"data": True}``."""
-        key = f"{topic}#{type_name}"
-        pub = self._pubs.get(key)
-        if pub is None:
-            pub = self._pubs[key] = self.node.create_publisher(
-                message_class(type_name), topic, self.profile(qos) if qos is not None else self._qos(False)
-            )
+        pub = self._pubs.make(
+            f"{topic}#{type_name}",
+            lambda: self.node.create_publisher(message_class(type_name), topic, _profile(qos)),
+        )
         pub.publish(message_class(type_name)(**fields))
 
     def typed_subscribers(self, topic: str, type_name: str) -> int:
@@ -359,7 +264,7 @@ class Ros2Transport:
         name: str,
         kind: str,
         handler: Callable[[dict[str, Any]], dict[str, Any]],
-        rejected: Callable[[str, Exception, str | None], None] | None = None,
+        rejected: Rejected | None = None,
     ) -> None:
         """Offer service ``name`` (``~/request``) of ``kind`` (request, decide, reload).
 
@@ -373,23 +278,10 @@ class Ros2Transport:
         """
         services = self._wire.services()
         cls = services.service_type(kind)
+        service = OfferedService(name, kind, services, handler, rejected, self._guard)
 
         def call(req: Any, resp: Any) -> Any:
-            try:
-                fields = services.read_request(kind, req)
-            except MessageError as e:  # the caller's mistake (a kind that is no value): said, not a bug
-                if rejected is not None:
-                    try:
-                        rejected(name, e, None)
-                    except Exception as bug:  # the caller still gets its answer
-                        self._guard.failed(name, bug)
-                return services.fill_response(kind, resp, failure(kind, e))
-            try:
-                answer = handler(fields)
-            except Exception as e:
-                self._guard.failed(name, e)
-                answer = failure(kind, e)
-            return services.fill_response(kind, resp, answer)
+            return service.answer(req, lambda: resp)
 
         self._services.append(self.node.create_service(cls, name, call))
 
@@ -410,29 +302,7 @@ class Ros2Transport:
         client = self._clients.get(name)
         if client is None:
             client = self._clients[name] = self.node.create_client(services.service_type(kind), name)
-        once = Once(answer)
-        if not client.service_is_ready():
-            once(None)
-            return
-        future = client.call_async(services.make_request(kind, fields))
-
-        def expired() -> None:
-            future.cancel()  # rclpy then forgets the request (and what it holds)
-            once(None)
-
-        timer = threading.Timer(timeout, expired)
-        timer.daemon = True
-        timer.start()
-
-        def done(f: Any) -> None:
-            timer.cancel()
-            try:
-                reply = None if f.cancelled() else services.read_response(kind, f.result())
-            except Exception:  # a reply that cannot be read is no answer
-                reply = None
-            once(reply)  # outside the try: an error in the caller's callback is the caller's
-
-        future.add_done_callback(done)
+        _call(client, services, kind, fields, Once(answer), timeout)
 
     # ------------------------------------------------------------------ parameters
     def parameters(self, defaults: dict[str, Any]) -> dict[str, Any]:
@@ -442,22 +312,7 @@ class Ros2Transport:
         given keeps ``defaults``' value. :class:`ParameterError` for a value of the wrong
         type or a parameter no option has (with did-you-mean).
         """
-        from rcl_interfaces.msg import ParameterDescriptor
-
-        out: dict[str, Any] = {}
-        for name, default in defaults.items():
-            # dynamically typed: `-p timeout:=2` is as good as 2.0; coerce() checks the type,
-            # with a message that names the parameter, and its option's checks follow
-            try:
-                value = self.node.declare_parameter(
-                    name, None, ParameterDescriptor(dynamic_typing=True)
-                ).value
-            except Exception as e:  # a value rclpy cannot hold
-                raise ParameterError(
-                    f"parameter {name!r}: {e}",
-                    hint=f"give it as {_type_name(default)} (the option's default is {default!r})",
-                ) from None
-            out[name] = default if value is None else coerce(name, value, default)
+        out = {name: _declare(self.node, name, default) for name, default in defaults.items()}
         given = set(getattr(self.node, "_parameter_overrides", {}))  # what -p / --params-file set
         check_overrides(given, set(defaults) | {"use_sim_time", "qos_overrides"})
         return out
@@ -483,10 +338,9 @@ class Ros2Transport:
     def _publish_diagnostics(self, fields: dict[str, Any]) -> None:
         from diagnostic_msgs.msg import DiagnosticArray
 
-        key = "/diagnostics#"
-        pub = self._pubs.get(key)
-        if pub is None:
-            pub = self._pubs[key] = self.node.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        pub = self._pubs.make(
+            "/diagnostics#", lambda: self.node.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        )
         pub.publish(self._wire.diagnostics(fields))
 
     # ------------------------------------------------------------------ end
@@ -499,10 +353,7 @@ class Ros2Transport:
 
         Errors along the way (a context already invalid) are ignored.
         """
-        self._closing = True
-        with contextlib.suppress(Exception):
-            self.executor.shutdown()
-        self._thread.join(5)
+        self._spin.stop()
         with contextlib.suppress(Exception):
             self.node.destroy_node()
         if self._rclpy.ok():
@@ -510,54 +361,144 @@ class Ros2Transport:
                 self._rclpy.shutdown()
 
 
+def _stamp(t: float) -> Any:
+    """The ROS 2 time (``builtin_interfaces/Time``) of ``t`` seconds."""
+    from builtin_interfaces.msg import Time
+
+    sec, nanosec = divmod(round(t * 1e9), 1_000_000_000)
+    return Time(sec=sec, nanosec=nanosec)
+
+
+def _seconds(stamp: Any) -> float:
+    """The seconds of a ROS 2 time."""
+    return float(stamp.sec) + float(stamp.nanosec) * 1e-9
+
+
+def _start_node(
+    node_name: str, ros_args: list[str] | None, hooks: dict[str, Callable[[], bool]] | None
+) -> Any:
+    """The rclpy node of a transport, a lifecycle node calling ``hooks`` when they are given.
+
+    rclpy is initialised first if it is not yet, without its signal handlers. ``ros_args``
+    that rcl refuses are the user's to fix: a UserError.
+    """
+    import rclpy
+
+    if not rclpy.ok():
+        from rclpy.signals import SignalHandlerOptions
+
+        # the node's own loop owns SIGINT/SIGTERM: a signal during start-up must not
+        # invalidate the context under our feet
+        # args=[]: the node takes its ROS arguments itself (cli_args); rclpy must not
+        # parse this process's command line, which is cosleec's
+        rclpy.init(args=[], signal_handler_options=SignalHandlerOptions.NO)
+    args = ["--ros-args", *ros_args] if ros_args and ros_args[0] != "--ros-args" else (ros_args or [])
+    try:
+        if hooks is not None:
+            return lifecycle_node(node_name, args, hooks)
+        return rclpy.create_node(node_name, cli_args=args or None)
+    except Exception as e:  # rcl refuses malformed or unknown --ros-args: the user's to fix
+        if not type(e).__module__.startswith("rclpy"):
+            raise
+        raise UserError(
+            f"ROS 2 cannot use these ROS arguments {args}: {type(e).__name__}: {e}",
+            hint="ROS arguments come last: `... --ros-args -p name:=value [--params-file FILE]`",
+        ) from None
+
+
+class _Spin:
+    """The single-threaded executor that runs every callback of one node, one at a time, on a
+    thread of its own. ``error`` holds what ended that thread, if something did before :meth:`stop`."""
+
+    def __init__(self, node: Any, node_name: str) -> None:
+        from rclpy.executors import SingleThreadedExecutor
+
+        self.executor = SingleThreadedExecutor()
+        self.executor.add_node(node)
+        self.error: BaseException | None = None
+        self._closing = False
+        self._thread = threading.Thread(target=self._run, name=f"{node_name}-spin", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        try:
+            self.executor.spin()
+        except Exception as e:
+            if not self._closing:  # not a shutdown race: the node has gone deaf, say why
+                self.error = e
+                log.error("the ROS 2 executor stopped: %s: %s", type(e).__name__, e, exc_info=e)
+        if not self._closing and self.error is None:
+            log.error("the ROS 2 executor stopped (rclpy shut down?)")
+
+    def alive(self) -> bool:
+        """Is the thread still delivering messages?"""
+        return self._thread.is_alive()
+
+    def stop(self) -> None:
+        """Shut the executor down and wait (up to 5 s) for its thread; errors along the way are ignored."""
+        self._closing = True
+        with contextlib.suppress(Exception):
+            self.executor.shutdown()
+        self._thread.join(5)
+
+
+def _call(
+    client: Any, services: ServiceCodec, kind: str, fields: dict[str, Any], once: Once, timeout: float
+) -> None:
+    """Call the service of ``client`` without blocking; ``once`` gets the reply, or None.
+
+    None at once when the service is not there; None when the call fails, the reply cannot
+    be read, or none comes within ``timeout`` seconds (the request is then cancelled).
+    """
+    if not client.service_is_ready():
+        once(None)
+        return
+    future = client.call_async(services.make_request(kind, fields))
+
+    def expired() -> None:
+        future.cancel()  # rclpy then forgets the request (and what it holds)
+        once(None)
+
+    timer = threading.Timer(timeout, expired)
+    timer.daemon = True
+    timer.start()
+
+    def done(f: Any) -> None:
+        timer.cancel()
+        try:
+            reply = None if f.cancelled() else services.read_response(kind, f.result())
+        except Exception:  # a reply that cannot be read is no answer
+            reply = None
+        once(reply)  # outside the try: an error in the caller's callback is the caller's
+
+    future.add_done_callback(done)
+
+
+def _declare(node: Any, name: str, default: Any) -> Any:
+    """Declare the parameter ``name`` of ``node`` and return its value (``default`` if not given).
+
+    Dynamically typed: ``-p timeout:=2`` is as good as 2.0; :func:`coerce` checks the type,
+    with a message that names the parameter, and its option's checks follow.
+    """
+    from rcl_interfaces.msg import ParameterDescriptor
+
+    try:
+        value = node.declare_parameter(name, None, ParameterDescriptor(dynamic_typing=True)).value
+    except Exception as e:  # a value rclpy cannot hold
+        raise ParameterError(
+            f"parameter {name!r}: {e}",
+            hint=f"give it as {_type_name(default)} (the option's default is {default!r})",
+        ) from None
+    return default if value is None else coerce(name, value, default)
+
+
+def _profile(qos: Qos | None) -> Any:
+    """The profile a robot's topic is read or written with: ``qos`` as the mapping says, else
+    a cosleec topic's (reliable, depth 1000)."""
+    return profile(qos) if qos is not None else topic_profile(False)
+
+
 def _type_name(default: Any) -> str:
     return {bool: "a boolean", int: "an integer", float: "a number", list: "a list of strings"}.get(
         type(default), "a string"
     )
-
-
-def _lifecycle_node(name: str, args: list[str], hooks: dict[str, Callable[[], bool]]) -> Any:
-    """A ``LifecycleNode`` whose transitions call ``hooks`` (filled in later by :meth:`Ros2Transport.managed`)."""
-    from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
-
-    def hook(which: str) -> Any:
-        fn = hooks.get(which)
-        if fn is None:
-            return TransitionCallbackReturn.SUCCESS
-        try:
-            ok = fn()
-        except Exception as e:
-            log.error("lifecycle %s failed: %s: %s", which, type(e).__name__, e)
-            return TransitionCallbackReturn.FAILURE
-        return TransitionCallbackReturn.SUCCESS if ok else TransitionCallbackReturn.FAILURE
-
-    class Managed(LifecycleNode):  # type: ignore[misc]
-        def on_configure(self, state: Any) -> Any:
-            return hook("configure")
-
-        def on_activate(self, state: Any) -> Any:
-            return hook("activate")
-
-        def on_deactivate(self, state: Any) -> Any:
-            return hook("deactivate")
-
-        def on_cleanup(self, state: Any) -> Any:
-            return hook("cleanup")
-
-        def on_shutdown(self, state: Any) -> Any:
-            return hook("shutdown")
-
-        # rclpy's change_state service raises into the executor for a transition the current
-        # state has not (configure while active): one such request from anyone on the graph
-        # would end the node, and with it enforcement. Answered "no" instead.
-        def _LifecycleNodeMixin__on_change_state(self, req: Any, resp: Any) -> Any:
-            try:
-                return LifecycleNode._LifecycleNodeMixin__on_change_state(self, req, resp)
-            except Exception as e:
-                log.warning(
-                    "lifecycle: refused transition %s: %s", req.transition.id or req.transition.label, e
-                )
-                resp.success = False
-                return resp
-
-    return Managed(name, cli_args=args or None)

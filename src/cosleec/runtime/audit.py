@@ -13,7 +13,8 @@ to ``<log>.uncommitted`` (each record carries its sequence number, ``seq``).
 
 One writer per log: opening it takes an exclusive lock on the file (``flock``), held until
 :meth:`AuditLog.close`, so two Managers can never interleave their ``seq`` in one log.
-Readers (``read_audit``, ``cosleec conforms``, ``cosleec timeline``) take no lock.
+Readers (``read_audit``, ``cosleec conforms``, ``cosleec timeline``) take no lock. The
+format of a line is :mod:`cosleec.records`' (written by :meth:`AuditLog.write_events`).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from cosleec.errors import UserError
+from cosleec.records import RuntimeEvent, audit_lines, read_records
 
 
 class AuditLog:
@@ -76,6 +78,12 @@ class AuditLog:
     def write_many(self, records: Iterable[dict[str, Any]]) -> None:
         """Append records in order with one flush (and one fsync) for all of them."""
         self.write_lines(json.dumps(r, default=str, separators=(",", ":")) for r in records)
+
+    def write_events(self, events: Iterable[RuntimeEvent], *, run: str, rules: str) -> int:
+        """Append one step's records as audit lines (:func:`cosleec.records.audit_lines`: one
+        header -- wall and monotonic time, ``run``, the first 16 characters of the ``rules``
+        digest -- for all of them) with one flush; returns what :meth:`write_lines` returns."""
+        return self.write_lines(audit_lines(events, run=run, rules=rules))
 
     def write_lines(self, lines: Iterable[str]) -> int:
         """Append records already encoded as one-line JSON texts, in order, with one flush.
@@ -316,11 +324,10 @@ def _repair(path: Path) -> tuple[str | None, int]:
 
 
 def read_audit(path: str | Path) -> list[dict[str, Any]]:
-    """Every complete record of an audit log (a torn last line is skipped)."""
-    out = []
-    for line in Path(path).read_text(encoding="utf-8").splitlines():
-        try:
-            out.append(json.loads(line))
-        except json.JSONDecodeError:
-            continue
-    return out
+    """Every record of an audit log, each as the JSON object of its line, in order.
+
+    Read by the one reader (:func:`cosleec.records.read_records`), leniently: a line that is
+    not a record (a torn last line, or what a crash or a hand left between records) is
+    skipped. :func:`cosleec.records.read_records` gives typed records and refuses such lines.
+    """
+    return [record.to_json() for record in read_records(path, lenient=True)]

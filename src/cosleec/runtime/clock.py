@@ -7,9 +7,11 @@ simulated time (``--sim-time``).
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 import time
+from pathlib import Path
 from typing import Protocol
 
 
@@ -85,3 +87,12 @@ def _finite(t: object) -> None:
         ok = False
     if not ok or abs(t) > MAX_TIME:
         raise ValueError(f"a time must be a finite number of seconds, at most {MAX_TIME:g}")
+
+
+@functools.cache
+def boot() -> str:
+    """This boot of the machine (Linux's boot id; a monotonic clock counts from it), or "" where it cannot be told."""
+    try:
+        return Path("/proc/sys/kernel/random/boot_id").read_text().strip()
+    except OSError:
+        return ""

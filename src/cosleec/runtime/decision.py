@@ -21,6 +21,9 @@ from cosleec.lang import HedgeSemantics, Unknowns, decisive
 from cosleec.runtime.model import Obligation
 from cosleec.runtime.values import Value
 
+#: the ``event`` of a fallback decision (no event triggered it: an obligation was missed)
+OTHERWISE = "otherwise"
+
 
 @dataclass(frozen=True, kw_only=True)
 class Decision:
@@ -29,8 +32,9 @@ class Decision:
     ``clause`` is 0 for the default response, i for clause i (layer ``R.i``), None when
     undetermined (a measure it needed had no value: nothing is done). ``conditions``
     holds ``(clause, condition text, value)`` with clause 0 for the trigger condition.
-    A fallback decision (``event == "otherwise"``) has ``violated``, the obligation whose
-    miss started it, and its explanation in ``reason``.
+    A fallback decision (:attr:`fallback`) has ``violated``, the obligation whose miss
+    started it, and its explanation in ``reason``; its ``event`` is :data:`OTHERWISE` (no
+    event triggered it), as its records say.
     """
 
     id: int
@@ -47,7 +51,7 @@ class Decision:
     reason: str = ""
     context_version: int = 0
     violated: int | None = None
-    unknowns: Unknowns = Unknowns.UNDETERMINED  # how unknown condition values were read
+    unknown: Unknowns = Unknowns.UNDETERMINED  # how unknown condition values were read
     _explanation: list[str] = field(default_factory=list, init=False, compare=False, repr=False)
 
     @classmethod
@@ -68,7 +72,7 @@ class Decision:
         reason: str = "",
         context_version: int = 0,
         violated: int | None = None,
-        unknowns: Unknowns = Unknowns.UNDETERMINED,
+        unknown: Unknowns = Unknowns.UNDETERMINED,
     ) -> Decision:
         """The same as the constructor, for the Manager's hot path: a frozen dataclass sets
         each of its 16 fields through ``object.__setattr__`` (about 5 us a decision here);
@@ -90,7 +94,7 @@ class Decision:
             reason=reason,
             context_version=context_version,
             violated=violated,
-            unknowns=unknowns,
+            unknown=unknown,
             _explanation=[],
         )
         return d
@@ -110,6 +114,12 @@ class Decision:
         if width is None:
             return self.explanation
         return self.reason or _because(self, width)
+
+    @property
+    def fallback(self) -> bool:
+        """True for an ``otherwise`` decision: started by a missed obligation (``violated``),
+        not by a trigger."""
+        return self.violated is not None
 
     @property
     def undetermined(self) -> bool:
@@ -135,7 +145,7 @@ class Decision:
             "explanation": self.explanation,
             "context_version": self.context_version,
             "violated": self.violated,
-            "unknowns": str(self.unknowns),
+            "unknowns": str(self.unknown),
         }
 
     @classmethod
@@ -162,7 +172,7 @@ class Decision:
             reason=str(d.get("reason", "")),
             context_version=int(d.get("context_version", 0)),
             violated=None if violated is None else int(violated),
-            unknowns=Unknowns(d.get("unknowns", Unknowns.UNDETERMINED)),
+            unknown=Unknowns(d.get("unknowns", Unknowns.UNDETERMINED)),
         )
 
 
@@ -207,7 +217,7 @@ def _because(d: Decision, width: int | None = None) -> str:
     hedges = [(c, t, v) for c, t, v in d.conditions if c > 0]
     if not hedges:
         return f"{rule}: {what}"
-    chosen = set(decisive([v for _, _, v in hedges], clause, d.semantics, d.unknowns))
+    chosen = set(decisive([v for _, _, v in hedges], clause, d.semantics, d.unknown))
 
     def cond(t: str) -> str:
         return t if width is None else shorten(t, width)

@@ -6,7 +6,7 @@ conditions read a changed measure (a dependency index from measure to rules), so
 of an update does not depend on the rules it does not touch, and activates, for each of
 them, exactly the layer :func:`cosleec.lang.hedges.choose` selects -- none for the
 default, none either when the choice is undetermined (a measure is unknown and the
-``unknowns`` policy does not say how to read it).
+``unknown`` policy does not say how to read it).
 
 A trigger is decided against this state: the decision takes the rule's active clause,
 and the rule's layered method is dispatched under that clause's composition, so COP runs
@@ -111,11 +111,11 @@ class LayerManager:
         self,
         ruleset: RuleSet,
         semantics: HedgeSemantics = HedgeSemantics.LAST_WINS,
-        unknowns: Unknowns = Unknowns.UNDETERMINED,
+        unknown: Unknowns = Unknowns.UNDETERMINED,
     ) -> None:
         self.ruleset = ruleset
         self.semantics = HedgeSemantics(semantics)
-        self.unknowns = Unknowns(unknowns)
+        self.unknown = Unknowns(unknown)
         self.index: dict[str, list[CompiledRule]] = {}
         for r in ruleset.rules:
             for m in r.hedge_reads:
@@ -141,15 +141,15 @@ class LayerManager:
             values: tuple[bool | None, ...] = r.evaluate_all(v)
         except KeyError:
             pass  # some measure is unknown: find out which, clause by clause
-        else:  # every value known (True or False): no unknowns policy applies
+        else:  # every value known (True or False): no ``unknown`` policy applies
             if self.semantics == HedgeSemantics.LAST_WINS:  # the last clause that holds
                 try:
                     return RuleStatus(values, len(values) - values[::-1].index(True))
                 except ValueError:
                     return RuleStatus(values, 0)
-            return RuleStatus(values, choose(values, self.semantics, self.unknowns))
+            return RuleStatus(values, choose(values, self.semantics, self.unknown))
         values, missing = evaluate(r.clauses, v)
-        return RuleStatus(values, choose(values, self.semantics, self.unknowns), missing)
+        return RuleStatus(values, choose(values, self.semantics, self.unknown), missing)
 
     def update(self, changed: Iterable[str], v: Values) -> list[LayerSwitch]:
         """Re-evaluate the rules that read a ``changed`` measure; return the layer switches."""

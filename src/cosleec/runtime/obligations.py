@@ -35,6 +35,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from cosleec.lang import Untimed
 from cosleec.runtime.model import Obligation
 
 PENDING, FULFILLED, VIOLATED, RESPECTED = "pending", "fulfilled", "violated", "respected"
@@ -159,8 +160,10 @@ class Tracker:
     seconds. Not thread-safe: its owner (the Manager) serialises access.
     """
 
-    def __init__(self, untimed: str | float = "none", immediate_tolerance: float = 1.0) -> None:
-        self.untimed = untimed
+    def __init__(
+        self, untimed: Untimed | str | float = Untimed.NONE, immediate_tolerance: float = 1.0
+    ) -> None:
+        self.untimed: Untimed | float = Untimed(untimed) if isinstance(untimed, str) else untimed
         self.tolerance = immediate_tolerance
         self._active: dict[int, Tracked] = {}
         self._by_event: dict[str, dict[int, Tracked]] = {}

@@ -27,15 +27,26 @@ test holds the two equal.
 from __future__ import annotations
 
 import difflib
+import logging
 import math
 from collections.abc import Container, Iterable, Iterator
 from dataclasses import dataclass
 
 from cosleec.errors import show
-from cosleec.lang import CANCEL, CONFLICT_AWARE, PRIORITY_SEMANTICS, closure, cycle, parse_priority
+from cosleec.lang import (
+    CANCEL,
+    CONFLICT_AWARE,
+    PRIORITY_SEMANTICS,
+    PrioritySemantics,
+    closure,
+    cycle,
+    parse_priority,
+)
 from cosleec.runtime.errors import ConfigurationError
 from cosleec.runtime.obligations import PENDING, Tracked, Tracker
 from cosleec.runtime.ruleset import RuleSet
+
+log = logging.getLogger("cosleec.runtime")
 
 
 @dataclass(frozen=True)
@@ -43,7 +54,7 @@ class Priorities:
     """The declared priorities, closed transitively, and how they resolve clashes."""
 
     above: frozenset[tuple[str, str]] = frozenset()  # (higher, lower), closed transitively
-    semantics: str = CANCEL
+    semantics: PrioritySemantics = PrioritySemantics.CANCEL
     lead: float = 0.0
     declared: tuple[tuple[str, str], ...] = ()  # as given (the file's and the caller's)
 
@@ -94,7 +105,7 @@ class Priorities:
             raise ConfigurationError(
                 f"the priorities form a cycle: {' > '.join(loop)}", hint="remove one of the pairs"
             )
-        return cls(closure(pairs), semantics, float(lead), tuple(dict.fromkeys(pairs)))
+        return cls(closure(pairs), PrioritySemantics(semantics), float(lead), tuple(dict.fromkeys(pairs)))
 
     def related(self, rule: str) -> list[str]:
         """The rules a priority orders ``rule`` against (above or below it), sorted."""
@@ -218,3 +229,31 @@ def possible_conflicts(
                     if limit is not None and len(out) >= limit:
                         return out
     return out
+
+
+def warn_conflicts(
+    ruleset: RuleSet, priorities: Priorities, known: Iterable[PossibleConflict] = ()
+) -> list[PossibleConflict]:
+    """The item pairs of ``ruleset`` that can conflict (:func:`possible_conflicts`); logs a
+    warning when there are any other than those ``known`` (warned of before a reload)."""
+    found = possible_conflicts(ruleset, priorities)
+    if set(found) - set(known):
+        shown = "; ".join(c.describe() for c in found[:5])
+        more = len(found) - 5
+        log.warning(
+            "the rules can conflict (%s%s): the prohibition will win unless a priority is declared "
+            "(a priority_start block, or Manager(priorities=[...]))",
+            shown,
+            f"; and {more} more" if more > 0 else "",
+        )
+    return found
+
+
+def warn_lead(priorities: Priorities, real_clock: bool) -> None:
+    """Warn when conflict-aware priorities with no lead run on a real clock (too late to act)."""
+    if priorities.semantics == CONFLICT_AWARE and priorities.above and not priorities.lead and real_clock:
+        log.warning(
+            "conflict-aware priorities with priority_lead=0 on a real clock: the lower rule is cancelled "
+            "at the higher rule's deadline, too late for the robot to act in time; give priority_lead "
+            "(seconds the robot needs)"
+        )

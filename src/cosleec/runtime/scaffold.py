@@ -91,6 +91,16 @@ def _rule_text(printer: Printer, rule: A.Rule) -> str:
     return printer.rule(rule).strip()
 
 
+_MODULE_NAMES = frozenset(
+    {"install", "TASKS", "TYPE_CHECKING", "Decision", "Task", "hedge", "main", "sys", "Manager", "TaskNode"}
+)
+"""The names a task-style module defines or imports: no task class may take one."""
+
+_TASK_MEMBERS = frozenset({"default", "rule", "fallback", "event", "request", "clauses", "manager"})
+"""The names a task class has already (its own and :class:`~cosleec.runtime.Task`'s): no clause
+method may take one."""
+
+
 def scaffold(
     rules: RuleSet,
     *,
@@ -108,27 +118,48 @@ def scaffold(
     """
     if style not in STYLES:
         raise ValueError(f"style {style!r} is not one of {', '.join(STYLES)}")
+    chosen = _chosen(rules, only)
+    if style == "capability":
+        return _capabilities(chosen, rules_path)
+    return _tasks(rules, chosen, rules_path)
+
+
+def _chosen(rules: RuleSet, only: Iterable[str] | None) -> list[CompiledRule]:
+    """The rules named in ``only`` (every rule when None), in file order; ValueError for a
+    name no rule has."""
     wanted = set(only) if only is not None else None
     missing = sorted((wanted or set()) - {r.name for r in rules.rules})
     if missing:
         raise ValueError(f"no rule {', '.join(missing)} in these rules")
-    chosen = [r for r in rules.rules if wanted is None or r.name in wanted]
-    if style == "capability":
-        return _capabilities(chosen, rules_path)
+    return [r for r in rules.rules if wanted is None or r.name in wanted]
+
+
+def _tasks(rules: RuleSet, chosen: list[CompiledRule], rules_path: str) -> str:
+    """The task style: the module's head, a task class per rule, ``TASKS`` and ``install``."""
     printer = Printer(rules.spec, rules.spec.dialect)
-    taken: set[str] = {
-        "install",
-        "TASKS",
-        "TYPE_CHECKING",
-        "Decision",
-        "Task",
-        "hedge",
-        "main",
-        "sys",
-        "Manager",
-        "TaskNode",
-    }
-    lines = [
+    taken = set(_MODULE_NAMES)
+    lines = _tasks_head(rules_path)
+    classes = []
+    for r in chosen:
+        cls = _identifier(r.name, taken)
+        classes.append(cls)
+        lines += _task_class(printer, r, cls)
+    lines += [
+        "",
+        "",
+        "TASKS = [" + ", ".join(f"{c}()" for c in classes) + "]",
+        "",
+        "",
+        "def install(node: Manager | TaskNode) -> None:",
+        '    """Bind every task: a cosleec task node calls it (`--module`), or pass a Manager."""',
+        "    node.bind(*TASKS)",
+    ]
+    return "\n".join([*lines, *_entry_point(rules_path)])
+
+
+def _tasks_head(rules_path: str) -> list[str]:
+    """The task-style module's docstring and imports."""
+    return [
         f'"""Implementations of the rules in {Path(rules_path).name} (written by `cosleec scaffold`).',
         "",
         "Each rule is a task: `default` implements the rule's default response and each `@hedge(i)`",
@@ -147,47 +178,43 @@ def scaffold(
         "    from cosleec.nodes import TaskNode",
         "    from cosleec.runtime import Manager",
     ]
-    classes = []
-    for r in chosen:
-        cls = _identifier(r.name, taken)
-        classes.append(cls)
-        lines += ["", "", f"class {cls}(Task):", *_docstring(_rule_text(printer, r.ast), "    ")]
-        lines += ["", f"    rule = {_str(r.name)}", ""]
-        lines += _method(r, None, "default")
-        methods = {"default", "rule", "fallback", "event", "request", "clauses", "manager"}
-        for c in r.clauses:
-            if c.response is None:
-                continue  # `unless c` with no response: nothing is required, nothing to implement
-            name = _identifier(f"clause_{c.index}", methods)
-            lines += ["", f"    @hedge({c.index})"]
-            lines += _method(r, c.index, name)
-        fallbacks: set[str] = set()
-        _otherwise_events(r.default, fallbacks)
-        for c in r.clauses:
-            _otherwise_events(c.response, fallbacks)
-        if fallbacks:
-            lines += [
-                "",
-                "    def fallback(self, decision: Decision) -> None:",
-                '        """The `otherwise` responses (a missed obligation\'s fallback): '
-                + ", ".join(sorted(fallbacks))
-                + '."""',
-                "        # TODO: make the robot do what the fallback obliges, then report it",
-                "        for ob in decision.obligations:",
-                "            if not ob.negated:",
-                "                self.event(ob.event)",
-            ]
-    lines += [
+
+
+def _task_class(printer: Printer, r: CompiledRule, cls: str) -> list[str]:
+    """Rule ``r``'s task class ``cls``: the rule as its docstring, ``default``, a ``@hedge(i)``
+    method per clause with a response, and a ``fallback`` when the rule has ``otherwise``."""
+    lines = ["", "", f"class {cls}(Task):", *_docstring(_rule_text(printer, r.ast), "    ")]
+    lines += ["", f"    rule = {_str(r.name)}", ""]
+    lines += _method(r, None, "default")
+    methods = set(_TASK_MEMBERS)
+    for c in r.clauses:
+        if c.response is None:
+            continue  # `unless c` with no response: nothing is required, nothing to implement
+        name = _identifier(f"clause_{c.index}", methods)
+        lines += ["", f"    @hedge({c.index})"]
+        lines += _method(r, c.index, name)
+    return lines + _fallback(r)
+
+
+def _fallback(r: CompiledRule) -> list[str]:
+    """The ``fallback`` method of ``r``'s task (nothing when ``r`` has no ``otherwise``)."""
+    fallbacks: set[str] = set()
+    _otherwise_events(r.default, fallbacks)
+    for c in r.clauses:
+        _otherwise_events(c.response, fallbacks)
+    if not fallbacks:
+        return []
+    return [
         "",
-        "",
-        "TASKS = [" + ", ".join(f"{c}()" for c in classes) + "]",
-        "",
-        "",
-        "def install(node: Manager | TaskNode) -> None:",
-        '    """Bind every task: a cosleec task node calls it (`--module`), or pass a Manager."""',
-        "    node.bind(*TASKS)",
+        "    def fallback(self, decision: Decision) -> None:",
+        '        """The `otherwise` responses (a missed obligation\'s fallback): '
+        + ", ".join(sorted(fallbacks))
+        + '."""',
+        "        # TODO: make the robot do what the fallback obliges, then report it",
+        "        for ob in decision.obligations:",
+        "            if not ob.negated:",
+        "                self.event(ob.event)",
     ]
-    return "\n".join([*lines, *_entry_point(rules_path)])
 
 
 def _capabilities(chosen: list[CompiledRule], rules_path: str) -> str:
@@ -238,7 +265,6 @@ def _capabilities(chosen: list[CompiledRule], rules_path: str) -> str:
         ]
     if not by_event:
         lines += ["    pass  # these rules oblige no action (only prohibitions)"]
-    lines += []
     return "\n".join([*lines, *_entry_point(rules_path)])
 
 

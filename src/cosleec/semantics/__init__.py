@@ -3,13 +3,15 @@
 Small and simple rather than fast (though linear in a trace's length): written from the
 language reference, sharing no code with :mod:`cosleec.runtime`, it is the oracle the
 runtime is tested against and what ``cosleec conforms`` judges recorded runs with. Depends
-on :mod:`cosleec.lang` only.
+on :mod:`cosleec.lang` only: :func:`judge` reads the rules as a :class:`cosleec.lang.Reading`
+says, and which reading a recorded run is judged under is :mod:`~cosleec.semantics.conformance`.
 """
 
 from __future__ import annotations
 
 from cosleec.lang import CANCEL, CONFLICT_AWARE
-from cosleec.semantics.reference import Options, judge
+from cosleec.semantics import conformance
+from cosleec.semantics.reference import judge
 from cosleec.semantics.trace import (
     Recording,
     RunOptions,
@@ -19,7 +21,7 @@ from cosleec.semantics.trace import (
     check_trace,
     fit_trace,
     read,
-    read_audit,
+    read_audit_trace,
     read_recording,
     read_trace,
 )
@@ -31,7 +33,6 @@ __all__ = [
     "Conflict",
     "Firing",
     "Judgement",
-    "Options",
     "Recording",
     "RunOptions",
     "Step",
@@ -39,10 +40,11 @@ __all__ = [
     "Value",
     "Verdict",
     "check_trace",
+    "conformance",
     "fit_trace",
     "judge",
     "read",
-    "read_audit",
+    "read_audit_trace",
     "read_recording",
     "read_trace",
 ]

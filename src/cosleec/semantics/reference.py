@@ -29,12 +29,12 @@ Clauses (§7)
 Windows (§6.4, §10)
     ``E within T`` started at ``t`` is fulfilled by an occurrence in ``[t, t+T]`` (closed at
     both ends) and violated at ``t+T`` once time has passed it; ``within [a, b]`` ignores
-    occurrences before ``t+a``. Untimed ``E`` has no deadline (or ``Options.untimed``
-    seconds); ``E eventually`` none. ``not E within T`` is violated by an occurrence in
-    ``[t, t+T]`` and respected once time passes ``t+T``; untimed ``not E`` covers the
-    instant ``[t, t]``; ``not E eventually`` is never respected. A window whose end comes
-    before its start (a negative deadline computed from measures) is already closed: an
-    obligation is violated at once, a prohibition respected at once.
+    occurrences before ``t+a``. Untimed ``E`` has no deadline (or ``Reading.untimed``:
+    ``immediate`` or seconds); ``E eventually`` none. ``not E within T`` is violated by an
+    occurrence in ``[t, t+T]`` and respected once time passes ``t+T``; untimed ``not E``
+    covers the instant ``[t, t]``; ``not E eventually`` is never respected. A window whose
+    end comes before its start (a negative deadline computed from measures) is already
+    closed: an obligation is violated at once, a prohibition respected at once.
 
 ``otherwise`` (§6.5)
     Starts at the deadline of a missed obligation, or at the occurrence that violates a
@@ -63,9 +63,9 @@ Priorities (§13; ``H > L``, closed transitively)
     first). ``conflict-aware``: L is kept as long as possible; it is cancelled at the
     deadline ``d`` of an obligation that one of the two owes and the other's prohibition
     forbids at ``d`` (an H obligation forbidden by L; or an L obligation forbidden by H, so
-    that L is not violated by respecting H), minus ``Options.lead`` seconds, and before
-    anything else happens at that instant. A cancelled instance imposes nothing more: no
-    violation, no ``otherwise``.
+    that L is not violated by respecting H), minus ``Reading.priority_lead`` seconds, and
+    before anything else happens at that instant. A cancelled instance imposes nothing
+    more: no violation, no ``otherwise``.
 """
 
 from __future__ import annotations
@@ -73,14 +73,13 @@ from __future__ import annotations
 import itertools
 import operator
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 from cosleec.lang import (
     CANCEL,
     CONFLICT_AWARE,
-    PRIORITY_SEMANTICS,
     HedgeSemantics,
+    Reading,
     Specification,
     closure,
     deeply,
@@ -104,42 +103,25 @@ from cosleec.semantics.verdicts import (
 )
 
 MAX_SECONDS = 1e10  # a window longer than this (about 317 years) is out of range, read as unknown
-
-
-@dataclass(frozen=True)
-class Options:
-    """How to read the rules.
-
-    ``semantics``: how ``unless`` clauses combine; ``untimed``: the deadline of an untimed
-    obligation in seconds (None: none, the default); ``priorities``: declared ``(higher,
-    lower)`` pairs (the file's and the command line's); ``priority_semantics``: ``cancel``
-    or ``conflict-aware``; ``lead``: how long before the forcing deadline a conflict-aware
-    priority cancels the lower rule (0: at the deadline, as SLEEC-TK).
-    """
-
-    semantics: HedgeSemantics = HedgeSemantics.LAST_WINS
-    untimed: float | None = None
-    priorities: frozenset[tuple[str, str]] = frozenset()
-    priority_semantics: str = CANCEL
-    lead: float = 0.0
+_AS_SLEEC = Reading()  # SLEEC-TK's reading: last-wins, untimed responses without a deadline, cancel
 
 
 class _Unknown(Exception):
     """A measure the expression reads has no value."""
 
 
-def judge(spec: Specification, trace: Iterable[Step], options: Options = Options()) -> Judgement:
-    """The verdicts of ``spec`` on ``trace`` up to the trace's last time.
+def judge(spec: Specification, trace: Iterable[Step], reading: Reading = _AS_SLEEC) -> Judgement:
+    """The verdicts of ``spec`` on ``trace`` up to the trace's last time, reading the rules as
+    ``reading`` says (its ``priorities`` are added to the rule file's; its ``unknown`` plays
+    no part: a firing that depends on a value nobody gave is undetermined here).
 
     ``spec`` must be checked (names resolved: :func:`cosleec.lang.load`); the trace's names
     are taken as given (:func:`cosleec.semantics.trace.check_trace` checks them).
     """
-    if options.priority_semantics not in PRIORITY_SEMANTICS:
-        raise ValueError(f"priority_semantics must be one of {PRIORITY_SEMANTICS}")
     steps = list(trace)
     # evaluation recurses once per level of an expression (but along an and/or chain), as
     # the checker's passes do: an expression `cosleec check` accepts is judged in a deep thread
-    return deeply(lambda: _Judge(spec, options).run(steps))
+    return deeply(lambda: _Judge(spec, reading).run(steps))
 
 
 # ---------------------------------------------------------------------------- expressions
@@ -271,15 +253,16 @@ class _Undetermined(Exception):
 
 
 class _Judge:
-    def __init__(self, spec: Specification, options: Options) -> None:
+    def __init__(self, spec: Specification, reading: Reading) -> None:
         self.spec = spec
-        self.options = options
+        self.reading = reading
+        self.untimed = reading.untimed_seconds  # the deadline of an untimed response (None: none)
         self.eval = _Eval(spec)
         self.rules = {r.name: r for r in spec.rules}
         self.triggered: dict[str, list[A.Rule]] = {}  # event -> the rules it triggers, in file order
         for r in spec.rules:
             self.triggered.setdefault(r.trigger.event, []).append(r)
-        self.above = closure([*options.priorities, *pairs(spec)])
+        self.above = closure([*reading.priorities, *pairs(spec)])
         self.related: dict[str, list[str]] = {}  # rule -> the rules a priority orders it with
         for high, low in sorted(self.above):
             self.related.setdefault(high, []).append(low)
@@ -348,7 +331,7 @@ class _Judge:
     def forced(self) -> list[tuple[float, Item, str]]:
         """Conflict-aware: (time, an item of the lower instance, the higher rule) for every
         obligation whose deadline finds it forbidden by a prioritised rule's prohibition."""
-        if self.options.priority_semantics != CONFLICT_AWARE or not self.above:
+        if self.reading.priority_semantics != CONFLICT_AWARE or not self.above:
             return []
         out = []
         for event in self.live.events():  # an obligation and a prohibition of one event in force
@@ -369,7 +352,7 @@ class _Judge:
                 lo, hi = p.v.window
                 if not (lo <= d and (hi is None or d <= hi)):
                     continue
-                at = max(d - self.options.lead, o.v.start, lo)
+                at = max(d - self.reading.priority_lead, o.v.start, lo)
                 if (o.v.rule, p.v.rule) in self.above:
                     out.append((at, p, o.v.rule))
                 elif (p.v.rule, o.v.rule) in self.above:
@@ -425,7 +408,7 @@ class _Judge:
             self.out.firings.append(Firing(step, now, rule.name, rule.trigger.event, False, None, None))
             return
         top = rule.response
-        k = choose([self.eval.truth(d.condition, self.values) for d in top.defeaters], self.options.semantics)
+        k = choose([self.eval.truth(d.condition, self.values) for d in top.defeaters], self.reading.semantics)
         if k is None:
             missing = set().union(*(self.eval.reads(d.condition) for d in top.defeaters)) - self.values.keys()
             self.out.firings.append(
@@ -475,7 +458,7 @@ class _Judge:
             key = self.keys[id(response)]
         if response.defeaters:
             vals = [self.eval.truth(d.condition, self.values) for d in response.defeaters]
-            chosen = choose(vals, self.options.semantics)
+            chosen = choose(vals, self.reading.semantics)
             if chosen is None:
                 raise _Undetermined(
                     set().union(*(self.eval.reads(d.condition) for d in response.defeaters))
@@ -509,7 +492,7 @@ class _Judge:
         if response.defeaters:
             k = choose(
                 [self.eval.truth(d.condition, self.values) for d in response.defeaters],
-                self.options.semantics,
+                self.reading.semantics,
             )
             if k is None:
                 return None  # unknown: it cannot be counted on (fail closed)
@@ -543,7 +526,7 @@ class _Judge:
             return now, now  # untimed `not E`: the trigger instant
         if has_otherwise:
             return now, now  # `otherwise` after an untimed occurrence: within 0 seconds
-        return now, None if self.options.untimed is None else now + self.options.untimed
+        return now, None if self.untimed is None else now + self.untimed
 
     def add(
         self,
@@ -575,7 +558,7 @@ class _Judge:
                     item.v.note = "its window closed before it opened (a negative deadline)"
                     if item.otherwise is not None:
                         self.start(item.otherwise, now, seq, instance, rule, clause, depth + 1)
-        if depth == 0 and self.options.priority_semantics == CANCEL:
+        if depth == 0 and self.reading.priority_semantics == CANCEL:
             self.prioritise(instance, rule, now)
         for item in fresh:
             if item.v.status == PENDING:
@@ -638,7 +621,7 @@ class _Judge:
         if o.v.status != PENDING or not _covers(o, p, now):
             return  # some instant of the obligation's window is allowed: the robot can wait
         pair = (o.v.rule, p.v.rule)
-        if self.options.priority_semantics == CONFLICT_AWARE and (
+        if self.reading.priority_semantics == CONFLICT_AWARE and (
             pair in self.above or pair[::-1] in self.above
         ):
             winner = o.v.rule if pair in self.above else p.v.rule

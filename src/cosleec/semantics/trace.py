@@ -9,7 +9,7 @@ Two files become traces (issue 12), both JSON Lines, one object a line:
 
 - a written trace (:func:`read_trace`): ``{"t": 0, "set": {"assentToSupportCalls": false}}``,
   ``{"t": 0, "event": "UserFallen"}``, ``{"t": 360}``;
-- the Manager's own audit log (:func:`read_audit`), so a real run can be checked ex post.
+- the Manager's own audit log (:func:`read_audit_trace`), so a real run can be checked ex post.
 
 :func:`read_recording` reads a file of either kind -- once, so a pipe (``/dev/stdin``,
 ``<(cat trace.jsonl)``) is read whole -- and tells them apart; for an audit log it also
@@ -17,18 +17,16 @@ returns the options the run used (the Manager's ``options`` record) and the sema
 decisions were made with. :func:`read` is its steps alone. :func:`check_trace` holds a
 written trace against the declarations of a specification; :func:`fit_trace` fits an audit
 log to rules that may be a newer version than those it ran (what they do not declare is
-dropped, and said). Every problem is a :class:`TraceError` naming ``file:line``. This module
-reads the audit log's records itself: ``semantics`` sits beside ``runtime`` and imports only
-``lang`` (and ``errors``), so the record layout is restated here, from what
-``cosleec.runtime`` writes (``Manager._commit``: ``seq``, ``kind``, ``time``, then the
-record's data at the top level; ``Manager.start()``: an ``options`` record).
+dropped, and said). Every problem is a :class:`TraceError` naming ``file:line``. The audit
+log's lines are read by the one reader of the record format, :mod:`cosleec.records` (a floor
+below both ``semantics`` and ``runtime``: the format is shared, what a record means for the
+rules is not); this module turns the records into steps.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import difflib
-import json
 import math
 import sys
 from collections.abc import Iterable, Iterator, Mapping, Sequence
@@ -37,7 +35,17 @@ from pathlib import Path
 from typing import Any, TypeGuard
 
 from cosleec.errors import UserError, clip, show
-from cosleec.lang import PRIORITY_SEMANTICS, HedgeSemantics, Specification, Unknowns, ast
+from cosleec.lang import Reading, Specification, Unknowns, ast
+from cosleec.records import (
+    AuditRecord,
+    Kind,
+    RecordError,
+    check_fields,
+    load_json,
+    records_in,
+    seconds,
+    starts_audit_log,
+)
 
 Value = bool | int | float | str  # a scale measure's value is its literal's name
 
@@ -48,8 +56,6 @@ EXAMPLE = '{"t": 0, "set": {"assentToSupportCalls": false}} or {"t": 0, "event":
 
 STDIN = "-"
 """The name that reads the trace from standard input."""
-
-UNTIMED_WORDS = ("none", "immediate")  # the Manager's untimed option, besides a number of seconds
 
 
 @dataclass(frozen=True, slots=True)
@@ -70,31 +76,24 @@ class Step:
 class TraceError(UserError):
     """A trace or audit log that cannot be read, or that names what the rules do not declare.
 
-    Raised by :func:`read_trace`, :func:`read_audit`, :func:`read` and :func:`check_trace`;
+    Raised by :func:`read_trace`, :func:`read_audit_trace`, :func:`read` and :func:`check_trace`;
     ``where`` is ``file:line`` (``file:line:col`` for a JSON syntax error), ``hint`` says
     how to fix the line. ``cosleec conforms`` prints it and exits 2.
     """
 
 
-@dataclass(frozen=True, slots=True)
-class RunOptions:
-    """The options a Manager ran with, as its ``options`` audit record states them.
+@dataclass(frozen=True, kw_only=True, slots=True)
+class RunOptions(Reading):
+    """The options a Manager ran with, as its ``options`` audit record states them: a
+    :class:`~cosleec.lang.Reading` (``priorities`` are every declared pair, the rule file's
+    and the Manager's), and which record said so.
 
-    ``semantics``: ``last-wins`` or ``nested``; ``priorities``: every declared ``(higher,
-    lower)`` pair, the rule file's and the Manager's (sorted, each once);
-    ``priority_semantics``: ``cancel`` or ``conflict-aware``; ``priority_lead``: seconds;
-    ``untimed``: ``"none"``, ``"immediate"`` or seconds; ``unknown``: how the Manager read
-    a condition over a measure with no value (None: the record does not say). ``line`` and
-    ``run`` say which record (they take no part in comparisons: two runs with equal options
-    are equal).
+    ``unknown`` is None when the record does not say (a Manager from before it did). ``line``
+    and ``run`` say which record (they take no part in comparisons: two runs with equal
+    options are equal).
     """
 
-    semantics: str
-    priorities: tuple[tuple[str, str], ...]
-    priority_semantics: str
-    priority_lead: float
-    untimed: str | float
-    unknown: str | None = None
+    unknown: Unknowns | None = None
     line: int = field(default=0, compare=False)
     run: str | None = field(default=None, compare=False)
 
@@ -131,13 +130,7 @@ def read_recording(path: str | Path) -> Recording:
     path = _source(path)
     lines, complete = _lines(path, data)
     first = next((text for _, text in lines if text.strip()), "")
-    try:
-        record = json.loads(first)
-    except (ValueError, RecursionError):  # a torn first (and only) record still starts like one
-        is_audit = first.lstrip().startswith('{"seq":')
-    else:
-        is_audit = isinstance(record, dict) and "seq" in record and "kind" in record
-    if not is_audit:
+    if not starts_audit_log(first):
         return Recording(list(_trace_steps(path, lines)), path)
     reader = _AuditReader(path)
     steps = list(reader.steps(lines, complete))
@@ -175,7 +168,7 @@ def read_trace(path: str | Path) -> list[Step]:
     return list(_trace_steps(_source(path), lines))
 
 
-def read_audit(path: str | Path) -> list[Step]:
+def read_audit_trace(path: str | Path) -> list[Step]:
     """The trace a Manager's audit log records: what it was told, and when.
 
     ``event`` records become event steps and ``context`` records set steps (a value that
@@ -300,39 +293,28 @@ def _lines(path: str, data: bytes) -> tuple[list[tuple[int, str]], bool]:
     return lines, not data or data.endswith(b"\n")
 
 
-def _parse(path: str | Path, n: int, text: str, hint: str, *, unique: bool = True) -> object:
-    """One line's JSON value; TraceError with line and column when it is not JSON.
-
-    ``unique``: a key given twice in one object is an error (in a trace, which value was
-    meant?). Audit records are read with ``unique=False``: the Manager writes its header
-    keys (``rules``: the digest) before a record's data, which may reuse a name, and the
-    data's value is the one that counts (as any JSON reader takes the last).
-    """
+def _parse(path: str | Path, n: int, text: str, hint: str) -> object:
+    """One line of a written trace as its JSON value; TraceError with line and column when it
+    is not JSON (:func:`cosleec.records.load_json`), or when a key is given twice in one
+    object (which value was meant?)."""
     try:
-        return json.loads(text, object_pairs_hook=_no_duplicates if unique else None)
-    except json.JSONDecodeError as e:
-        raise TraceError(f"not valid JSON: {e.msg}", where=f"{path}:{n}:{e.colno}", hint=hint) from None
+        return load_json(text, f"{path}:{n}", hint, hook=_no_duplicates)
+    except RecordError as e:
+        raise _traced(e) from None
     except _DuplicateKey as e:
         raise TraceError(
             f"the key {show(e.key)} appears twice in one object",
             where=f"{path}:{n}",
             hint="give each key once",
         ) from None
-    except RecursionError:
-        raise TraceError("the line is nested too deeply to read", where=f"{path}:{n}", hint=hint) from None
-    except ValueError as e:  # Python's limit on integer digits
-        if "integer string conversion" in str(e):
-            raise TraceError(
-                "a number in the line has more than 4,300 digits",
-                where=f"{path}:{n}",
-                hint="no time or measure needs that many; write a smaller number",
-            ) from None
-        raise TraceError(
-            f"cannot read the line: {clip(str(e), 100)}", where=f"{path}:{n}", hint=hint
-        ) from None
 
 
-class _DuplicateKey(ValueError):
+def _traced(e: RecordError) -> TraceError:
+    """The record reader's refusal of a line, as this module's error (same words, place, hint)."""
+    return TraceError(str(e), where=e.where, hint=e.hint)
+
+
+class _DuplicateKey(Exception):  # not a ValueError: load_json lets it through
     def __init__(self, key: str) -> None:
         super().__init__(key)
         self.key = key
@@ -405,29 +387,13 @@ def _trace_steps(path: str | Path, lines: Sequence[tuple[int, str]]) -> Iterator
         yield Step(t=t, event=event, values=values, line=n)
 
 
-def _time(t: object, present: bool, where: str, key: str = "t") -> float:
-    """A line's ``t`` (an audit record's ``time``) as float seconds; TraceError unless a finite number."""
-    if not present:
-        raise TraceError(
-            f'the line has no time "{key}"',
-            where=where,
-            hint=f'add "{key}": the time in seconds, e.g. {{"{key}": 0, ...}}',
-        )
-    if isinstance(t, bool) or not isinstance(t, int | float):
-        raise TraceError(
-            f'"{key}" is a number of seconds, not {show(t)}', where=where, hint=f'write e.g. "{key}": 360'
-        )
+def _time(t: object, present: bool, where: str) -> float:
+    """A line's ``t`` as float seconds; TraceError unless a finite number
+    (:func:`cosleec.records.seconds`, which checks an audit record's ``time`` alike)."""
     try:
-        seconds = float(t)
-    except OverflowError:  # an integer past a float's range
-        seconds = math.inf
-    if not math.isfinite(seconds):
-        raise TraceError(
-            f'"{key}" must be a finite number, not {show(t, 40)}',
-            where=where,
-            hint="give the time in seconds",
-        )
-    return seconds + 0.0  # -0.0 is 0
+        return seconds(t, present, where, "t")
+    except RecordError as e:
+        raise _traced(e) from None
 
 
 def _values(given: Mapping[str, object], where: str) -> dict[str, Value | None]:
@@ -475,107 +441,66 @@ class _AuditReader:
     def steps(self, lines: Sequence[tuple[int, str]], complete: bool) -> Iterator[Step]:
         """The steps of ``lines``; ``complete``: the text ends with a newline (else the last
         line may be a write a crash cut short, and is ignored when it is not JSON)."""
-        path = self.path
-        lines = [(n, text) for n, text in lines if text.strip()]
         last: float | None = None
-        run: object = None
-        for i, (n, text) in enumerate(lines):
-            where = f"{path}:{n}"
-            try:
-                rec = _parse(path, n, text, "an audit log line is one record the Manager wrote", unique=False)
-            except TraceError:
-                if i == len(lines) - 1 and not complete:
-                    return  # the process died mid-write: the record never happened
-                raise
-            if not isinstance(rec, dict) or "seq" not in rec or not isinstance(rec.get("kind"), str):
-                raise TraceError(
-                    "not an audit record (a JSON object with seq, kind and time)",
-                    where=where,
-                    hint="give either a Manager's audit log or a trace, not a mix of both",
-                )
-            kind: str = rec["kind"]
-            t = _time(rec.get("time"), "time" in rec, where, "time")
-            if kind in ("event", "context") and last is not None and t < last:
-                again = " (a new run starts here)" if rec.get("run") != run else ""
+        run: str | None = None
+        for rec in self._records(lines, complete):
+            where = f"{self.path}:{rec.line}"
+            assert rec.time is not None  # read strictly: a finite number
+            t = float(rec.time) + 0.0  # -0.0 is 0
+            if rec.kind in (Kind.OCCURRENCE, Kind.CONTEXT) and last is not None and t < last:
+                again = " (a new run starts here)" if rec.run != run else ""
                 raise TraceError(
                     f"time goes back in the audit log: {_s(t)} after {_s(last)}{again}",
                     where=where,
                     hint="check each run of the log on its own: split it where the `run` field changes",
                 )
-            run = rec.get("run")
-            if kind == "options":
-                self.options.append(_run_options(rec, where, n))
-            elif kind == "decision" and isinstance(rec.get("semantics"), str):
-                name = clip(rec["semantics"], 40)
+            run = rec.run
+            if rec.kind == Kind.OPTIONS:
+                self.options.append(_run_options(rec.to_json(), where, rec.line))
+            elif rec.kind == Kind.DECISION and isinstance(rec.data.get("semantics"), str):
+                name = clip(rec.data["semantics"], 40)
                 self.decision_semantics[name] = self.decision_semantics.get(name, 0) + 1
-            if kind == "event":
-                event = rec.get("event")
-                if not isinstance(event, str) or not event:
-                    raise TraceError(f"an event record names no event: {show(event)}", where=where)
-                yield Step(t=t, event=event, line=n)
-            elif kind == "context":
-                values = rec.get("values")
-                if not isinstance(values, dict):
-                    raise TraceError(f"a context record has no values: {show(values)}", where=where)
-                yield Step(t=t, values=_values(values, where), line=n)
+            if rec.kind == Kind.OCCURRENCE:
+                yield Step(t=t, event=self._checked(rec)["event"], line=rec.line)
+            elif rec.kind == Kind.CONTEXT:
+                yield Step(t=t, values=_values(self._checked(rec)["values"], where), line=rec.line)
             elif last is None or t > last:
                 # a record at an earlier time (a fallback's decision carries its deadline) is no step back
-                yield Step(t=t, line=n)
+                yield Step(t=t, line=rec.line)
             else:
                 continue
             last = t if last is None else max(last, t)
 
+    def _records(self, lines: Sequence[tuple[int, str]], complete: bool) -> Iterator[AuditRecord]:
+        """The records of ``lines`` (:func:`cosleec.records.records_in`); a refused line is a TraceError."""
+        try:
+            yield from records_in(lines, str(self.path), complete=complete)
+        except RecordError as e:
+            raise _traced(e) from None
+
+    def _checked(self, rec: AuditRecord) -> Mapping[str, Any]:
+        """The fields of ``rec``, which this reader reads; TraceError unless its kind's required
+        fields are there (:func:`cosleec.records.check_fields`)."""
+        try:
+            check_fields(rec, str(self.path))
+        except RecordError as e:
+            raise _traced(e) from None
+        return rec.data
+
 
 def _run_options(rec: Mapping[str, Any], where: str, line: int) -> RunOptions:
     """An ``options`` record's options; TraceError naming the field that is missing or wrong."""
-
-    def bad(key: str, want: str) -> TraceError:
-        got = f"not {show(rec[key], 60)}" if key in rec else "missing"
-        return TraceError(
-            f"the options record's {key!r} is {want}: {got}",
+    try:
+        options = RunOptions.from_json(rec)
+    except ValueError as e:
+        raise TraceError(
+            str(e),
             where=where,
             hint="this is not a record a Manager writes; fix the line, or delete it and give the options "
             "on the command line",
-        )
-
-    semantics = rec.get("semantics")
-    if semantics not in [str(s) for s in HedgeSemantics]:
-        raise bad("semantics", "last-wins or nested")
-    given = rec.get("priorities")
-    if not isinstance(given, list) or not all(
-        isinstance(p, list) and len(p) == 2 and all(isinstance(x, str) and x for x in p) for p in given
-    ):
-        raise bad("priorities", 'a list of ["higher", "lower"] rule name pairs')
-    priority_semantics = rec.get("priority_semantics")
-    if priority_semantics not in PRIORITY_SEMANTICS:
-        raise bad("priority_semantics", " or ".join(PRIORITY_SEMANTICS))
-    lead = rec.get("priority_lead")
-    if not _seconds(lead):
-        raise bad("priority_lead", "a number of seconds >= 0")
-    untimed = rec.get("untimed")
-    if untimed not in UNTIMED_WORDS and not _seconds(untimed):
-        raise bad("untimed", '"none", "immediate" or a number of seconds >= 0')
-    unknown = rec.get("unknown")
-    if "unknown" in rec and unknown not in [str(u) for u in Unknowns]:
-        raise bad("unknown", " or ".join(str(u) for u in Unknowns))
-    assert isinstance(semantics, str) and isinstance(priority_semantics, str)
-    assert isinstance(lead, int | float) and isinstance(untimed, str | int | float)
+        ) from None
     run = rec.get("run")
-    return RunOptions(
-        semantics=semantics,
-        priorities=tuple(sorted({(h, lo) for h, lo in given})),
-        priority_semantics=priority_semantics,
-        priority_lead=float(lead),
-        untimed=untimed if isinstance(untimed, str) else float(untimed),
-        unknown=unknown if isinstance(unknown, str) else None,
-        line=line,
-        run=run if isinstance(run, str) else None,
-    )
-
-
-def _seconds(x: object) -> bool:
-    """Is ``x`` a finite number of seconds >= 0 (not a boolean)?"""
-    return isinstance(x, int | float) and not isinstance(x, bool) and _finite(x) and x >= 0
+    return dataclasses.replace(options, line=line, run=run if isinstance(run, str) else None)
 
 
 # ---------------------------------------------------------------------------- names and types

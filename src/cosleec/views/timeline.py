@@ -21,10 +21,10 @@ A :class:`Timeline` is built from the records a Manager writes -- its audit log
 - ``otherwise`` chains as :class:`Link` s: the fallback decision of a missed obligation
   names it (``violated``), and that decision's obligations are its children.
 
-Every record kind the runtime writes is read; ``options`` gives the title,
-``task-done`` and ``dispatch`` are counted but not drawn (an obligation's outcome shows
-the first, the decision the second). A kind this version does not know is ignored and
-counted in :attr:`Timeline.ignored`. Times are the runtime clock's, in seconds.
+Every record kind the runtime writes (:class:`cosleec.records.Kind`) is read; ``options``
+gives the title, ``task-done`` and ``dispatch`` are counted but not drawn (an obligation's
+outcome shows the first, the decision the second). A kind this version does not know is
+ignored and counted in :attr:`Timeline.ignored`. Times are the runtime clock's, in seconds.
 
 The marks themselves are in :mod:`cosleec.views.timeline_marks`, the files they are read
 from in :mod:`cosleec.views.timeline_files` (:meth:`Timeline.read`). Drawing is elsewhere
@@ -36,13 +36,14 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 from typing import Any
 
 from cosleec.errors import UserError, clip, show
+from cosleec.records import HEADER, Kind
 from cosleec.views.timeline_files import read_records
 from cosleec.views.timeline_marks import (
     UNDETERMINED,
@@ -370,9 +371,7 @@ class _Builder:
 
     def _run_note(self, t: float, rec: Mapping[str, Any]) -> None:
         kind = str(rec["kind"])
-        shown = {
-            k: v for k, v in rec.items() if k not in ("kind", "time", "seq", "wall", "mono", "run", "rules")
-        }
+        shown = {k: v for k, v in rec.items() if k not in HEADER}
         self._note(t, kind, f"{kind}: {clip(str(shown), 300)}")
 
     def _counted(self, t: float, rec: Mapping[str, Any]) -> None:
@@ -477,35 +476,35 @@ def _continues(records: Sequence[Mapping[str, Any]], i: int, run: object) -> boo
     for rec in records[i:]:
         if not isinstance(rec, Mapping) or rec.get("run") != run:
             return False
-        if rec.get("kind") == "restored":
+        if rec.get("kind") == Kind.RESTORED:
             return rec.get("from") is not None  # a new journal, or one reset on purpose, starts afresh
-        if rec.get("kind") in ("decision", "obligation"):
+        if rec.get("kind") in (Kind.DECISION, Kind.OBLIGATION):
             return False
     return False
 
 
-_HANDLERS = {
-    "options": _Builder._options,
-    "context": _Builder._context,
-    "layers": _Builder._layers,
-    "semantics": _Builder._semantics,
-    "event": _Builder._event,
-    "decision": _Builder._decision,
-    "obligation": _Builder._obligation,
-    "refused": _Builder._refused,
-    "rejected": _Builder._rejected,
-    "conflict": _Builder._conflict,
-    "cancelled": _Builder._cancelled,
-    "held": _Builder._held,
-    "withheld": _Builder._withheld,
-    "task-failed": _Builder._task_failed,
-    "task-interrupted": _Builder._task_interrupted,
-    "task-done": _Builder._counted,
-    "dispatch": _Builder._counted,
-    "reloaded": _Builder._run_note,
-    "restored": _Builder._run_note,
-    "dropped": _Builder._run_note,
-    "uncommitted": _Builder._run_note,
-    "audit-mismatch": _Builder._run_note,
+_HANDLERS: dict[str, Callable[[_Builder, float, Mapping[str, Any]], None]] = {
+    Kind.OPTIONS: _Builder._options,
+    Kind.CONTEXT: _Builder._context,
+    Kind.LAYERS: _Builder._layers,
+    Kind.SEMANTICS: _Builder._semantics,
+    Kind.OCCURRENCE: _Builder._event,
+    Kind.DECISION: _Builder._decision,
+    Kind.OBLIGATION: _Builder._obligation,
+    Kind.REFUSED: _Builder._refused,
+    Kind.REJECTED: _Builder._rejected,
+    Kind.CONFLICT: _Builder._conflict,
+    Kind.CANCELLED: _Builder._cancelled,
+    Kind.HELD: _Builder._held,
+    Kind.WITHHELD: _Builder._withheld,
+    Kind.TASK_FAILED: _Builder._task_failed,
+    Kind.TASK_INTERRUPTED: _Builder._task_interrupted,
+    Kind.TASK_DONE: _Builder._counted,
+    Kind.DISPATCH: _Builder._counted,
+    Kind.RELOADED: _Builder._run_note,
+    Kind.RESTORED: _Builder._run_note,
+    Kind.DROPPED: _Builder._run_note,
+    Kind.UNCOMMITTED: _Builder._run_note,
+    Kind.AUDIT_MISMATCH: _Builder._run_note,
 }
-"""What each record kind the runtime writes (``Manager._emit``) contributes."""
+"""What each record kind the runtime writes contributes (by the ``kind`` string a record holds)."""

@@ -1,15 +1,17 @@
 """The live web view: one page that shows a running Manager as it decides.
 
-``Manager(..., web=PORT)``, ``cosleec demo --web`` and the ROS Manager node's ``--web PORT``
-serve it: the context with each value's age, each rule's layer, the latest decisions and
+``attach(manager, PORT)`` (:mod:`cosleec.views.registry`), ``cosleec demo --web`` and the ROS
+Manager node's ``--web PORT`` serve it: the context with each value's age, each rule's layer, the latest decisions and
 why, the obligations in force with a countdown to their deadline, violations, conflicts
-and refused actions (``docs/runtime.md``, "The live web view"). The runtime finds it
-through the entry point ``cosleec.views: web`` (:func:`serve`), so that ``cosleec.runtime``
-never imports this floor.
+and refused actions (``docs/runtime.md``, "The live web view"). It is found by the entry
+point ``cosleec.views: web`` (:func:`serve`; :func:`~cosleec.views.registry.load_view`), so
+that nothing imports the web packages until the view is asked for; ``cosleec.runtime`` names
+no view at all.
 
 Built on Starlette, served by uvicorn on a daemon thread with its own asyncio loop, from
-:meth:`Manager.start <cosleec.runtime.Manager.start>` to :meth:`Manager.close
-<cosleec.runtime.Manager.close>`. ``GET /`` is the page (package data in ``static/``:
+:func:`~cosleec.views.registry.attach` (before :meth:`Manager.start
+<cosleec.runtime.Manager.start>`) to :meth:`WebView.close` (before :meth:`Manager.close
+<cosleec.runtime.Manager.close>`). ``GET /`` is the page (package data in ``static/``:
 HTML, CSS and plain JavaScript, nothing fetched from elsewhere), ``GET /state`` the state as
 JSON, ``GET /events`` a stream of server-sent events: a ``state`` message whenever
 something shown changed (at most every :data:`MIN_INTERVAL_S`) and a ``clock`` message with
@@ -112,7 +114,7 @@ _HEADERS = [  # on every response
 
 @dataclass(frozen=True, kw_only=True)
 class WebOptions:
-    """How the web view serves: ``Manager(web=PORT)`` or ``Manager(web={...})`` with these keys.
+    """How the web view serves: ``attach(manager, PORT)`` or ``attach(manager, {...})`` with these keys.
 
     ``port`` (0: a free one), ``host`` (an IP address or ``localhost``; 127.0.0.1 by
     default), ``allow_remote`` (serve clients on other machines: needed for any host other
@@ -240,7 +242,7 @@ class WebView:
     (:class:`~cosleec.views.live.Live`) and ``app`` its ASGI application;
     ``max_connections`` and ``max_streams`` what it allows at once (:meth:`WebOptions.limits`).
     :meth:`close` stops the server, frees the port and stops following the Manager
-    (``Manager.close()`` calls it).
+    (call it before ``Manager.close()``; :class:`~cosleec.views.registry.AttachedView` does).
     """
 
     def __init__(self, manager: Manager, options: WebOptions) -> None:
@@ -321,8 +323,8 @@ class WebView:
 def serve(manager: Manager, options: object) -> WebView:
     """Serve ``manager``'s live web view: the ``web`` entry point of the group ``cosleec.views``.
 
-    ``options`` is what ``Manager(web=...)`` was given (see :class:`WebOptions`); the
-    Manager calls this when it starts and closes the view when it closes.
+    ``options`` is what :func:`~cosleec.views.registry.attach` was given (see
+    :class:`WebOptions`); it serves from now, and its caller closes it before the Manager.
     """
     return WebView(manager, WebOptions.of(options))
 

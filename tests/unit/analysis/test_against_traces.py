@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from cosleec.analysis.witness import final_breaches
-from cosleec.lang import load
-from cosleec.semantics import Options, Step, judge
+from cosleec.lang import Reading, load
+from cosleec.semantics import Step, judge
 
 from .support import analyse, run, sleec, subjects
 
@@ -49,7 +49,7 @@ CASES = {
 def test_no_conflict_where_a_trace_meets_every_rule(tmp_path: Path, name: str) -> None:
     rules, trace = CASES[name]
     spec = load(tmp_path.joinpath("x.sleec").write_text(sleec(rules)) and tmp_path / "x.sleec")
-    assert not final_breaches(spec, judge(spec, trace, Options())), "the trace is no counter-example"
+    assert not final_breaches(spec, judge(spec, trace, Reading())), "the trace is no counter-example"
     report = run(tmp_path, rules, checks="vacuous-conflict")
     assert subjects(report, "vacuous-conflict") == set()
 
@@ -64,7 +64,7 @@ def test_a_conflict_a_declared_priority_settles_is_left_to_it(tmp_path: Path) ->
     assert any("left to the declared priority R1 > R2" in u for u in report.unknown)
     spec = load(tmp_path / "rules.sleec")
     trace = [Step(0, "A"), Step(1, "B"), Step(100)]
-    j = judge(spec, trace, Options(priorities=frozenset({("R1", "R2")})))
+    j = judge(spec, trace, Reading(priorities=frozenset({("R1", "R2")})))
     assert j.conforms
 
 
@@ -92,7 +92,7 @@ def test_an_occurrence_no_rule_asks_for_can_refuse_early_and_meet_every_rule(tmp
         tmp_path, HEAD + f"rule_start\n{REFUSABLE}\nrule_end\npurpose_start P1 exists A purpose_end\n"
     )
     spec = load(path)
-    assert not final_breaches(spec, judge(spec, REFUSED_EARLY, Options()))
+    assert not final_breaches(spec, judge(spec, REFUSED_EARLY, Reading()))
     report = analyse(path, ["vacuous-conflict", "purpose-blocked"])
     assert report.findings == []
 
@@ -106,7 +106,7 @@ def test_a_refusal_can_break_the_rule_the_others_seem_to_imply(tmp_path: Path) -
     path = _spec(tmp_path, HEAD + f"rule_start\n{rules}\nrule_end\n")
     spec = load(path)
     trace = [Step(0, "X"), Step(0, "A"), Step(11, "F"), Step(200)]
-    breached = {v.rule for v in final_breaches(spec, judge(spec, trace, Options()))}
+    breached = {v.rule for v in final_breaches(spec, judge(spec, trace, Reading()))}
     assert breached == {"R1"}  # the others are met, R1 is not: R1 is not redundant
     assert "R1" not in subjects(analyse(path, "redundant"), "redundant")
 
@@ -167,7 +167,7 @@ def test_an_obligation_without_fallback_refused_at_once_is_broken_even_if_its_ev
     )
     spec = load(path)
     trace = [Step(0, "A"), Step(1, "B"), Step(2, "C"), Step(200)]
-    assert {v.rule for v in final_breaches(spec, judge(spec, trace, Options()))} == {"RY"}
+    assert {v.rule for v in final_breaches(spec, judge(spec, trace, Reading()))} == {"RY"}
     report = analyse(path, ["vacuous-conflict", "purpose-blocked", "concern-raised"])
     assert subjects(report, "vacuous-conflict") == {"RP", "RY"}
     assert subjects(report, "purpose-blocked") == {"p1"}

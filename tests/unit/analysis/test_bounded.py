@@ -18,9 +18,9 @@ import pytest
 
 from cosleec.analysis import MORE, Deadline, Settings, analyse_file
 from cosleec.analysis.checks import LISTED
-from cosleec.analysis.encoding import Encoding, Reading
+from cosleec.analysis.encoding import Encoding
 from cosleec.cli.main import main
-from cosleec.lang import HedgeSemantics, analyse
+from cosleec.lang import HedgeSemantics, Reading, analyse
 
 
 def hedged(clauses: int, *, negated: bool = False, rules: int = 1) -> str:
@@ -55,7 +55,7 @@ def edges(enc: Encoding) -> int:
 def encoded(clauses: int, semantics: HedgeSemantics, negated: bool) -> int:
     result = analyse(hedged(clauses, negated=negated), "scale.sleec")
     assert result.ok and result.spec is not None and result.symbols is not None
-    enc = Encoding(result.spec, dict(result.symbols.constant_values), Reading(semantics), 2)
+    enc = Encoding(result.spec, dict(result.symbols.constant_values), Reading(semantics=semantics), 2)
     enc.probe("Go")
     enc.unfold()
     for rule in result.spec.rules:  # what the snapshot checks ask on top: every clause's condition

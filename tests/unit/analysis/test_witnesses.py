@@ -9,8 +9,8 @@ import pytest
 
 from cosleec.analysis import Finding
 from cosleec.cli.main import main
-from cosleec.lang import HedgeSemantics, load
-from cosleec.semantics import Options, judge, read_trace
+from cosleec.lang import HedgeSemantics, Reading, load
+from cosleec.semantics import judge, read_trace
 
 from .support import analyse, sleec
 
@@ -98,7 +98,7 @@ def test_a_runtime_conflict_witness_shows_overlapping_windows(tmp_path: Path) ->
     path, findings = _findings(tmp_path, "runtime")
     (f,) = [f for f in findings if f.code == "runtime-conflict"]
     assert f.witness is not None
-    j = judge(load(path), list(f.witness.steps), Options())
+    j = judge(load(path), list(f.witness.steps), Reading())
     owes = [v for v in j.verdicts if v.rule == "R1" and not v.negated and v.event == "B"]
     bans = [v for v in j.verdicts if v.rule == "R2" and v.negated and v.event == "B"]
     inf = float("inf")
@@ -119,7 +119,7 @@ def test_a_semantics_differ_witness_fires_different_clauses_under_each_semantics
         assert f.witness is not None
         picked = {}
         for sem in HedgeSemantics:
-            j = judge(spec, list(f.witness.steps), Options(semantics=sem))
+            j = judge(spec, list(f.witness.steps), Reading(semantics=sem))
             (fired,) = [x for x in j.firings if x.rule == f.subject and x.fired]
             picked[sem] = fired.clause
         assert picked[HedgeSemantics.LAST_WINS] != picked[HedgeSemantics.NESTED], f.situation

@@ -32,7 +32,7 @@ from cosleec.lang import (
 )
 from cosleec.lang import ast as A
 from cosleec.lang import diagnostics as D
-from cosleec.lang.checker import MAX_LINT_CLAUSES, _implication
+from cosleec.lang.unreachable import MAX_LINT_CLAUSES, _implication
 
 from .strategies import condition
 
@@ -113,7 +113,7 @@ def test_the_comparison_helper_is_called_a_bounded_number_of_times(monkeypatch: 
 
         return wrapped
 
-    monkeypatch.setattr("cosleec.lang.checker._implication", counting)
+    monkeypatch.setattr("cosleec.lang.unreachable._implication", counting)
     for n in (1000, 4000):
         asked = 0
         analyse(rule(n, "false"))

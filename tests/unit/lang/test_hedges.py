@@ -95,16 +95,16 @@ def test_decisive_values_alone_decide(values: list[bool | None], semantics: Hedg
     st.sampled_from(list(Unknowns)),
 )
 def test_decisive_shortcut_names_what_the_search_names(
-    values: list[bool | None], semantics: HedgeSemantics, unknowns: Unknowns
+    values: list[bool | None], semantics: HedgeSemantics, unknown: Unknowns
 ) -> None:
     """The last-wins shortcut (issue 16) against the search it replaces: the chosen clause
     and every later one, never an earlier one, all of them when none holds."""
     from cosleec.lang.hedges import _decisive_by_search
 
-    clause = choose(values, semantics, unknowns)
+    clause = choose(values, semantics, unknown)
     if clause is not None:
-        assert decisive(values, clause, semantics, unknowns) == _decisive_by_search(
-            values, clause, semantics, unknowns
+        assert decisive(values, clause, semantics, unknown) == _decisive_by_search(
+            values, clause, semantics, unknown
         )
 
 

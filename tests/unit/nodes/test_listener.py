@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from cosleec.nodes import ListenerNode, Mapping, MappingError
-from cosleec.nodes.listener import default_qos
+from cosleec.nodes.mapping import default_qos
 from cosleec.nodes.qos import Qos
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -363,9 +363,9 @@ def test_the_documented_battery_and_command_examples_behave_as_documented() -> N
 
 
 def test_the_module_docstring_example_is_a_valid_mapping() -> None:
-    import cosleec.nodes.listener as listener_module
+    import cosleec.nodes.mapping as mapping_module
 
-    doc = listener_module.__doc__ or ""
+    doc = mapping_module.__doc__ or ""
     example = doc.split("::\n\n", 1)[1].split("\n\n", 1)[0]
     m = Mapping.parse("\n".join(line[4:] for line in example.splitlines()), "docstring")
     assert {e.name for e in m.entries} >= {"batteryLevel", "CleanRequest"}

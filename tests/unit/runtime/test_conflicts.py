@@ -313,7 +313,7 @@ def test_a_priority_declared_before_a_restart_acts_on_what_the_journal_restores(
 def test_conflict_aware_cuts_are_not_recomputed_while_nothing_in_force_changes(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    import cosleec.runtime.manager as manager_module
+    import cosleec.runtime.enforcer as manager_module
 
     rules = (
         "def_start event T event G event E event Q def_end rule_start "
@@ -336,5 +336,5 @@ def test_conflict_aware_cuts_are_not_recomputed_while_nothing_in_force_changes(
     for _ in range(20):
         assert m.request("Q") is True  # a step that changes nothing in force
     assert len(calls) <= 1  # not a scan of everything in force per step
-    assert m.request("E") is False and len(m._held) == 50  # still held, and still right
+    assert m.request("E") is False and len(m._gate.held) == 50  # still held, and still right
     m.close()

@@ -434,7 +434,7 @@ def test_a_capability_that_triggers_its_own_rule_is_stopped_with_a_record(tmp_pa
 
 
 def test_a_max_depth_the_stack_cannot_hold_is_refused_with_the_limit() -> None:
-    from cosleec.runtime.manager import _deepest
+    from cosleec.runtime.runner import deepest as _deepest
 
     deepest = _deepest()
     with pytest.raises(
@@ -449,7 +449,7 @@ def test_a_max_depth_the_stack_cannot_hold_is_refused_with_the_limit() -> None:
 def test_the_deepest_max_depth_allowed_ends_a_trigger_loop_with_a_record_not_recursion_error(
     tmp_path: Path,
 ) -> None:
-    from cosleec.runtime.manager import _deepest
+    from cosleec.runtime.runner import deepest as _deepest
 
     log = tmp_path / "a.jsonl"
     m, _ = manager("R1 when E then F", audit=log, max_depth=_deepest())

@@ -36,7 +36,7 @@ def test_decision_made_takes_exactly_the_fields_with_their_defaults() -> None:
     reason=st.text(max_size=5),
     version=st.integers(0, 9),
     violated=st.none() | st.integers(1, 9),
-    unknowns=st.sampled_from(list(Unknowns)),
+    unknown=st.sampled_from(list(Unknowns)),
 )
 def test_decision_made_equals_the_constructor(
     clause: int | None,
@@ -45,7 +45,7 @@ def test_decision_made_equals_the_constructor(
     reason: str,
     version: int,
     violated: int | None,
-    unknowns: Unknowns,
+    unknown: Unknowns,
 ) -> None:
     kw = dict(
         id=3,
@@ -62,7 +62,7 @@ def test_decision_made_equals_the_constructor(
         reason=reason,
         context_version=version,
         violated=violated,
-        unknowns=unknowns,
+        unknown=unknown,
     )
     fast, plain = Decision.made(**kw), Decision(**kw)  # type: ignore[arg-type]
     assert fast == plain
@@ -154,20 +154,20 @@ CHAIN = (
 @given(
     values=st.lists(st.booleans(), min_size=CLAUSES, max_size=CLAUSES),
     semantics=st.sampled_from(list(HedgeSemantics)),
-    unknowns=st.sampled_from(list(Unknowns)),
+    unknown=st.sampled_from(list(Unknowns)),
 )
 def test_the_layer_manager_chooses_as_choose_does(
-    values: list[bool], semantics: HedgeSemantics, unknowns: Unknowns
+    values: list[bool], semantics: HedgeSemantics, unknown: Unknowns
 ) -> None:
     """Every value known: the shortcut for last-wins picks what :func:`choose` picks (the
     last clause that holds, not the first; 0 when none holds), whatever the policy."""
     from cosleec.lang import choose
 
-    m = Manager.from_text(CHAIN, clock=VirtualClock(), semantics=semantics, unknown=unknowns)
+    m = Manager.from_text(CHAIN, clock=VirtualClock(), semantics=semantics, unknown=unknown)
     m.update({f"c{j}": v for j, v in enumerate(values)})
     status = m.layer_manager.status[0]
     assert status.values == tuple(values)
-    assert status.clause == choose(values, semantics, unknowns)
+    assert status.clause == choose(values, semantics, unknown)
     expected = [f"R.{status.clause}"] if status.clause else []
     assert m.active_layers() == expected
 
@@ -203,18 +203,18 @@ def test_the_deadline_timer_is_woken_only_for_a_deadline_earlier_than_its_sleep(
     m.start(check=False, timer=True)
     try:
         pokes: list[float] = []
-        real = m._wake.notify_all
+        real = m._timer.wake.notify_all
 
         def counted() -> None:
             pokes.append(wall.monotonic())
             real()
 
-        m._wake.notify_all = counted  # type: ignore[method-assign]
+        m._timer.wake.notify_all = counted  # type: ignore[method-assign]
         m.event("Long")  # nothing was due: the timer sleeps with no deadline -> woken
         deadline = wall.monotonic() + 2
-        while m._timer_due == float("inf") and wall.monotonic() < deadline:
+        while m._timer.due == float("inf") and wall.monotonic() < deadline:
             wall.sleep(0.005)  # until the timer sleeps until RL's deadline
-        assert len(pokes) == 1 and m._timer_due < float("inf")
+        assert len(pokes) == 1 and m._timer.due < float("inf")
         m.event("Long")  # 30 s later than what it sleeps until: not woken
         assert len(pokes) == 1
         started = wall.monotonic()

@@ -561,9 +561,9 @@ def test_a_journal_reopened_after_a_reload_restores_what_the_reload_left_and_dro
     m.update(a=False, gone=True)
     m.event("G")  # 1: not Rec (R2), withdrawn by the reload
     m.event("E")  # 2: F (R1), kept; 3: Rec (R6), held while R2 forbids it, then withdrawn
-    assert len(m._held) == 1
+    assert len(m._gate.held) == 1
     done = m.reload(new)
-    assert done.withdrawn == (1, 3) and m._held == {}
+    assert done.withdrawn == (1, 3) and m._gate.held == {}
     kept = [t.to_json() for t in m.tracker.active]
     m.close()
     m = Manager(new, clock=VirtualClock(), audit=log, journal=journal)
@@ -672,7 +672,7 @@ def observed(m: Manager) -> tuple[Any, ...]:
         dict(m.stats),
         [t.to_json() for t in sorted(m.tracker.active, key=lambda t: t.id)],
         m.active_layers(),
-        sorted(m._held),
+        sorted(m._gate.held),
     )
 
 

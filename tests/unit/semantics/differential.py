@@ -18,9 +18,9 @@ from typing import Any
 
 from hypothesis import strategies as st
 
-from cosleec.lang import HedgeSemantics, parse
+from cosleec.lang import HedgeSemantics, Reading, parse
 from cosleec.runtime import Manager, VirtualClock
-from cosleec.semantics import Options, Step, judge
+from cosleec.semantics import Step, judge
 
 TRIGGERS = ("T0", "T1")
 ACTIONS = ("A", "B")
@@ -165,11 +165,11 @@ def reference(case: Case) -> dict[str, Any]:
     j = judge(
         spec,
         case.trace,
-        Options(
+        Reading(
             semantics=case.semantics,
             priorities=frozenset(case.priorities),
             priority_semantics=case.priority_semantics,
-            lead=case.lead,
+            priority_lead=case.lead,
         ),
     )
     return {

@@ -12,8 +12,8 @@ from typing import Any
 
 import pytest
 
-from cosleec.lang import HedgeSemantics, parse
-from cosleec.semantics import Options, Step, judge
+from cosleec.lang import HedgeSemantics, Reading, parse
+from cosleec.semantics import Step, judge
 from tests.unit.semantics.differential import HEADER
 
 V0: dict[str, Any] = {"b": False, "n": 2, "s": "low"}
@@ -22,7 +22,7 @@ V0: dict[str, Any] = {"b": False, "n": 2, "s": "low"}
 def verdicts(rules: str, *trace: Step, **options: Any) -> list[tuple[str, float, str, float | None]]:
     """(item key, start, status, at) of every verdict, for ``trace`` after all measures are set at 0."""
     spec = parse(HEADER + "rule_start\n" + rules + "\nrule_end\n")
-    j = judge(spec, [Step(0, values=V0), *trace], Options(**options))
+    j = judge(spec, [Step(0, values=V0), *trace], Reading(**options))
     return [(v.key, v.start, v.status, v.at) for v in sorted(j.verdicts, key=lambda v: v.id)]
 
 

@@ -13,8 +13,8 @@ import time
 
 import pytest
 
-from cosleec.lang import parse
-from cosleec.semantics import Options, Step, judge
+from cosleec.lang import Reading, parse
+from cosleec.semantics import Step, judge
 
 RULES = """def_start
     event Ask event Open event Refuse event Explain event Warn event Stop
@@ -50,13 +50,13 @@ def day(requests: int) -> list[Step]:
 @pytest.mark.parametrize(
     "options",
     [
-        Options(),
-        Options(priorities=frozenset({("R2", "R3")})),
-        Options(priorities=frozenset({("R2", "R3")}), priority_semantics="conflict-aware"),
+        Reading(),
+        Reading(priorities=frozenset({("R2", "R3")})),
+        Reading(priorities=frozenset({("R2", "R3")}), priority_semantics="conflict-aware"),
     ],
     ids=["plain", "cancel", "conflict-aware"],
 )
-def test_judging_takes_time_linear_in_the_trace(options: Options) -> None:
+def test_judging_takes_time_linear_in_the_trace(options: Reading) -> None:
     spec = parse(RULES)
 
     def seconds(requests: int) -> float:

@@ -13,9 +13,9 @@ from typing import Any
 
 import pytest
 
-from cosleec.lang import parse
+from cosleec.lang import Reading, parse
 from cosleec.runtime import Manager, VirtualClock
-from cosleec.semantics import Options, Step, judge
+from cosleec.semantics import Step, judge
 
 TIAGO = """def_start
     event UserFallen
@@ -82,7 +82,7 @@ def verdict(steps: list[Step], semantics: str) -> dict[str, Any]:
     j = judge(
         parse(TIAGO),
         steps,
-        Options(priorities=frozenset({("Rule21", "Rule3")}), priority_semantics=semantics),
+        Reading(priorities=frozenset({("Rule21", "Rule3")}), priority_semantics=semantics),
     )
     ref = {"conforms": j.conforms, "violated": sorted(v.rule for v in j.breaches)}
     assert runtime(steps, semantics) == ref

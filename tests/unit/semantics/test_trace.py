@@ -20,7 +20,7 @@ from cosleec.semantics.trace import (
     check_trace,
     fit_trace,
     read,
-    read_audit,
+    read_audit_trace,
     read_recording,
     read_trace,
 )
@@ -256,7 +256,7 @@ def run_manager(log: Path) -> list[tuple[float, str | None, dict[str, object]]]:
 def test_audit_log_round_trip(tmp_path: Path) -> None:
     log = tmp_path / "audit.jsonl"
     fed = run_manager(log)
-    steps = read_audit(log)
+    steps = read_audit_trace(log)
     records = [json.loads(line) for line in log.read_text().splitlines()]
     # the event and context steps are exactly what was fed; the others only advance time
     assert [s for s in steps_of(steps) if s[1] is not None or s[2]] == fed
@@ -270,9 +270,9 @@ def test_audit_log_round_trip(tmp_path: Path) -> None:
 def test_audit_log_torn_last_line_is_ignored(tmp_path: Path) -> None:
     log = tmp_path / "audit.jsonl"
     run_manager(log)
-    whole = read_audit(log)
+    whole = read_audit_trace(log)
     log.write_bytes(log.read_bytes() + b'{"seq":999,"kind":"event","time":700.0,"ev')
-    assert read_audit(log) == whole
+    assert read_audit_trace(log) == whole
     assert read(log) == whole
 
 
@@ -281,17 +281,17 @@ def test_audit_log_bad_lines_are_errors(tmp_path: Path) -> None:
     run_manager(log)
     lines = log.read_text().splitlines()
     n = len(lines)
-    whole = read_audit(log)
+    whole = read_audit_trace(log)
     log.write_text("\n".join([*lines[:2], '{"seq":3,"kind":"event","ti', *lines[2:]]) + "\n")
     with pytest.raises(TraceError, match="not valid JSON") as e:
-        read_audit(log)
+        read_audit_trace(log)
     assert e.value.where.startswith(f"{log}:3:")
     # a complete but unterminated last line is a record all the same; a broken one with a newline is not
     log.write_text("\n".join(lines))
-    assert read_audit(log) == whole
+    assert read_audit_trace(log) == whole
     log.write_text("\n".join([*lines, '{"seq":', ""]))
     with pytest.raises(TraceError) as e:
-        read_audit(log)
+        read_audit_trace(log)
     assert e.value.where.startswith(f"{log}:{n + 1}:")
 
 
@@ -325,7 +325,7 @@ def test_audit_records_at_an_earlier_time_do_not_step_back(tmp_path: Path) -> No
         '{"seq": 3, "kind": "obligation", "time": 10}\n'
         '{"seq": 4, "kind": "task-done", "time": 12}\n'
     )
-    assert steps_of(read_audit(log)) == [(10, "E", {}), (12, None, {})]
+    assert steps_of(read_audit_trace(log)) == [(10, "E", {}), (12, None, {})]
 
 
 def test_a_lone_torn_record_is_an_empty_audit_log(tmp_path: Path) -> None:
@@ -342,7 +342,7 @@ def test_audit_records_may_repeat_a_header_key(tmp_path: Path) -> None:
         '{"seq":1,"kind":"conflict","time":3,"rules":"e4e99dbb","rules":["R1","R2"]}\n'
         '{"seq":2,"kind":"event","time":4,"rules":"e4e99dbb","event":"E"}\n'
     )
-    assert steps_of(read_audit(log)) == [(3, None, {}), (4, "E", {})]
+    assert steps_of(read_audit_trace(log)) == [(3, None, {}), (4, "E", {})]
 
 
 # ---------------------------------------------------------------------------- read once (pipes)
@@ -382,7 +382,7 @@ def test_a_pipe_is_read_once_whole(tmp_path: Path) -> None:
 def test_a_piped_audit_log_keeps_its_records_and_drops_a_torn_tail(tmp_path: Path) -> None:
     log = tmp_path / "audit.jsonl"
     run_manager(log)
-    whole = read_audit(log)
+    whole = read_audit_trace(log)
     path, thread = piped(log.read_bytes() + b'{"seq":999,"kind":"event","time":700.0,"ev')
     try:
         rec = read_recording(path)

@@ -1,4 +1,4 @@
-"""The live web view (``Manager(web=PORT)``, ``cosleec demo --web``): real uvicorn on 127.0.0.1.
+"""The live web view (attached to a Manager, ``cosleec demo --web``): real uvicorn on 127.0.0.1.
 
 In the real Chromium (Debian's ``/usr/bin/chromium``, driven by Playwright; skipped where
 it is missing locally, a failure under CI): the page loads and shows the context, a decision
@@ -6,7 +6,7 @@ made after it opened appears with its explanation, a countdown reaches zero on a
 clock the test moves and then the violation shows, and no request leaves for another host.
 Without a browser (httpx): the state's content, who is refused (clients of other machines,
 foreign ``Host`` headers, controls while off), bad options, the entry point from
-``Manager(web=0)`` to a freed port, a stalled browser that must not hold the Manager up,
+an attached view to a freed port, a stalled browser that must not hold the Manager up,
 the demo command, and the largest corpus file.
 """
 
@@ -34,11 +34,14 @@ import pytest
 from cosleec.cli.main import main
 from cosleec.demo import rules_path
 from cosleec.errors import UserError
-from cosleec.runtime import ConfigurationError, Manager, RuleSet, VirtualClock, load_view
+from cosleec.runtime import ConfigurationError, Manager, RuleSet, VirtualClock
 from cosleec.testing import CHROMIUM, CHROMIUM_ARGS
 from cosleec.testing.corpus import corpus_dir
+from cosleec.views import AttachedView, load_view
 from cosleec.views.live import HISTORY
 from cosleec.views.web import MIN_INTERVAL_S, WebView
+
+from .attached import attach_web, close, web_url, web_view
 
 LARGEST = (
     "a-l-partis__SLEEC-ADAPT__AgentAdaption__agentAdaptionCode__scalability__sleecRules__rulestest625.sleec"
@@ -56,22 +59,23 @@ rule_end"""
 def served(rules: str | Path = TEXT, web: Any = 0, **options: Any) -> Iterator[Manager]:
     """A started Manager on a virtual clock, serving its web view; closed afterwards."""
     ruleset = RuleSet.from_file(rules) if isinstance(rules, Path) else RuleSet.from_text(rules)
-    m = Manager(ruleset, clock=options.pop("clock", VirtualClock()), dispatch=False, web=web, **options)
+    m = Manager(ruleset, clock=options.pop("clock", VirtualClock()), dispatch=False, **options)
     try:
-        m.start()
+        attach_web(m, web).start(m)
         yield m
     finally:
-        m.close()
+        close(m)
 
 
 def view(m: Manager) -> WebView:
-    assert isinstance(m.view, WebView)
-    return m.view
+    v = web_view(m)
+    assert isinstance(v, WebView)
+    return v
 
 
 def state(m: Manager) -> dict[str, Any]:
-    assert m.web_url is not None
-    r = httpx.get(m.web_url + "state", timeout=5)
+    assert web_url(m) is not None
+    r = httpx.get(web_url(m) + "state", timeout=5)
     assert r.status_code == 200 and r.headers["content-type"] == "application/json"
     return r.json()  # type: ignore[no-any-return]
 
@@ -140,7 +144,7 @@ def test_the_page_shows_the_context_and_a_decision_made_after_it_opened(page: An
 
     with served() as m:
         m.update(m=False)
-        page.goto(m.web_url)
+        page.goto(web_url(m))
         expect(page.locator("#connection")).to_have_text("live")
         row = page.locator("#context tbody tr", has_text="m")
         expect(row.locator("td.value")).to_have_text("false")
@@ -165,7 +169,7 @@ def test_a_countdown_reaches_zero_on_the_virtual_clock_then_the_violation_shows(
     clock = VirtualClock()
     with served(clock=clock) as m:
         m.update(m=True)
-        page.goto(m.web_url)
+        page.goto(web_url(m))
         expect(page.locator("#obligations")).to_have_text("Nothing is owed.")
         m.event("E")
         ob = page.locator("#obligations .obligation")
@@ -202,7 +206,7 @@ def test_the_largest_corpus_file_renders_every_rule(page: Any) -> None:
     page.on("pageerror", lambda e: errors.append(str(e)))
     with served(path, unknown_events="refuse") as m:
         rules = m.ruleset.rules
-        page.goto(m.web_url)
+        page.goto(web_url(m))
         expect(page.locator("#rules tbody tr")).to_have_count(len(rules))
         m.event(rules[0].trigger)
         expect(page.locator("#decisions li").first).to_contain_text(rules[0].trigger)
@@ -270,11 +274,11 @@ def test_a_conflict_and_a_violation_are_in_the_state_and_values_set_before_the_v
 ):
     clock = VirtualClock()
     ruleset = RuleSet.from_file(rules_path())
-    m = Manager(ruleset, clock=clock, dispatch=False, web=0)
+    m = Manager(ruleset, clock=clock, dispatch=False)
     m.update(userConsent=False, userUndressed=False, userConscious=True)  # before the view started
     clock.advance(3)
     try:
-        m.start()
+        attach_web(m, 0).start(m)
         m.event("UserFallen")  # R6 forbids RecordVideo for 10 minutes
         m.update(userConsent=True)
         m.event("CameraRequest")  # R10.1 obliges RecordVideo within 5 s: a conflict
@@ -282,7 +286,7 @@ def test_a_conflict_and_a_violation_are_in_the_state_and_values_set_before_the_v
         m.tick()  # R4's CallSupport within 60 s is missed
         s = state(m)
     finally:
-        m.close()
+        close(m)
     context = {c["name"]: c for c in s["context"]}
     assert context["userUndressed"]["since"] == 3 and context["userUndressed"]["before"] is True
     assert context["userConsent"]["since"] == 3 and context["userConsent"]["before"] is False
@@ -349,15 +353,15 @@ def test_only_a_host_header_this_view_can_be_is_answered(host: str, status: int)
 
 def test_controls_are_refused_unless_enabled_and_then_only_as_json_from_the_page() -> None:
     with served() as m:
-        assert m.web_url is not None
-        r = httpx.post(m.web_url + "control/event", json={"event": "E"})
+        assert web_url(m) is not None
+        r = httpx.post(web_url(m) + "control/event", json={"event": "E"})
         assert r.status_code == 403 and "read-only" in r.json()["error"]
-        assert httpx.post(m.web_url + "control/advance", json={"seconds": 5}).status_code == 403
+        assert httpx.post(web_url(m) + "control/advance", json={"seconds": 5}).status_code == 403
         assert m.stats["events"] == 0 and m.clock.now() == 0
-        assert httpx.get(m.web_url + "control/event").status_code == 405
+        assert httpx.get(web_url(m) + "control/event").status_code == 405
     clock = VirtualClock()
     with served(clock=clock, web={"controls": True}) as m:
-        url = m.web_url
+        url = web_url(m)
         assert url is not None
         r = httpx.post(url + "control/event", json={"event": "E"}, headers={"origin": url.rstrip("/")})
         assert r.status_code == 200 and r.json() == {"ok": True, "decisions": [1]}
@@ -386,8 +390,8 @@ def test_controls_are_refused_unless_enabled_and_then_only_as_json_from_the_page
         assert httpx.post(url + "control/event", json=["E"]).status_code == 400
         assert m.stats["events"] == 1 and clock.now() == 11
     with served(clock=None, web={"controls": True}) as m:  # a real clock
-        assert m.web_url is not None
-        r = httpx.post(m.web_url + "control/advance", json={"seconds": 1})
+        assert web_url(m) is not None
+        r = httpx.post(web_url(m) + "control/advance", json={"seconds": 1})
         assert r.status_code == 409 and "real clock" in r.json()["error"]
 
 
@@ -410,32 +414,35 @@ def test_controls_are_refused_unless_enabled_and_then_only_as_json_from_the_page
     ],
 )
 def test_bad_web_options_are_a_user_error_when_the_manager_starts(web: Any, message: str) -> None:
-    m = Manager.from_text(TEXT, dispatch=False, web=web)
+    m = Manager.from_text(TEXT, dispatch=False)
+    attached = attach_web(m, web)
     with pytest.raises(ConfigurationError, match=message) as e:
-        m.start()
+        attached.start(m)
     assert isinstance(e.value, UserError)
     if web == {"prot": 8765}:
         assert e.value.hint == "did you mean 'port'?"
-    assert m.web_url is None and not web_threads()
-    m.close()
+    assert web_url(m) is None and not web_threads()
+    close(m)
 
 
 def test_a_port_in_use_is_a_user_error() -> None:
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))
         taken.listen()
-        m = Manager.from_text(TEXT, dispatch=False, web=taken.getsockname()[1])
+        m = Manager.from_text(TEXT, dispatch=False)
+        attached = attach_web(m, taken.getsockname()[1])
         with pytest.raises(UserError, match=r"cannot serve the web view on 127\.0\.0\.1 port") as e:
-            m.start()
+            attached.start(m)
         assert "0 for a free one" in e.value.hint
-        m.close()
+        close(m)
 
 
-def test_manager_web_finds_the_view_by_its_entry_point_and_close_frees_the_port() -> None:
-    m = Manager.from_text(TEXT, dispatch=False, web=0)
-    assert m.web_url is None  # serves from start()
-    m.start()
-    url = m.web_url
+def test_an_attached_view_is_found_by_its_entry_point_and_close_frees_the_port() -> None:
+    m = Manager.from_text(TEXT, dispatch=False)
+    attached = attach_web(m, 0)
+    assert web_url(m) is None  # serves from start()
+    attached.start(m)
+    url = web_url(m)
     assert url is not None and url.startswith("http://127.0.0.1:") and url.endswith("/")
     port = urlsplit(url).port
     assert port is not None and port != 0
@@ -446,11 +453,11 @@ def test_manager_web_finds_the_view_by_its_entry_point_and_close_frees_the_port(
     reader.start()  # a browser still connected when the Manager closes
     wait(lambda: len(lines) > 2)
     started = time.monotonic()
-    m.close()
+    close(m)
     assert time.monotonic() - started < 3
     reader.join(3)
     assert not reader.is_alive()  # its stream ended
-    assert refused(port) and not web_threads() and m.web_url is None
+    assert refused(port) and not web_threads() and web_url(m) is None
 
 
 def test_a_missing_view_or_dependency_says_which_extra_to_install(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -460,7 +467,7 @@ def test_a_missing_view_or_dependency_says_which_extra_to_install(monkeypatch: p
     monkeypatch.setitem(sys.modules, "sse_starlette", None)  # as if the web extra were not installed
     monkeypatch.delitem(sys.modules, "cosleec.views.web")
     with pytest.raises(ConfigurationError, match="the web view cannot be loaded") as e:
-        Manager.from_text(TEXT, web=0)
+        AttachedView(0)  # said before any Manager opens a file
     assert "pip install 'cosleec[web]'" in e.value.hint
 
 
@@ -489,7 +496,7 @@ def wait(cond: Any, timeout: float = 5) -> None:
 
 def test_a_stalled_browser_or_a_busy_server_does_not_hold_up_the_manager() -> None:
     with served() as m:
-        url = m.web_url
+        url = web_url(m)
         assert url is not None
         stalled = socket.socket()
         stalled.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1024)
@@ -520,7 +527,7 @@ def test_a_stalled_browser_or_a_busy_server_does_not_hold_up_the_manager() -> No
 
 def test_a_burst_of_records_is_a_few_state_messages_not_one_per_record() -> None:
     with served() as m:
-        url = m.web_url
+        url = web_url(m)
         assert url is not None
         kinds: list[str] = []
         stop = threading.Event()

@@ -42,6 +42,8 @@ from cosleec.testing import CHROMIUM, CHROMIUM_ARGS
 from cosleec.views import live as live_module
 from cosleec.views.web import MAX_BODY, SHUTDOWN_S, WebView
 
+from .attached import attach_web, close, web_url, web_view
+
 ARGS = list(CHROMIUM_ARGS)
 TEXT = """def_start event E event F event A event B measure m : boolean def_end
 rule_start
@@ -57,22 +59,24 @@ JSON = {"content-type": "application/json"}
 def served(rules: str | Path = TEXT, web: Any = 0, **options: Any) -> Iterator[Manager]:
     """A started Manager on a virtual clock, serving its web view; closed afterwards."""
     ruleset = RuleSet.from_file(rules) if isinstance(rules, Path) else RuleSet.from_text(rules)
-    m = Manager(ruleset, clock=options.pop("clock", VirtualClock()), dispatch=False, web=web, **options)
+    m = Manager(ruleset, clock=options.pop("clock", VirtualClock()), dispatch=False, **options)
     try:
-        m.start()
+        attach_web(m, web).start(m)
         yield m
     finally:
-        m.close()
+        close(m)
 
 
 def view(m: Manager) -> WebView:
-    assert isinstance(m.view, WebView)
-    return m.view
+    v = web_view(m)
+    assert isinstance(v, WebView)
+    return v
 
 
 def url(m: Manager) -> str:
-    assert m.web_url is not None
-    return m.web_url
+    u = web_url(m)
+    assert u is not None
+    return u
 
 
 def port(m: Manager) -> int:
@@ -416,23 +420,23 @@ def test_two_hundred_browsers_share_one_state_per_change_each_with_its_own_now()
 
 
 def test_a_view_closed_twice_or_before_its_manager_leaves_the_manager_able_to_close() -> None:
-    m = Manager.from_text(TEXT, clock=VirtualClock(), dispatch=False, web=0)
-    m.start()
+    m = Manager.from_text(TEXT, clock=VirtualClock(), dispatch=False)
+    attach_web(m, 0).start(m)
     p = port(m)
     v = view(m)
     v.close()
     v.close()
     assert refused(p) and not web_threads()
     m.update(m=True)  # the Manager goes on without its view
-    m.close()  # and closes: ValueError here left the journal, the audit log and the timer open
-    assert m.web_url is None
+    close(m)  # and closes: ValueError here left the journal, the audit log and the timer open
+    assert web_url(m) is None
     with pytest.raises(UserError):
         m.event("E")  # closed
 
 
 def test_close_is_prompt_with_stalled_and_half_open_clients_and_frees_the_port() -> None:
-    m = Manager.from_text(TEXT, clock=VirtualClock(), dispatch=False, web={"controls": True})
-    m.start()
+    m = Manager.from_text(TEXT, clock=VirtualClock(), dispatch=False)
+    attach_web(m, {"controls": True}).start(m)
     p = port(m)
     stalled = [Browser(m, rcvbuf=1024) for _ in range(50)]  # never read
     half: list[socket.socket] = []
@@ -449,7 +453,7 @@ def test_close_is_prompt_with_stalled_and_half_open_clients_and_frees_the_port()
         m.update(m=bool(i % 2))
         m.event("F")
     started = time.monotonic()
-    m.close()
+    close(m)
     took = time.monotonic() - started
     for b in stalled:
         b.close()
@@ -479,12 +483,13 @@ def test_a_port_in_use_fails_clearly_and_leaves_no_thread_and_no_socket() -> Non
         taken.bind(("127.0.0.1", 0))
         taken.listen()
         files = len(os.listdir("/proc/self/fd"))
-        m = Manager.from_text(TEXT, dispatch=False, web=taken.getsockname()[1])
+        m = Manager.from_text(TEXT, dispatch=False)
+        attached = attach_web(m, taken.getsockname()[1])
         with pytest.raises(UserError, match="cannot serve the web view"):
-            m.start()
-        assert m.web_url is None and not web_threads()
+            attached.start(m)
+        assert web_url(m) is None and not web_threads()
         assert len(os.listdir("/proc/self/fd")) == files
-        m.close()
+        close(m)
 
 
 def test_browsers_that_drop_mid_stream_are_forgotten() -> None:
@@ -598,11 +603,12 @@ def test_a_view_on_ipv6_loopback_serves_there_only() -> None:
 
 
 def test_a_manager_that_fails_to_start_serves_no_view() -> None:
-    m = Manager.from_text(TEXT, clock=VirtualClock(), dispatch=False, web=0, audit="/dev/full")
+    m = Manager.from_text(TEXT, clock=VirtualClock(), dispatch=False, audit="/dev/full")
     try:
+        attached = attach_web(m, 0)
         with pytest.raises(UserError, match="cannot write the audit log"):
-            m.start()  # a full disk
-        assert m.web_url is None and not web_threads()
+            attached.start(m)  # a full disk
+        assert web_url(m) is None and not web_threads()
     finally:
         with contextlib.suppress(OSError):  # the audit log cannot flush to /dev/full
-            m.close()
+            close(m)

@@ -38,6 +38,8 @@ from cosleec.errors import UserError
 from cosleec.runtime import ConfigurationError, Manager, RuleSet, VirtualClock
 from cosleec.views.web import WebView
 
+from .attached import attach_web, close, web_url, web_view
+
 TEXT = """def_start event E event F event A event B measure m : boolean def_end
 rule_start
 R1 when E then A within 10 seconds
@@ -50,22 +52,24 @@ PARTIAL = b"GET /state HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: "
 @contextmanager
 def served(web: Any = 0) -> Iterator[Manager]:
     """A started Manager on a virtual clock, serving its web view; closed afterwards."""
-    m = Manager(RuleSet.from_text(TEXT), clock=VirtualClock(), dispatch=False, web=web)
+    m = Manager(RuleSet.from_text(TEXT), clock=VirtualClock(), dispatch=False)
     try:
-        m.start()
+        attach_web(m, web).start(m)
         yield m
     finally:
-        m.close()
+        close(m)
 
 
 def view(m: Manager) -> WebView:
-    assert isinstance(m.view, WebView)
-    return m.view
+    v = web_view(m)
+    assert isinstance(v, WebView)
+    return v
 
 
 def port(m: Manager) -> int:
-    assert m.web_url is not None
-    return urlsplit(m.web_url).port or 0
+    url = web_url(m)
+    assert url is not None
+    return urlsplit(url).port or 0
 
 
 def connect(m: Manager, data: bytes = b"") -> socket.socket:
@@ -146,7 +150,7 @@ def test_half_sent_requests_are_closed_within_the_request_timeout() -> None:
             assert len(done) == len(socks), f"{len(socks) - len(done)} of {len(socks)} still open after 6 s"
             assert max(done.values()) < 3.5, sorted(done.values())[-5:]  # 1 s, and the test's own pace
             # and the view still serves
-            assert httpx.get(f"{m.web_url}state", timeout=5).status_code == 200
+            assert httpx.get(f"{web_url(m)}state", timeout=5).status_code == 200
         finally:
             for s in socks:
                 s.close()
@@ -183,9 +187,9 @@ def test_an_answer_left_unread_is_dropped_after_the_request_timeout() -> None:
         + " ".join(f"R{i} when E then A{i} within {i + 1} seconds" for i in range(n))
         + " rule_end"
     )
-    m = Manager(RuleSet.from_text(text), clock=VirtualClock(), dispatch=False, web={"request_timeout": 1.0})
+    m = Manager(RuleSet.from_text(text), clock=VirtualClock(), dispatch=False)
     try:
-        m.start()
+        attach_web(m, {"request_timeout": 1.0}).start(m)
         server = view(m)._server
         with socket.socket() as s:
             s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1024)
@@ -200,7 +204,7 @@ def test_an_answer_left_unread_is_dropped_after_the_request_timeout() -> None:
                 assert time.monotonic() - started < 3, "a reader that never reads still holds its connection"
                 time.sleep(0.05)
     finally:
-        m.close()
+        close(m)
 
 
 def test_a_half_sent_control_body_is_408_within_the_request_timeout() -> None:
@@ -251,7 +255,7 @@ def test_streams_beyond_max_streams_are_refused_with_503_and_the_state_still_ser
             assert reply.startswith(b"HTTP/1.1 503 "), reply
             assert b"retry-after: " in reply.lower()
             assert "at most 3 live pages" in json.loads(reply.split(b"\r\n\r\n", 1)[1])["error"]
-            assert httpx.get(f"{m.web_url}state", timeout=5).status_code == 200
+            assert httpx.get(f"{web_url(m)}state", timeout=5).status_code == 200
             streams.pop().close()  # one page closes: another may stream
             deadline = time.monotonic() + 5
             while True:
@@ -283,20 +287,22 @@ def test_streams_beyond_max_streams_are_refused_with_503_and_the_state_still_ser
     ],
 )
 def test_bad_limits_are_a_user_error(web: Any, message: str) -> None:
-    m = Manager.from_text(TEXT, dispatch=False, web=web)
+    m = Manager.from_text(TEXT, dispatch=False)
+    attached = attach_web(m, web)
     with pytest.raises(ConfigurationError, match=message):
-        m.start()
-    m.close()
+        attached.start(m)
+    close(m)
 
 
 def test_more_connections_than_the_descriptor_limit_allows_is_refused_at_start() -> None:
     soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
-    m = Manager.from_text(TEXT, dispatch=False, web={"max_connections": 1_000_000})
+    m = Manager.from_text(TEXT, dispatch=False)
+    attached = attach_web(m, {"max_connections": 1_000_000})
     with pytest.raises(UserError, match="file descriptors") as e:
-        m.start()
+        attached.start(m)
     assert e.value.hint is not None and "ulimit -n" in e.value.hint
-    assert m.web_url is None
-    m.close()
+    assert web_url(m) is None
+    close(m)
     assert resource.getrlimit(resource.RLIMIT_NOFILE) == (soft, hard)
 
 
@@ -307,10 +313,12 @@ import json, logging, os, resource, sys
 resource.setrlimit(resource.RLIMIT_NOFILE, (int(sys.argv[1]), resource.getrlimit(resource.RLIMIT_NOFILE)[1]))
 logging.basicConfig(level=logging.WARNING, stream=sys.stderr, format="%(name)s: %(message)s")
 from cosleec.runtime import Manager, RuleSet, VirtualClock
+from cosleec.views import AttachedView
 rules = sys.argv[2]
-m = Manager(RuleSet.from_file(rules), clock=VirtualClock(), dispatch=False, web=0)
-m.start()
-print(json.dumps({"url": m.web_url, "cap": getattr(m.view, "max_connections", None)}), flush=True)
+m = Manager(RuleSet.from_file(rules), clock=VirtualClock(), dispatch=False)
+web = AttachedView(0)
+web.start(m)
+print(json.dumps({"url": web.url, "cap": getattr(web.view, "max_connections", None)}), flush=True)
 held = []
 
 
@@ -348,6 +356,7 @@ for line in sys.stdin:
             print(len(held), flush=True)
         else:
             print(f"error: {e}", flush=True)
+web.close()
 m.close()
 """
 
@@ -473,20 +482,20 @@ def test_a_deeply_nested_control_body_is_a_400_with_the_reason() -> None:
         deep = b'{"event": "E", "x": ' + b"[" * 20_000 + b"]" * 20_000 + b"}"  # 40 KB
         assert len(deep) < 64 * 1024
         r = httpx.post(
-            f"{m.web_url}control/event", content=deep, headers={"content-type": "application/json"}
+            f"{web_url(m)}control/event", content=deep, headers={"content-type": "application/json"}
         )
         assert r.status_code == 400, r.text
         assert "nested" in r.json()["error"] and "at most" in r.json()["error"]
         for depth, status in ((4, 200), (5, 400)):  # the bound: 4 levels, {"event": ..., "x": [[[1]]]}
             body = b'{"event": "E", "x": ' + b"[" * (depth - 1) + b"1" + b"]" * (depth - 1) + b"}"
             r = httpx.post(
-                f"{m.web_url}control/event", content=body, headers={"content-type": "application/json"}
+                f"{web_url(m)}control/event", content=body, headers={"content-type": "application/json"}
             )
             assert r.status_code == status, (depth, r.text)
         # a string full of brackets is not nesting
         flat = json.dumps({"event": "E", "note": "[" * 20_000}).encode()
         r = httpx.post(
-            f"{m.web_url}control/event", content=flat, headers={"content-type": "application/json"}
+            f"{web_url(m)}control/event", content=flat, headers={"content-type": "application/json"}
         )
         assert r.status_code == 200, r.text
         assert m.stats["events"] == 2

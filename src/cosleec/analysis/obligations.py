@@ -1,0 +1,249 @@
+"""When a response, started at a slot, is met: its obligations and prohibitions, its chosen
+clause, ``otherwise`` and ``else`` (for :mod:`cosleec.analysis.encoding`).
+
+An obligation is met by a present occurrence of its event in its window (windows.py), after
+the step that raised it, unless a prohibition refuses it (refusals.py); a prohibition by
+none. An ``otherwise`` starts at the deadline it follows, at the first occurrence that breaks
+its prohibition, or at a refusal, and reads the values of that moment (a
+:class:`~cosleec.analysis.slots.Fallback` snapshot, which the relations constrain too).
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable, Iterator
+
+import z3
+
+from cosleec.analysis.refusals import Refusals
+from cosleec.analysis.relations import Relations
+from cosleec.analysis.slots import Z3, After, Fallback, Slot, before
+from cosleec.analysis.state import State
+from cosleec.analysis.terms import Terms
+from cosleec.analysis.windows import Windows
+from cosleec.lang import ast as A
+
+
+class Obligations:
+    """The responses of one encoding's rules over its slots, read as its reading says; the
+    snapshots of the ``otherwise`` responses encoded so far are the state's ``fallbacks``."""
+
+    def __init__(
+        self, state: State, terms: Terms, windows: Windows, relations: Relations, refusals: Refusals
+    ) -> None:
+        self.state = state  # with the other parts, all it holds (state.py says why)
+        self.terms = terms
+        self.windows = windows
+        self.relations = relations
+        self.refusals = refusals
+
+    def rule_holds(self, rule: A.Rule, x: Slot) -> Z3:
+        """``rule`` is met at slot ``x``: if ``x`` is present and triggers it, its response holds."""
+        fires = z3.And(x.present, self.terms.truth(rule.trigger.condition, x.snap))
+        return z3.Implies(fires, self.holds(rule.response, x, guard=fires))
+
+    def holds(
+        self,
+        response: A.Response | None,
+        x: Slot,
+        *,
+        untimed: float | str | None = "reading",
+        guard: Z3 | None = None,
+        situation: bool = False,
+    ) -> Z3:
+        """``response``, started by slot ``x``, is met (``untimed`` overrides the reading's).
+        ``guard`` says when the response is in force (default: when ``x`` is present): an
+        ``otherwise`` counts as started only then (:attr:`Fallback.started`). A
+        ``situation`` (a concern's or purpose's response) describes what occurs, not what a
+        rule owes: no prohibition refuses it."""
+        u = self.state.reading.untimed_seconds if untimed == "reading" else untimed
+        assert not isinstance(u, str)
+        self.state.guard = x.present if guard is None else guard
+        self.state.situation = situation
+        try:
+            return self._response(response, x.t, After(slot=x), x.snap, u)
+        finally:
+            self.state.situation = False
+
+    @contextlib.contextmanager
+    def _within(self, condition: Z3) -> Iterator[None]:
+        """Encode under ``condition`` too (a clause chosen, a primary missed)."""
+        outer = self.state.guard
+        self.state.guard = z3.And(outer, condition)
+        try:
+            yield
+        finally:
+            self.state.guard = outer
+
+    def _response(
+        self,
+        resp: A.Response | None,
+        start: Z3,
+        after: Callable[[Slot], Z3],
+        snap: dict[str, Z3],
+        untimed: float | None,
+    ) -> Z3:
+        if resp is None:
+            return z3.BoolVal(True, self.state.ctx)
+        if not resp.defeaters:
+            items = z3.And(
+                *(self._item(it, start, after, snap, untimed) for it in resp.items), self.state.ctx
+            )
+            known = self.windows.in_range(resp, snap)
+            return items if known is None else z3.Or(z3.Not(known), items)
+        conds = self.terms.chosen(resp.defeaters, snap)
+        parts = []
+        for sub, cond in zip([A.Response(resp.items), *(d.response for d in resp.defeaters)], conds):
+            self.terms.on_time()  # a rule of thousands of clauses takes seconds to encode
+            with self._within(cond):
+                parts.append(z3.Implies(cond, self._response(sub, start, after, snap, untimed)))
+        return z3.And(*parts, self.state.ctx)
+
+    def _item(
+        self,
+        it: A.ResponseItem,
+        start: Z3,
+        after: Callable[[Slot], Z3],
+        snap: dict[str, Z3],
+        untimed: float | None,
+    ) -> Z3:
+        """One item of a response: a prohibition (with its ``otherwise``: the first occurrence
+        that breaks it starts the fallback), or an obligation (with its ``else`` and
+        ``otherwise``). What this frame holds, and so the order it lets go of it in, is as it
+        has always been (state.py says why that order matters)."""
+        occ = it.occurrence
+        lo, hi = self.windows.window(occ, it.otherwise is not None, start, snap, untimed)
+        if occ.negated:
+            ok = z3.Not(self.windows.occurs(occ.event, lo, hi, after))
+            if it.otherwise is None:
+                return ok
+            breaks = [
+                (y, z3.And(y.present, lo <= y.t, *([y.t <= hi] if hi is not None else []), after(y)))
+                for y in self.state.by_event.get(occ.event, ())
+            ]
+            firsts = []
+            for y, by in breaks:
+                first = z3.And(by, *(z3.Not(z3.And(bz, before(z, y))) for (z, bz) in breaks if z is not y))
+                with self._within(first):
+                    fallback = self._response(it.otherwise, y.t, After(slot=y), y.snap, untimed)
+                firsts.append(z3.And(first, fallback))
+            return z3.Or(ok, *firsts)
+        ok = self.windows.occurs(occ.event, lo, hi, after)
+        if it.alternative is not None:
+            ok = z3.Or(ok, self._branch(it.alternative, start, after, snap, untimed))
+        if it.otherwise is None and it.alternative is None and hi is not None and not self.state.situation:
+            # refused at once by a prohibition that covers its whole window: a breach, even if
+            # the event then occurs (breaking that prohibition, whose own otherwise may be met)
+            refused, _, _ = self.refusals.refusal(occ.event, lo, hi, start, after, snap)
+            if refused is not None:
+                ok = z3.And(z3.Not(refused), ok)
+        if it.otherwise is not None and hi is not None:
+            ok, at, refused, when, fb = self._fallback_start(it, ok, lo, hi, start, after, snap)
+            later = _FallbackStart(at, hi < lo, after, refused, when)
+            with self._within(z3.Not(ok)):
+                fallback = self._response(it.otherwise, at, later, fb.snap, untimed)
+            ok = z3.Or(ok, fallback)
+        return ok
+
+    def _fallback_start(
+        self,
+        it: A.ResponseItem,
+        ok: Z3,
+        lo: Z3,
+        hi: Z3,
+        start: Z3,
+        after: Callable[[Slot], Z3],
+        snap: dict[str, Z3],
+    ) -> tuple[Z3, Z3, Z3 | None, Z3, Fallback]:
+        """Where the ``otherwise`` of an obligation (met when ``ok``) starts: at its deadline,
+        or at once when a prohibition refuses the obligation, which ``ok`` then also needs not
+        to be -> (ok, the start, refused, when refused, the snapshot the fallback reads)."""
+        terms = self.terms
+        at = z3.If(hi < lo, start, hi)
+        fresh = {m: terms.var(m, f"o{terms.fresh_number()}") for m in self.state.measures}
+        refused, when, reads = (
+            self.refusals.refusal(it.occurrence.event, lo, hi, start, after, snap)
+            if it.alternative is None and not self.state.situation  # an `else` may still meet it
+            else (None, None, [])
+        )
+        if refused is not None:  # refused: its fallback starts then, not at the deadline
+            ok = z3.And(z3.Not(refused), ok)
+            at = z3.If(refused, when, at)
+            for cond, values in reads:
+                self.state.solver.add(
+                    z3.Implies(cond, z3.And(*(fresh[m] == values[m] for m in fresh), self.state.ctx))
+                )
+        return ok, at, refused, when, self._fallback(at, z3.And(self.state.guard, z3.Not(ok)), fresh)
+
+    def _fallback(self, at: Z3, started: Z3, snap: dict[str, Z3]) -> Fallback:
+        """A new fallback snapshot, read at ``at`` when ``started``: in its measures' domains,
+        the same values as any other fallback started at that instant, the relations on it."""
+        fb = Fallback(at, started, snap)
+        self.terms.domain(fb.snap)
+        for other in self.state.fallbacks:
+            self.state.solver.add(
+                z3.Implies(
+                    z3.And(fb.started, other.started, fb.at == other.at),
+                    z3.And(*(fb.snap[m] == other.snap[m] for m in self.state.measures), self.state.ctx),
+                )
+            )
+        for lit, rel in zip(self.state.relation_lit, self.state.spec.relations):
+            on_fallback = self.relations.on_fallback(rel, fb)
+            if on_fallback is not None:
+                self.state.solver.add(z3.Implies(lit, on_fallback))
+        self.state.fallbacks.append(fb)
+        return fb
+
+    def _branch(
+        self,
+        resp: A.Response,
+        start: Z3,
+        after: Callable[[Slot], Z3],
+        snap: dict[str, Z3],
+        untimed: float | None,
+    ) -> Z3:
+        """An ``else`` alternative: every item of its chosen clause occurs in its own window."""
+        if resp.defeaters:
+            conds = self.terms.chosen(resp.defeaters, snap)
+            parts = [z3.Implies(conds[0], self._branch(A.Response(resp.items), start, after, snap, untimed))]
+            for d, cond in zip(resp.defeaters, conds[1:]):
+                sub = d.response
+                parts.append(
+                    z3.Implies(
+                        cond,
+                        z3.BoolVal(False, self.state.ctx)
+                        if sub is None
+                        else self._branch(sub, start, after, snap, untimed),
+                    )
+                )
+            return z3.And(*parts, self.state.ctx)
+        out = []
+        for it in resp.items:
+            if it.occurrence.negated:
+                return z3.BoolVal(False, self.state.ctx)
+            lo, hi = self.windows.window(it.occurrence, it.otherwise is not None, start, snap, untimed)
+            out.append(self.windows.occurs(it.occurrence.event, lo, hi, after))
+        return z3.And(*out, self.state.ctx) if out else z3.BoolVal(False, self.state.ctx)
+
+
+class _FallbackStart:
+    """Which occurrences count for an ``otherwise``: strictly after the deadline it follows;
+    after the step that raised the obligation when its window closed at once (a negative
+    deadline); after the refusal when a prohibition refused the obligation."""
+
+    def __init__(
+        self, at: Z3, closed_at_once: Z3, creation: Callable[[Slot], Z3], refused: Z3 | None, when: Z3
+    ) -> None:
+        self.at, self.closed_at_once, self.creation = at, closed_at_once, creation
+        self.refused, self.when = refused, when
+
+    def __call__(self, y: Slot) -> Z3:
+        """``y`` comes after the fallback's start."""
+        plain = z3.If(self.closed_at_once, self.creation(y), y.t > self.at)
+        if self.refused is None:
+            return plain
+        by_refusal = z3.Or(y.t > self.when, z3.And(y.t == self.when, self.creation(y)))
+        return z3.If(self.refused, by_refusal, plain)
+
+
+__all__ = ["Obligations"]

@@ -1,0 +1,74 @@
+"""The one writer of the record format: a step's records as audit lines, a record as one object.
+
+An audit line is one JSON object on one line, compact, its keys in this order::
+
+    {"seq":7,"kind":"decision","time":12.5,"wall":"2026-01-01T00:00:00.000000+00:00",
+     "mono":8123.25,"run":"1f0c...","rules":"06700cf8c39a7f6f","id":3,"rule":"R1",...}
+
+``seq``, ``kind`` and ``time`` are the record's; ``wall`` (UTC, microseconds), ``mono``
+(:func:`time.monotonic`), ``run`` and ``rules`` (the first 16 characters of the rules'
+digest) are the log's header, the same for every record of one step (readers find a step's
+records by them); then the fields of the kind (:data:`cosleec.records.FIELDS`). A record
+whose data has its own ``time`` (a decision's; a fallback's is its deadline) is written at
+that time, with one ``time`` key. A time that is not a finite number is written as
+``null``. Values JSON cannot hold are written as their ``str``.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import math
+import time as clock
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+from cosleec.records.event import RuntimeEvent
+from cosleec.records.kinds import Kind
+
+
+def audit_lines(
+    events: Iterable[RuntimeEvent],
+    *,
+    run: str,
+    rules: str,
+    wall: str | None = None,
+    mono: float | None = None,
+) -> list[str]:
+    """The audit lines of one step's ``events``, without newlines, in order.
+
+    ``run`` is the Manager's run id, ``rules`` the rules' digest (its first 16 characters
+    are written). ``wall`` and ``mono`` are read from the clocks once, for the whole step,
+    unless given (a test gives them, to compare bytes).
+    """
+    if wall is None:
+        wall = datetime.datetime.now(datetime.UTC).isoformat(timespec="microseconds")
+    if mono is None:
+        mono = clock.monotonic()
+    head = f',"wall":"{wall}","mono":{mono!r},"run":"{run}","rules":"{rules[:16]}"'
+    lines = []
+    for ev in events:
+        data, t = ev.data, ev.time
+        if "time" in data:  # a decision's own time (a fallback's is its deadline) is the record's:
+            t = data["time"]  # one "time" key, as a dict of the record has it, never two
+            data = {k: v for k, v in data.items() if k != "time"}
+        body = json.dumps(data, default=str, separators=(",", ":"))
+        lines.append(
+            f'{{"seq":{ev.seq},"kind":"{ev.kind}","time":{_number(t)}{head}'
+            + (f",{body[1:]}" if len(body) > 2 else "}")
+        )
+    return lines
+
+
+def as_object(kind: Kind | str, time: float, data: Mapping[str, Any]) -> dict[str, Any]:
+    """A record as one JSON object without the audit log's header: ``{"kind", "time", **data}``.
+
+    The form of an MCAP message (``/cosleec/<kind>``) and of ``cosleec demo --json``; as
+    in the audit log, a ``time`` of the data (a decision's own) is the record's time.
+    """
+    return {"kind": kind, "time": time, **data}
+
+
+def _number(x: object) -> str:
+    """A time as JSON: non-finite values (never from a checked clock) as null."""
+    return repr(x) if isinstance(x, int | float) and math.isfinite(x) else "null"

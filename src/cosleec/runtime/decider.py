@@ -1,0 +1,122 @@
+"""The decider: a trigger (or a missed deadline) becomes a :class:`~cosleec.runtime.decision.Decision`.
+
+At a trigger, the rule's condition is read on the context (three-valued: an unknown
+measure leaves it undetermined unless the ``unknown`` policy reads it), the Layer
+Manager's status says which clause is active, and the issuer turns that clause's response
+into obligations -- or, undetermined, into the prohibitions of every clause that could
+apply (fail closed). At a missed deadline, the obligation's ``otherwise`` is decided the
+same way (an ``otherwise`` decision).
+
+The decider makes decisions; it does not record them or put them in force (the Manager
+and the enforcer do).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from cosleec.lang import Unknowns
+from cosleec.runtime.context import Context
+from cosleec.runtime.decision import OTHERWISE, Decision
+from cosleec.runtime.issuer import Issuer
+from cosleec.runtime.layers import LayerManager
+from cosleec.runtime.model import CompiledRule
+from cosleec.runtime.obligations import Tracked
+from cosleec.runtime.stats import Stats
+
+
+class Decider:
+    """Decides on ``context`` as ``layers`` reads it, numbering decisions with ``next_id``."""
+
+    def __init__(
+        self, context: Context, layers: LayerManager, issuer: Issuer, next_id: Callable[[], int], stats: Stats
+    ) -> None:
+        self.context = context
+        self.layers = layers
+        self.issuer = issuer
+        self.next_id = next_id
+        self.stats = stats
+
+    def decide(self, rule: CompiledRule, event: str, now: float) -> Decision | None:
+        """``rule``'s decision at its trigger ``event``: None when its condition is false."""
+        v = self.context.values
+        fired, missing = self._fired(rule, v)
+        if fired is False:
+            return None
+        status = self.layers.status[rule.index]
+        clause = status.clause if fired else None
+        if fired and clause is None:
+            missing = status.missing
+        if clause is not None:
+            issued = self.issuer.issue(rule.response_of(clause), rule.name)
+            if not issued.determined:  # an inner response's own `unless` is unknown
+                clause, missing = None, issued.missing
+        else:
+            issued = self.issuer.undetermined(rule, status.values)
+        if clause is None:
+            self.stats.undetermined += 1
+        conds = ((0, rule.trigger_text, fired), *zip(rule.clause_ids, rule.clause_texts, status.values))
+        names = rule.value_names
+        values = dict(zip(names, map(v.get, names)))
+        for n, lits in rule.scale_values:  # scale positions back to their literals
+            x = values[n]
+            if x is not None:
+                values[n] = lits[x]
+        # the explanation is computed from these parts when first read (Decision.explanation)
+        return Decision.made(
+            id=self.next_id(),
+            time=now,
+            event=event,
+            rule=rule.name,
+            clause=clause,
+            layer=rule.layer_of(clause) if clause else None,
+            semantics=self.layers.semantics,
+            values=values,
+            conditions=conds,
+            obligations=issued.obligations,
+            missing=missing,
+            context_version=self.context.version,
+            unknown=self.layers.unknown,
+        )
+
+    def _fired(self, rule: CompiledRule, v: dict[str, object]) -> tuple[bool | None, tuple[str, ...]]:
+        """Did the trigger condition hold (None: unknown), and the measures it lacked."""
+        try:
+            return bool(rule.condition(v)), ()
+        except KeyError:
+            x = rule.trigger_kleene(v)
+            fired = None if x is None else bool(x)
+            unknown = self.layers.unknown
+            if fired is None and unknown != Unknowns.UNDETERMINED:
+                fired = unknown == Unknowns.TRUE  # the policy reads it so
+            if fired is None:
+                return None, tuple(sorted(n for n in rule.trigger_reads if n not in v))
+            return fired, ()
+
+    def fallback(self, rule: CompiledRule, t: Tracked, start: float) -> tuple[Decision, bool]:
+        """The ``otherwise`` decision of ``t``, violated at ``start``, of ``rule``, and whether it
+        is determined (an inner choice an unknown value leaves open: only prohibitions, nothing runs)."""
+        ob = t.obligation
+        assert ob.otherwise is not None
+        issued = self.issuer.issue(ob.otherwise, rule.name)
+        what = " and ".join(o.describe() for o in issued.obligations) or "nothing is required"
+        if not issued.determined:
+            what = f"undetermined (no value for {', '.join(issued.missing)}); meanwhile {what}"
+        why = f"{rule.name}: {ob.describe()} was violated at {start:g}; otherwise {what}"
+        d = Decision.made(
+            id=self.next_id(),
+            time=start,
+            event=OTHERWISE,
+            rule=rule.name,
+            clause=t.clause if issued.determined else None,
+            layer=None,
+            semantics=self.layers.semantics,
+            values={},
+            conditions=(),
+            obligations=issued.obligations,
+            missing=issued.missing,
+            reason=why,
+            context_version=self.context.version,
+            violated=t.id,
+        )
+        return d, issued.determined
