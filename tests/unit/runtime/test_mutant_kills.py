@@ -155,7 +155,7 @@ PRIORITISED = "R1 when E then F within 5 seconds R2 when E then not F within 3 s
 def test_what_started_is_kept_only_for_conflict_aware_priorities_that_act(
     semantics: str, pairs: list[str], kept: bool
 ) -> None:
-    """core.py:117:81:and-or (``CONFLICT_AWARE and above``): only conflict-aware priorities
+    """core.py:127:81:and-or (``CONFLICT_AWARE and above``): only conflict-aware priorities
     between rules read (and clear) what started since; kept for cancellation priorities or
     for no priority at all, the list would grow with every obligation for as long as the
     runtime runs."""
@@ -328,7 +328,7 @@ def test_an_expression_is_python_up_to_max_nest_levels_and_a_program_beyond(shap
 
 
 def test_a_cancellation_forced_by_two_higher_rules_at_once_is_the_older_prohibitions() -> None:
-    """enforcer.py:213:79:lt-le (``(found[0], found[1].id) < (kept[0], kept[1].id)``): when a
+    """enforcer.py:239:79:lt-le (``(found[0], found[1].id) < (kept[0], kept[1].id)``): when a
     prohibition that starts later forces the same cancellation at the same time as one
     already weighed, the one weighed first stays the cause -- as a computation of
     everything in force finds it -- and is what the ``cancelled`` record names."""
@@ -368,7 +368,7 @@ WARNED = "priority_lead=0 on a real clock"
 def test_start_warns_of_a_missing_priority_lead_on_a_real_clock_only(
     clock: Any, warned: bool, caplog: pytest.LogCaptureFixture
 ) -> None:
-    """manager.py:235:36:drop-not (``not isinstance(self.clock, VirtualClock)``): the warning
+    """manager.py:237:36:drop-not (``not isinstance(self.clock, VirtualClock)``): the warning
     that conflict-aware priorities act too late without ``priority_lead`` would be given on
     simulated time, where nothing is late, and not on the real clock it is for."""
     m = Manager(
