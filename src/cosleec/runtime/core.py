@@ -13,6 +13,7 @@ in the journal), an obligation's new state, layer switches, values gone stale.
 
 from __future__ import annotations
 
+import functools
 from collections import deque
 from typing import Any, Generic, TypeVar, overload
 
@@ -29,7 +30,7 @@ from cosleec.runtime.obligations import PENDING, Tracked, Tracker
 from cosleec.runtime.priorities import Priorities
 from cosleec.runtime.ruleset import RuleSet
 from cosleec.runtime.stats import Stats
-from cosleec.runtime.steps import Step, Steps
+from cosleec.runtime.steps import Step, Steps, weakly
 
 T = TypeVar("T")
 
@@ -78,7 +79,7 @@ class Core:
         self.stats = Stats()
         self.decisions: deque[Decision] = deque(maxlen=history)
         self.dispatch = dispatch
-        steps.meta = self.meta
+        steps.meta, steps.rules = weakly(self.meta), weakly(self.digest)  # (no cycle: see weakly)
         self.install(rules, Context(rules.measures, max_age), layers, priorities, Implementations(rules))
 
     @classmethod
@@ -119,7 +120,9 @@ class Core:
         self.priorities = priorities
         self.implementations = implementations
         self.issuer = Issuer(context, layers, self.tracker)
-        self.decider = Decider(context, layers, self.issuer, self.next_decision, self.stats)
+        self.decider = Decider(
+            context, layers, self.issuer, functools.partial(self.steps.count, "decision"), self.stats
+        )
 
     def index(self) -> None:
         """Index the tracker as the priorities need (priorities act on activations)."""
@@ -140,6 +143,10 @@ class Core:
     def aware(self) -> bool:
         """Do conflict-aware priorities act (declared, and some rule outranks another)?"""
         return self.priorities.semantics == CONFLICT_AWARE and bool(self.priorities.above)
+
+    def digest(self) -> str:
+        """The digest of the rules in force (``RuleSet.digest``): what heads each audit record."""
+        return self.ruleset.digest
 
     def next_decision(self) -> int:
         """The next decision id, used up."""

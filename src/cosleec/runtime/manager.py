@@ -52,7 +52,7 @@ from cosleec.runtime.reload import Reloaded
 from cosleec.runtime.restore import open_journal
 from cosleec.runtime.ruleset import RuleSet
 from cosleec.runtime.runner import Runner
-from cosleec.runtime.steps import Step, Steps
+from cosleec.runtime.steps import Step, Steps, weakly
 from cosleec.runtime.tasks import Task
 from cosleec.runtime.timer import Timer
 
@@ -93,7 +93,7 @@ class Manager:
             (r.name for r in rules.rules), o.all_priorities(rules.spec), o.priority_semantics, o.priority_lead
         )
         self._given = list(o.priorities)  # the caller's priorities (not the file's): a reload keeps them
-        steps = Steps(self.clock, run_id=self.run_id, rules=lambda: self.rules_hash)
+        steps = Steps(self.clock, run_id=self.run_id)
         core = Core(
             rules,
             steps,
@@ -109,10 +109,9 @@ class Manager:
         self._answers = Answers(core)
         self._gate = Gate(core, self._answers)
         self.undelivered = self._gate.undelivered  # decisions to publish again after a restart
-        steps.before_commit = self._gate.before_commit
         self._enforcer = Enforcer(core)
         self._runner = Runner(core, self._gate, o.max_depth)
-        self._timer = Timer(core, self._enforcer, self._gate, self.tick)
+        self._timer = Timer(core, self._enforcer, self._gate, weakly(self.tick))
         self.possible_conflicts: list[PossibleConflict] = []  # item pairs that can conflict (start() warns)
         self._check = False  # start() checked the bindings: a reload checks the new rules' too
         self.audit: AuditLog | None = None
@@ -129,6 +128,8 @@ class Manager:
             )
             if self.journal is not None:
                 self.core.steps.journal = self.journal
+                # what a Manager node published leaves the outbox as the next step commits
+                self.core.steps.before_commit = weakly(self._gate.before_commit)
                 open_journal(self.core, self._gate, self._enforcer, reset=o.reset_journal)
         except BaseException:  # refused: what this constructor opened is free again (the audit log's lock)
             if self.journal is not None and self.journal is not o.journal:

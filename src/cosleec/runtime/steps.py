@@ -28,9 +28,10 @@ from __future__ import annotations
 
 import logging
 import threading
+import weakref
 from collections import deque
 from collections.abc import Callable
-from typing import Any
+from typing import Any, ParamSpec, TypeVar
 
 from cosleec.errors import CosleecError, clip
 from cosleec.records import Kind, RuntimeEvent
@@ -42,6 +43,30 @@ from cosleec.runtime.journal import Change, Journal, JournalError
 log = logging.getLogger("cosleec.runtime")
 
 Observer = Callable[[RuntimeEvent], None]
+P = ParamSpec("P")
+R = TypeVar("R")
+
+
+def weakly(method: Callable[P, R]) -> Callable[P, R]:
+    """``method`` (a bound method) called through a weak reference to its object.
+
+    For the hooks the steps call back (``meta``, ``rules``, ``before_commit``) and the
+    timer's ``tick``: a strong one would make a reference cycle between the parts, and a
+    Manager dropped without ``close()`` would then keep its rules, records and files until
+    the cyclic collector ran -- late, and as a pause in someone's step. ReferenceError once
+    the object is gone (nothing calls a hook of a part that no longer exists).
+    """
+    ref = weakref.WeakMethod(method)  # type: ignore[arg-type]
+    name = getattr(method, "__qualname__", "a hook")  # (not the method itself: that would hold it)
+
+    def call(*args: P.args, **kw: P.kwargs) -> R:
+        fn = ref()
+        if fn is None:
+            raise ReferenceError(f"{name}: its object is gone")
+        result: R = fn(*args, **kw)
+        return result
+
+    return call
 
 
 class Step:

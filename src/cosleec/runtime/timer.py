@@ -104,5 +104,7 @@ class Timer:
                     self.tick()
                 except JournalError:
                     return  # logged where it happened; the runtime refuses from now on
+                except ReferenceError:
+                    return  # its Manager is gone (dropped without close): nothing is left to judge
                 except Exception:  # a bug must not stop deadlines from being judged
                     log.exception("judging deadlines failed; the timer goes on")
