@@ -148,10 +148,6 @@ class Core:
         """The digest of the rules in force (``RuleSet.digest``): what heads each audit record."""
         return self.ruleset.digest
 
-    def next_decision(self) -> int:
-        """The next decision id, used up."""
-        return self.steps.count("decision")
-
     def record(self, d: Decision, step: Step, *, queue: bool = False) -> dict[str, Any] | None:
         """Record a decision; ``queue`` puts its implementation in the journal's outbox until it ran.
 

@@ -59,5 +59,5 @@ def test_a_hook_of_a_part_that_is_gone_says_so() -> None:
     call = weakly(p.hook)
     assert call() == 1
     del p
-    with pytest.raises(ReferenceError, match="Part.hook"):
+    with pytest.raises(ReferenceError, match=r"Part\.hook"):
         call()

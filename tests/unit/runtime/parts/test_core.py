@@ -79,7 +79,7 @@ def test_the_tracker_is_indexed_as_the_priorities_need(
 
 def test_decision_ids_are_used_up_from_the_steps_counter() -> None:
     core = Core.build(ruleset(RULES))
-    assert [core.next_decision(), core.next_decision()] == [1, 2]
+    assert [core.decider.next_id(), core.decider.next_id()] == [1, 2]
     assert core.steps.counters["decision"] == 3
 
 
