@@ -240,7 +240,7 @@ class Manager:
             core.implementations.prepare()  # start-up work, not the first trigger's latency
         self.tick()
         if timer:
-            self._timer.start()
+            self._timer.start(self.tick)  # held while it runs: close() stops it
         return self
 
     def close(self) -> None:

@@ -38,10 +38,14 @@ class Timer:
         self.due = math.inf
         self._poke = False
         self._stop = threading.Event()
+        self._held: Callable[[], object] | None = None  # the strong tick, while the thread runs
 
-    def start(self) -> None:
-        """Start the thread (once)."""
+    def start(self, tick: Callable[[], object] | None = None) -> None:
+        """Start the thread (once). ``tick``, when given, is held strongly until :meth:`stop`:
+        a running timer keeps what it judges for (its Manager) alive, as it always has --
+        a Manager without a running timer is referred to only weakly (no cycle)."""
         if self.thread is None:
+            self._held = tick
             self.thread = threading.Thread(target=self._run, name="cosleec-deadlines", daemon=True)
             self.thread.start()
 
@@ -52,6 +56,7 @@ class Timer:
             self.wake.notify_all()
         if self.thread is not None:
             self.thread.join(wait)
+        self._held = None
 
     def due_at(self) -> float | None:
         """(Under the lock, at the end of a step.) The earliest clock time the timer must judge
@@ -101,7 +106,7 @@ class Timer:
                 self.due = math.inf  # awake: every step that adds a deadline pokes
             if not self._stop.is_set():
                 try:
-                    self.tick()
+                    (self._held or self.tick)()
                 except JournalError:
                     return  # logged where it happened; the runtime refuses from now on
                 except ReferenceError:
