@@ -105,6 +105,7 @@ did_open  #
 did_change  #
 did_save  #
 did_close  #
+code_action  #
 servers  # views/web_server.Server: uvicorn's Server reads it when it shuts down
 __getattr__  # cosleec/__init__: the module's lazy exports (PEP 562), called by Python
 __dir__  # cosleec/__init__: dir(cosleec) lists the lazy exports (PEP 562)

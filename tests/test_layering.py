@@ -5,7 +5,7 @@ floor 4   cli                         the only place that prints and calls sys.e
 floor 3   ros  demo  views  lsp       adapters and front ends (ros runs the demo over middleware; views draw;
                                       lsp serves editors)
 floor 2   nodes  testing              the paper's nodes; public test helpers
-floor 1   runtime                     on lang and cop
+floor 1   runtime  repair             runtime on lang and cop; repair on analysis
 floor 0   errors  bulk  records  lang  cop     cop imports nothing of ours
 """
 
@@ -26,11 +26,12 @@ ALLOWED: dict[str, set[str]] = {
     "cop": set(),
     "semantics": {"errors", "bulk", "lang", "records"},
     "analysis": {"errors", "records", "bulk", "lang", "semantics"},
+    "repair": {"errors", "records", "bulk", "lang", "semantics", "analysis"},
     "runtime": {"errors", "bulk", "lang", "records", "cop"},
     "nodes": {"errors", "records", "lang", "runtime"},
     "testing": {"errors", "records", "lang", "cop", "runtime", "nodes"},
     "views": {"errors", "records", "lang", "semantics", "analysis", "runtime", "nodes"},
-    "lsp": {"errors", "records", "lang", "semantics", "analysis"},
+    "lsp": {"errors", "records", "lang", "semantics", "analysis", "repair"},
     "demo": {"errors", "records", "lang", "runtime", "nodes", "testing"},
     "ros": {"errors", "records", "lang", "runtime", "nodes", "testing", "demo"},
     "cli": {
@@ -40,6 +41,7 @@ ALLOWED: dict[str, set[str]] = {
         "cop",
         "semantics",
         "analysis",
+        "repair",
         "runtime",
         "nodes",
         "testing",
@@ -49,7 +51,7 @@ ALLOWED: dict[str, set[str]] = {
         "ros",
     },
 }
-NO_FUNCTION_IMPORTS = {"errors", "lang", "cop", "semantics", "analysis", "runtime"}
+NO_FUNCTION_IMPORTS = {"errors", "lang", "cop", "semantics", "analysis", "repair", "runtime"}
 
 
 def modules() -> Iterator[tuple[str, Path]]:

@@ -17,15 +17,21 @@ Typical use::
 A :class:`Deadline` (``analyse_file(..., deadline=Deadline.after(60))``) bounds a whole run,
 where ``Settings.timeout`` bounds one solver question: the report is then partial, and
 ``FileReport.undecided`` says what was not decided.
+
+The encoding itself (:class:`Encoding`, its :class:`Slot`, and the witness helpers) is public
+for the tools built on the analysis: :mod:`cosleec.repair` asks its own questions with it
+(what else a patch changes).
 """
 
 from __future__ import annotations
 
 from cosleec.analysis.checks import DEFAULT_BOUND, Settings
-from cosleec.analysis.deadline import Deadline
+from cosleec.analysis.deadline import Deadline, OutOfTime
+from cosleec.analysis.encoding import Encoding, Slot, as_float
 from cosleec.analysis.findings import BOUNDED, CHECKS, MORE, PROVED, FileReport, Finding, Witness
 from cosleec.analysis.run import Coverage, analyse_file, analyse_spec
 from cosleec.analysis.sarif import sarif
+from cosleec.analysis.witness import final_breaches, smallest, snapshot, steps
 
 __all__ = [
     "BOUNDED",
@@ -35,11 +41,19 @@ __all__ = [
     "PROVED",
     "Coverage",
     "Deadline",
+    "Encoding",
     "FileReport",
     "Finding",
+    "OutOfTime",
     "Settings",
+    "Slot",
     "Witness",
     "analyse_file",
     "analyse_spec",
+    "as_float",
+    "final_breaches",
     "sarif",
+    "smallest",
+    "snapshot",
+    "steps",
 ]

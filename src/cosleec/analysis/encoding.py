@@ -37,9 +37,11 @@ that instant), at the first occurrence that breaks its prohibition, or when a pr
 in force covers the obligation's whole remaining window (a refusal), and reads the values of
 that moment. Numeric measures are reals, as at run time; scale measures are their literal's
 position. A measure always has a value (the runtime's policy for unknown values is not part
-of the rules' meaning). One known limit: only a rule's own clause items refuse; a
-prohibition inside an ``otherwise`` or a braced clause does not, where the reference's does
-(:class:`cosleec.analysis.session.Session` names such rules per file).
+of the rules' meaning). A rule's own clause items refuse, and so do prohibitions in its
+braced inner clauses (:func:`~cosleec.analysis.refusals.raised_items`); one known limit: a
+prohibition inside an ``otherwise`` does not, where the reference's does
+(:class:`cosleec.analysis.session.Session` names such rules per file). Declared priorities
+cancel the lower rule's firings (:mod:`~cosleec.analysis.priorities`).
 
 :class:`Encoding` unfolds the slots (:mod:`~cosleec.analysis.slots`) and solves; the formulas
 over them are built by the parts it holds, one concern each: :mod:`~cosleec.analysis.terms`
@@ -59,13 +61,14 @@ import z3
 
 from cosleec.analysis.deadline import Deadline, OutOfTime, question_ms
 from cosleec.analysis.obligations import Obligations
-from cosleec.analysis.refusals import Refusals, clause_items
+from cosleec.analysis.priorities import Priorities
+from cosleec.analysis.refusals import Refusals, clause_items, raised_items
 from cosleec.analysis.relations import Relations
 from cosleec.analysis.slots import Z3, After, Fallback, Slot
 from cosleec.analysis.state import State
 from cosleec.analysis.terms import Terms, as_float
 from cosleec.analysis.windows import MAX_SECONDS, Windows
-from cosleec.lang import HedgeSemantics, Reading, Specification
+from cosleec.lang import HedgeSemantics, Reading, Specification, closure, pairs
 from cosleec.lang import ast as A
 
 
@@ -100,7 +103,7 @@ class Encoding:
             rules_by_event.setdefault(r.trigger.event, []).append(r)
         refusers: dict[str, set[str]] = {}  # event -> the triggers of rules that can forbid it
         for r in spec.rules:
-            for _, it in clause_items(r.response):
+            for _, it in raised_items(r.response):
                 if it.occurrence.negated:
                     refusers.setdefault(it.occurrence.event, set()).add(r.trigger.event)
         self.state = State(  # every z3 object the encoding keeps (state.py: why nothing else holds one)
@@ -119,12 +122,16 @@ class Encoding:
             relation_lit=[z3.Bool(f"relation!{i}", ctx) for i in range(len(spec.relations))],
             complete=not any(isinstance(r, A.UntilRelation) for r in spec.relations),
             refusers=refusers,
+            above=closure([*reading.priorities, *pairs(spec)]),
         )
         self.terms = Terms(self.state)
         self.windows = Windows(self.state, self.terms)
         self.relations = Relations(self.state, self.terms)
-        self.refusals = Refusals(self.state, self.terms, self.windows)
-        self.obligations = Obligations(self.state, self.terms, self.windows, self.relations, self.refusals)
+        self.priorities = Priorities(self.state, self.terms)
+        self.refusals = Refusals(self.state, self.terms, self.windows, self.priorities)
+        self.obligations = Obligations(
+            self.state, self.terms, self.windows, self.relations, self.refusals, self.priorities
+        )
 
     # ------------------------------------------------------------------ what the state holds
     @property
@@ -258,6 +265,7 @@ class Encoding:
         if len(self.state.slots) > 1:
             self.state.solver.add(z3.Distinct(*(s.pos for s in self.state.slots)))
         self.state.unfolded = True
+        self.priorities.prepare(self.state.slots)
         self.refusals.register(self.state.slots)
         for s in self.state.slots:
             for r in self.state.rules_by_event.get(s.event, ()):
@@ -267,6 +275,7 @@ class Encoding:
                 )
         for lit, rel in zip(self.state.relation_lit, self.state.spec.relations):
             self.state.solver.add(z3.Implies(lit, self.relations.holds(rel)))
+        self.priorities.settle()
 
     def _demands(self, s: Slot) -> Iterator[tuple[str, str]]:
         """The events an occurrence ``s`` can need (with why): what its rules owe, what can
@@ -279,6 +288,9 @@ class Encoding:
             for e in fallible_events(r.response):
                 for trigger in sorted(self.state.refusers.get(e, ())):
                     yield trigger, f"may refuse {e} of {r.name}"
+            # a firing of a higher rule may cancel this one: its trigger may be what a trace needs
+            for event in dict.fromkeys(h.trigger.event for h in self.priorities.higher(r.name)):
+                yield event, f"may cancel {r.name}"
         yield from self.relations.demands(s.event)
 
     # ------------------------------------------------------------------ formulas most questions ask for

@@ -142,8 +142,8 @@ class FileReport:
     source: str
     findings: list[Finding] = field(default_factory=list)
     # what the analysis did not settle: questions out of time (or answered up to a smaller
-    # bound), results left to a declared priority, a witness the reference did not confirm,
-    # and the encoding's known limit where it could matter
+    # bound), a witness the reference did not confirm, and the encoding's known limit where
+    # it could matter
     unknown: list[str] = field(default_factory=list)
     seconds: dict[str, float] = field(default_factory=dict)  # per check
     diagnostics: list[Diagnostic] = field(default_factory=list)  # the file's own (from check)

@@ -15,9 +15,10 @@ from collections.abc import Callable, Iterator
 
 import z3
 
+from cosleec.analysis.priorities import Priorities
 from cosleec.analysis.refusals import Refusals
 from cosleec.analysis.relations import Relations
-from cosleec.analysis.slots import Z3, After, Fallback, Slot, before
+from cosleec.analysis.slots import Z3, After, Cut, Fallback, Slot, before
 from cosleec.analysis.state import State
 from cosleec.analysis.terms import Terms
 from cosleec.analysis.windows import Windows
@@ -29,18 +30,27 @@ class Obligations:
     snapshots of the ``otherwise`` responses encoded so far are the state's ``fallbacks``."""
 
     def __init__(
-        self, state: State, terms: Terms, windows: Windows, relations: Relations, refusals: Refusals
+        self,
+        state: State,
+        terms: Terms,
+        windows: Windows,
+        relations: Relations,
+        refusals: Refusals,
+        priorities: Priorities,
     ) -> None:
         self.state = state  # with the other parts, all it holds (state.py says why)
         self.terms = terms
         self.windows = windows
         self.relations = relations
         self.refusals = refusals
+        self.priorities = priorities
 
     def rule_holds(self, rule: A.Rule, x: Slot) -> Z3:
-        """``rule`` is met at slot ``x``: if ``x`` is present and triggers it, its response holds."""
+        """``rule`` is met at slot ``x``: if ``x`` is present and triggers it, its response holds
+        (up to the moment a declared priority cancels that firing)."""
         fires = z3.And(x.present, self.terms.truth(rule.trigger.condition, x.snap))
-        return z3.Implies(fires, self.holds(rule.response, x, guard=fires))
+        with self.priorities.firing(rule, x, record=True):
+            return z3.Implies(fires, self.holds(rule.response, x, guard=fires))
 
     def holds(
         self,
@@ -50,12 +60,18 @@ class Obligations:
         untimed: float | str | None = "reading",
         guard: Z3 | None = None,
         situation: bool = False,
+        rule: A.Rule | None = None,
     ) -> Z3:
         """``response``, started by slot ``x``, is met (``untimed`` overrides the reading's).
         ``guard`` says when the response is in force (default: when ``x`` is present): an
         ``otherwise`` counts as started only then (:attr:`Fallback.started`). A
         ``situation`` (a concern's or purpose's response) describes what occurs, not what a
-        rule owes: no prohibition refuses it."""
+        rule owes: no prohibition refuses it. ``rule``: the response is that rule's firing at
+        ``x`` (a declared priority may cancel it, and no rule refuses it that a priority orders
+        with it)."""
+        if rule is not None:
+            with self.priorities.firing(rule, x, record=False):
+                return self.holds(response, x, untimed=untimed, guard=guard, situation=situation)
         u = self.state.reading.untimed_seconds if untimed == "reading" else untimed
         assert not isinstance(u, str)
         self.state.guard = x.present if guard is None else guard
@@ -113,12 +129,15 @@ class Obligations:
         has always been (state.py says why that order matters)."""
         occ = it.occurrence
         lo, hi = self.windows.window(occ, it.otherwise is not None, start, snap, untimed)
+        self.priorities.note(it, lo, hi, start, after)
+        cut = None if self.state.situation else self.state.cut
         if occ.negated:
-            ok = z3.Not(self.windows.occurs(occ.event, lo, hi, after))
+            counts = after if cut is None else _BeforeCut(after, cut)
+            ok = z3.Not(self.windows.occurs(occ.event, lo, hi, counts))
             if it.otherwise is None:
                 return ok
             breaks = [
-                (y, z3.And(y.present, lo <= y.t, *([y.t <= hi] if hi is not None else []), after(y)))
+                (y, z3.And(y.present, lo <= y.t, *([y.t <= hi] if hi is not None else []), counts(y)))
                 for y in self.state.by_event.get(occ.event, ())
             ]
             firsts = []
@@ -134,9 +153,13 @@ class Obligations:
         if it.otherwise is None and it.alternative is None and hi is not None and not self.state.situation:
             # refused at once by a prohibition that covers its whole window: a breach, even if
             # the event then occurs (breaking that prohibition, whose own otherwise may be met)
-            refused, _, _ = self.refusals.refusal(occ.event, lo, hi, start, after, snap)
+            refused, when, _ = self.refusals.refusal(occ.event, lo, hi, start, after, snap)
             if refused is not None:
                 ok = z3.And(z3.Not(refused), ok)
+            if cut is not None:
+                ok = z3.Or(ok, self._saved(cut, lo, hi, refused, when))
+        elif cut is not None and (it.otherwise is None or hi is None):
+            ok = z3.Or(ok, cut.saves(lo, hi))
         if it.otherwise is not None and hi is not None:
             ok, at, refused, when, fb = self._fallback_start(it, ok, lo, hi, start, after, snap)
             later = _FallbackStart(at, hi < lo, after, refused, when)
@@ -173,7 +196,18 @@ class Obligations:
                 self.state.solver.add(
                     z3.Implies(cond, z3.And(*(fresh[m] == values[m] for m in fresh), self.state.ctx))
                 )
+        if self.state.cut is not None and not self.state.situation:  # cancelled first: no fallback
+            ok = z3.Or(ok, self._saved(self.state.cut, lo, hi, refused, when))
         return ok, at, refused, when, self._fallback(at, z3.And(self.state.guard, z3.Not(ok)), fresh)
+
+    def _saved(self, cut: Cut, lo: Z3, hi: Z3, refused: Z3 | None, when: Z3) -> Z3:
+        """A declared priority cancels the firing while the obligation's window ``[lo, hi]`` is
+        open, and no later than a prohibition refuses it (a refusal at ``when`` is a breach
+        already; at the same step, the cancellation comes first)."""
+        if refused is None:
+            return cut.saves(lo, hi)
+        _, step = self.refusals.steps.get(id(when), (when, None))
+        return z3.And(cut.saves(lo, hi), z3.Or(z3.Not(refused), cut.by(when, step)))
 
     def _fallback(self, at: Z3, started: Z3, snap: dict[str, Z3]) -> Fallback:
         """A new fallback snapshot, read at ``at`` when ``started``: in its measures' domains,
@@ -224,6 +258,18 @@ class Obligations:
             lo, hi = self.windows.window(it.occurrence, it.otherwise is not None, start, snap, untimed)
             out.append(self.windows.occurs(it.occurrence.event, lo, hi, after))
         return z3.And(*out, self.state.ctx) if out else z3.BoolVal(False, self.state.ctx)
+
+
+class _BeforeCut:
+    """Which occurrences break a prohibition of a firing a priority may cancel: those after
+    its raising step (``after``) and not after the cancellation."""
+
+    def __init__(self, after: Callable[[Slot], Z3], cut: Cut) -> None:
+        self.after, self.cut = after, cut
+
+    def __call__(self, y: Slot) -> Z3:
+        """``y`` can break the prohibition."""
+        return z3.And(self.after(y), z3.Not(self.cut.spares(y)))
 
 
 class _FallbackStart:

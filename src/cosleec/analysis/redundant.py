@@ -29,8 +29,6 @@ def redundancies(a: Session) -> None:
             continue
         _, enc, goal, cands = asked
         core = a.core(enc, goal, cands, f"redundancy of {rule.name}")
-        if a.left_to_priority(f"redundancy of {rule.name}", (rule.name, *core)):
-            continue
         why = (
             f"the other rules already imply it: {', '.join(core)}"
             if core

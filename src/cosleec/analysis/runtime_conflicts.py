@@ -158,7 +158,9 @@ def _overlaps(a: Session, c: Clash) -> Iterator[Overlap]:
             if (r := enc.windows.in_range(A.Response((it,)), x.snap)) is not None
         ]
         base = _base(a, enc, c, xo, xp, readable)
-        overlap = z3.And(*([lo <= phi] if phi is not None else []), *([plo <= hi] if hi is not None else []))
+        overlap = z3.And(
+            *([lo <= phi] if phi is not None else []), *([plo <= hi] if hi is not None else []), enc.ctx
+        )
         alone = z3.And(*(z3.Not(s.present) for s in enc.slots if s.id not in probes), enc.ctx)
         what = f"runtime conflict {clause_name(ro.name, ko)} / {clause_name(rp.name, kp)}"
         if (

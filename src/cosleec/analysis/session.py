@@ -20,8 +20,9 @@ import z3
 
 from cosleec.analysis.cores import Undecided, minimal_core
 from cosleec.analysis.deadline import Deadline
-from cosleec.analysis.encoding import Encoding, Slot, clause_items, fallible_events
+from cosleec.analysis.encoding import Encoding, Slot, fallible_events
 from cosleec.analysis.findings import MORE, Finding
+from cosleec.analysis.refusals import raised_items
 from cosleec.lang import (
     HedgeSemantics,
     PrioritySemantics,
@@ -62,7 +63,7 @@ class Settings:
     @functools.cached_property
     def reading(self) -> Reading:
         """How the rules are read: the encoding's, and the reference semantics' when it judges a
-        witness (the analysis leaves ``priority_lead`` at 0: it does not analyse cancellations)."""
+        witness (``priority_lead`` stays 0, SLEEC-TK's: the encoding reads it as the reference does)."""
         return Reading(
             semantics=self.semantics,
             untimed=self.untimed,
@@ -91,7 +92,7 @@ class Session:
     def __post_init__(self) -> None:
         self.above = frozenset(closure([*self.settings.priorities, *pairs(self.spec)]))
         fallible = {e for r in self.spec.rules for e in fallible_events(r.response)}
-        top = {(r.name, id(it)) for r in self.spec.rules for _, it in clause_items(r.response)}
+        top = {(r.name, id(it)) for r in self.spec.rules for _, it in raised_items(r.response)}
         nested = sorted(
             {
                 r.name
@@ -103,7 +104,7 @@ class Session:
         )
         if nested:  # said once per file: the encoding's known limit (README, "What is not modelled")
             self.unknown.append(
-                f"{', '.join(nested)}: a prohibition inside an otherwise or a braced clause can refuse an "
+                f"{', '.join(nested)}: a prohibition inside an otherwise can refuse an "
                 "obligation here, which the analysis does not model; a finding that involves "
                 f"{'it' if len(nested) == 1 else 'them'} may miss that"
             )
@@ -212,17 +213,6 @@ class Session:
     def in_order(self, names: set[str]) -> tuple[str, ...]:
         """``names`` (rules) in file order."""
         return tuple(r.name for r in self.spec.rules if r.name in names)
-
-    def left_to_priority(self, what: str, names: tuple[str, ...]) -> bool:
-        """Whether a rule of ``names`` is the lower rule of a declared priority: the runtime
-        may then cancel it, which the encoding does not model, so the finding is not shown as
-        proved but listed as left to the priority (in :attr:`unknown`)."""
-        lower = sorted({(h, low) for h, low in self.above if low in names})
-        if not lower:
-            return False
-        said = ", ".join(f"{h} > {low}" for h, low in lower)
-        self.unknown.append(f"{what}: left to the declared priority {said} (cancellations are not analysed)")
-        return True
 
     def core(self, enc: Encoding, goal: Any, cands: list[tuple[str, Any]], what: str) -> tuple[str, ...]:
         """The minimal cause of an unsatisfiable ``goal``; when the solver runs out of time

@@ -82,8 +82,6 @@ def _pinned(a: Session, model: Any, c: Clash, o: Overlap) -> None:
     fixed, last, goal, cands, allowed = h
     later = c.owing if probes[-1] is o.xo else c.banning
     core = a.core(fixed, goal, cands, f"situational conflict of {later.name}")
-    if a.left_to_priority(f"situational conflict of {later.name}", core):
-        return
     if any(f.code == "vacuous-conflict" and f.subject in core for f in a.findings):
         return
     # the rules of the cause that the later occurrence triggers: those it leaves unanswerable

@@ -46,8 +46,6 @@ def situations(a: Session, kind: str) -> None:
             )
         elif kind == "purpose" and answer == z3.unsat:
             core = a.core(enc, goal, cands, f"purpose {s.name}")
-            if a.left_to_priority(f"purpose {s.name}", core):
-                continue
             a.findings.append(
                 finding(
                     a.spec,

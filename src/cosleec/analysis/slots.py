@@ -1,6 +1,6 @@
 """The occurrences a trace is encoded with (:mod:`cosleec.analysis.encoding`): slots, the
-snapshot an ``otherwise`` reads, the prohibitions a slot can raise, and which occurrences come
-after a step.
+snapshot an ``otherwise`` reads, the prohibitions a slot can raise, which occurrences come
+after a step, and when a declared priority cancels a firing (:class:`Cut`).
 
 A :class:`Slot` is one possible occurrence: present or not, its time, causal position and
 snapshot free. Every question about a response asks which present slots fall in a window
@@ -59,13 +59,67 @@ class After:
 
 
 @dataclass(frozen=True)
+class Cut:
+    """When a declared priority cancels one firing (an *instance*) of a lower rule: whether it
+    is ``cancelled``, at time ``at`` and -- cancel semantics -- at the step of position ``pos``
+    (the firing that cancels it, after everything that step's occurrence settles); under
+    conflict-aware semantics (``pos`` None), before anything else happens at ``at``. A
+    cancelled instance imposes nothing more (:mod:`cosleec.analysis.priorities`)."""
+
+    cancelled: Z3
+    at: Z3
+    pos: Z3 | None
+
+    def spares(self, y: Slot) -> Z3:
+        """``y`` comes after the cancellation: it no longer breaks the instance's prohibitions."""
+        if self.pos is None:
+            later = y.t >= self.at
+        else:
+            later = z3.Or(y.t > self.at, z3.And(y.t == self.at, y.pos > self.pos))
+        return z3.And(self.cancelled, later)
+
+    def saves(self, lo: Z3, hi: Z3 | None) -> Z3:
+        """An obligation of window ``[lo, hi]`` is not broken: the cancellation comes while its
+        window is still open (a window closes once time passes its end; one that closes
+        before it opens is broken at once)."""
+        if hi is None:
+            return self.cancelled
+        return z3.And(self.cancelled, lo <= hi, self.at <= hi)
+
+    def by(self, t: Z3, pos: Z3 | None = None) -> Z3:
+        """The instance is cancelled at or before time ``t`` (the step of position ``pos``)."""
+        if pos is None or self.pos is None:
+            return z3.And(self.cancelled, self.at <= t)
+        return z3.And(self.cancelled, z3.Or(self.at < t, z3.And(self.at == t, self.pos <= pos)))
+
+
+@dataclass(frozen=True)
 class Ban:
-    """A prohibition a rule can raise at ``slot``: in force when ``active``, over ``[lo, hi]``."""
+    """A prohibition a rule can raise at ``slot``: in force when ``active``, over ``[lo, hi]``;
+    ``rule`` is the rule's name, ``cut`` when a declared priority cancels that firing."""
 
     slot: Slot
     active: Z3
     lo: Z3
     hi: Z3 | None
+    rule: str = ""
+    cut: Cut | None = None
+
+
+@dataclass(frozen=True)
+class Raised:
+    """An obligation or prohibition (``occurrence``) a firing of a rule that a priority orders
+    raises, at any depth: its window ``[lo, hi]``, the time its response started, which
+    occurrences come after the step that raised it (``after``), and when it is raised
+    (``guard``: the rule fires, its clause is chosen, an ``otherwise`` has started)."""
+
+    occurrence: Any
+    lo: Z3
+    hi: Z3 | None
+    start: Z3
+    after: Any
+    guard: Z3
+    plain: bool  # no `else`: the reference judges it by its own window alone
 
 
 def before(z: Slot, y: Slot) -> Z3:
@@ -73,4 +127,4 @@ def before(z: Slot, y: Slot) -> Z3:
     return z3.Or(z.t < y.t, z3.And(z.t == y.t, z.pos < y.pos))
 
 
-__all__ = ["Z3", "After", "Ban", "Fallback", "Slot", "before"]
+__all__ = ["Z3", "After", "Ban", "Cut", "Fallback", "Raised", "Slot", "before"]

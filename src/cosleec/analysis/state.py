@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import z3
 
 from cosleec.analysis.deadline import Deadline
-from cosleec.analysis.slots import Z3, Ban, Fallback, Slot
+from cosleec.analysis.slots import Z3, Ban, Cut, Fallback, Raised, Slot
 from cosleec.lang import HedgeSemantics, Reading, Specification
 from cosleec.lang import ast as A
 
@@ -64,6 +64,14 @@ class State:
     )
     # (id(condition), id(snap)) -> (condition, snap, term) (Terms)
     truths: dict[tuple[int, int], tuple[object, object, Z3]] = field(default_factory=dict)
+    # declared priorities (Priorities): the pairs, closed; the firing being encoded (rule, slot id)
+    # and its cut; each lower rule's firing's cut; what each ordered rule's firing raises
+    above: frozenset[tuple[str, str]] = frozenset()
+    rule: str | None = None
+    firing: tuple[str, int] | None = None
+    cut: Cut | None = None
+    cuts: dict[tuple[str, int], Cut] = field(default_factory=dict)
+    raised: dict[tuple[str, int], list[Raised]] = field(default_factory=dict)
 
 
 __all__ = ["State"]

@@ -63,9 +63,7 @@ def _triggered(enc: Encoding, model: Any) -> list[str]:
 
 def _report(a: Session, rule: A.Rule, enc: Encoding, core: tuple[str, ...]) -> None:
     """``rule`` cannot fire, because of ``core`` (minimal): a dead rule when only relations
-    are needed, else a vacuous conflict (unless a declared priority may settle it)."""
-    if a.left_to_priority(f"vacuous conflict of {rule.name}", (rule.name, *core)):
-        return
+    are needed, else a vacuous conflict (a declared priority that settles it is in the encoding)."""
     if all(n.startswith("relation ") for n in core):  # no rule needed: the condition never holds
         a.findings.append(
             finding(

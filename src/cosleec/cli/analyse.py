@@ -8,6 +8,12 @@ proved whether or not the run finished). ``--timeout`` bounds each solver questi
 rules involved, a hint), then whether the finding is proved or holds up to a bound, and the
 witness as a timeline; ``--json`` prints one document; ``--sarif FILE`` writes SARIF 2.1.0;
 ``--witnesses DIR`` writes each witness as a trace ``cosleec conforms`` reads.
+
+``--fix`` repairs as well (:mod:`cosleec.repair`): under each finding its verified fixes,
+best first, with what else they change and their unified diffs, then the file's patch set
+(the fixes that verify applied together) and what it leaves unrepaired; ``--fix --write``
+writes each file's patch set to it, atomically (cli/patching.py). The exit code is the
+analysis' own, of the files as they were read.
 """
 
 from __future__ import annotations
@@ -18,6 +24,7 @@ import importlib
 import importlib.util
 import json
 import math
+import os
 import re
 import sys
 from pathlib import Path
@@ -37,6 +44,8 @@ from cosleec.analysis import (
     sarif,
 )
 from cosleec.cli.common import add_clause_options, add_priority_options, console, expand, input_file
+from cosleec.cli.fixes import add_fixes, as_file_report, show_fixes, show_patch_set
+from cosleec.cli.patching import write_patch_sets
 from cosleec.errors import ConfigurationError, UserError
 from cosleec.lang import (
     HedgeSemantics,
@@ -49,6 +58,7 @@ from cosleec.lang import (
     parse_untimed,
 )
 from cosleec.lang import analyse_file as check_file
+from cosleec.repair import Budget, RepairReport, repair_file, with_fixes
 
 USAGE_ERROR = 2
 PARTIAL = 3
@@ -91,7 +101,51 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     add_clause_options(p, unknown=False)
     add_priority_options(p)
     _add_inputs(p)
+    _add_fix(p)
     p.set_defaults(run=run)
+
+
+def _add_fix(p: argparse.ArgumentParser) -> None:
+    """``--fix``, ``--write``, ``--fix-tries`` and ``--fix-keep``: repairs, and applying them."""
+    p.add_argument(
+        "--fix",
+        action="store_true",
+        help="under each finding, its verified repairs, best first, as unified diffs with what else "
+        "they change; per file, the set of fixes that verifies applied together",
+    )
+    p.add_argument(
+        "--write",
+        action="store_true",
+        help="with --fix: apply each file's patch set to the file (atomically; comments and layout kept)",
+    )
+    p.add_argument(
+        "--fix-tries",
+        type=_positive,
+        default=None,
+        metavar="N",
+        help=f"with --fix: candidates verified per finding, at most (default {Budget().tried})",
+    )
+    p.add_argument(
+        "--fix-keep",
+        type=_positive,
+        default=None,
+        metavar="N",
+        help=f"with --fix: verified fixes kept per finding (default {Budget().kept})",
+    )
+
+
+def _fix_options(args: argparse.Namespace) -> None:
+    """Refuse the combinations of --fix's options that mean nothing (UserError)."""
+    if not args.fix:
+        for option, given in (("--write", args.write), ("--fix-tries", args.fix_tries is not None),
+                              ("--fix-keep", args.fix_keep is not None)):  # fmt: skip
+            if given:
+                raise UserError(f"{option} needs --fix", hint=f"cosleec analyse --fix {option} ...")
+    elif args.check is not None:
+        raise UserError(
+            "--check cannot be used with --fix: a fix is verified against every check",
+            hint="leave out --check (--fix runs all checks)",
+        )
 
 
 def _add_limits(p: argparse.ArgumentParser) -> None:
@@ -203,6 +257,7 @@ def run(args: argparse.Namespace) -> int:
         checks = _checks(args.check)
         untimed = _untimed(args.untimed)
         given = [pair for text in args.priority for pair in parse_priority(text)]
+        _fix_options(args)
     except UserError as e:
         print(f"cosleec: {e.render()}", file=sys.stderr)
         return USAGE_ERROR
@@ -227,14 +282,34 @@ def run(args: argparse.Namespace) -> int:
         priority_semantics=PrioritySemantics(args.priority_semantics),
     )
     try:
-        reports = _analyse(args, files, settings, checks)
+        reports, repaired = _analyse(args, files, settings, checks)
     except UserError as e:  # an input error (a module, a mapping, an output path): exit 2
         print(f"cosleec: {e.render()}", file=sys.stderr)
         return USAGE_ERROR
+    return _report(args, reports, repaired)
+
+
+def _report(args: argparse.Namespace, reports: list[FileReport], repaired: list[RepairReport] | None) -> int:
+    """Print the reports (and, with --fix --write, write the patch sets); the exit code."""
+    written: list[RepairReport] = []
+    problem = None
+    if args.write and repaired is not None:
+        written, problem = write_patch_sets(repaired)
     if args.json:
-        print(json.dumps(_json(reports), indent=2))
+        doc = _json(reports)
+        if repaired is not None:
+            add_fixes(doc, repaired, written)
+        print(json.dumps(doc, indent=2))
     else:
-        _text(reports)
+        _text(reports, repaired)
+        for r in written:
+            assert r.plan is not None
+            n = len(r.plan.fixes)
+            print(f"{r.path}: wrote the patch set ({n} fix{'es' if n != 1 else ''}); "
+                  f"cosleec analyse {r.path} checks the result")  # fmt: skip
+    if problem is not None:
+        print(f"cosleec: {problem.render()}", file=sys.stderr)
+        return USAGE_ERROR
     if any(r.failed for r in reports):
         return USAGE_ERROR  # a rule file that cannot be analysed is an input error
     if any(r.findings for r in reports):
@@ -244,24 +319,31 @@ def run(args: argparse.Namespace) -> int:
 
 def _analyse(
     args: argparse.Namespace, files: list[Path], settings: Settings, checks: list[str]
-) -> list[FileReport]:
-    """Every file's report, under one ``--deadline``; then the witnesses and the SARIF file
-    written when asked (UserError: a module, a mapping or an output path that fails)."""
+) -> tuple[list[FileReport], list[RepairReport] | None]:
+    """Every file's report (and with --fix its repairs), under one ``--deadline``; then the
+    witnesses and the SARIF file written when asked (UserError: a module, a mapping or an
+    output path that fails)."""
     reports = []
+    repaired: list[RepairReport] | None = None
     deadline = Deadline.after(args.deadline) if args.deadline is not None else None
-    for f in files:
-        coverage = _coverage(args, f)
-        reports.append(
-            analyse_file(
-                f, settings, checks, legos_compat=args.legos_compat, infer_defs=args.infer_defs,
-                coverage=coverage, deadline=deadline,
-            )
-        )  # fmt: skip
+    if args.fix:
+        repaired = _repair(args, files, settings, deadline)
+        reports = [as_file_report(r) for r in repaired]
+    else:
+        for f in files:
+            coverage = _coverage(args, f)
+            reports.append(
+                analyse_file(
+                    f, settings, checks, legos_compat=args.legos_compat, infer_defs=args.infer_defs,
+                    coverage=coverage, deadline=deadline,
+                )
+            )  # fmt: skip
     if args.witnesses:
         _write_witnesses(Path(args.witnesses), reports)
     if args.sarif:
         try:
-            text = json.dumps(sarif(reports, checks), indent=2) + "\n"
+            log = sarif(reports, checks)
+            text = json.dumps(log if repaired is None else with_fixes(log, repaired), indent=2) + "\n"
             Path(args.sarif).write_text(text, encoding="utf-8")
         except OSError as e:
             raise UserError(
@@ -269,7 +351,27 @@ def _analyse(
                 where=args.sarif,
                 hint="give a path in a directory that exists and that you can write",
             ) from None
-    return reports
+    return reports, repaired
+
+
+def _repair(
+    args: argparse.Namespace, files: list[Path], settings: Settings, deadline: Deadline | None
+) -> list[RepairReport]:
+    """``--fix``: every file analysed and repaired, with the limits the options set."""
+    default = Budget()
+    budget = Budget(
+        tried=args.fix_tries or default.tried,
+        kept=args.fix_keep or default.kept,
+        deadline=deadline,
+        workers=os.cpu_count() or 1,  # findings repaired side by side, one process per core
+    )
+    return [
+        repair_file(
+            f, settings, legos_compat=args.legos_compat, infer_defs=args.infer_defs,
+            coverage=_coverage(args, f), budget=budget,
+        )
+        for f in files
+    ]  # fmt: skip
 
 
 def _unknown_rules(given: list[tuple[str, str]], files: list[Path], legos_compat: bool) -> str:
@@ -393,9 +495,11 @@ def _json(reports: list[FileReport]) -> dict[str, object]:
     }
 
 
-def _text(reports: list[FileReport]) -> None:
+def _text(reports: list[FileReport], repaired: list[RepairReport] | None = None) -> None:
+    """The reports as text; with ``repaired`` (--fix), each finding's fixes and each file's
+    patch set."""
     out = console()
-    for r in reports:
+    for i, r in enumerate(reports):
         for d in r.diagnostics:  # the file's own errors and warnings, as `cosleec check` shows them
             if d.is_error or str(d.severity) == "warning":
                 out.print(Text(d.render(r.source)))
@@ -423,11 +527,15 @@ def _text(reports: list[FileReport]) -> None:
                                                  "semantics: please report this)") + ":"))  # fmt: skip
                 for line in f.witness.timeline:
                     out.print(Text(f"      {line}"))
+            if repaired is not None:
+                show_fixes(out, repaired[i], f)
         for u in r.unknown:
-            label = "note" if "left to the declared priority" in u else "undecided"
+            label = "note" if "which the analysis does not model" in u else "undecided"  # a known limit
             out.print(Text.assemble(f"{r.path}: ", (label, "yellow"), f": {u}"))
         for line in _not_decided(r):
             out.print(Text.assemble(f"{r.path}: ", ("undecided", "yellow"), f": {line}"))
+        if repaired is not None:
+            show_patch_set(out, repaired[i])
         n = len(r.findings)
         summary = "no findings" if n == 0 else f"{n} finding{'s' if n != 1 else ''}"
         partial = "" if r.complete else ", partial: the deadline passed"

@@ -8,14 +8,13 @@ pre-commit hooks) and ``--in-place`` (rewrite the files that change, atomically)
 from __future__ import annotations
 
 import argparse
-import contextlib
 import difflib
 import os
 import re
 import sys
-import tempfile
 from pathlib import Path
 
+from cosleec.cli.atomic import replace_file
 from cosleec.errors import UserError
 from cosleec.lang import WIDTH, SleecError, analyse_file, format_source
 
@@ -124,25 +123,9 @@ def _lines(text: str) -> list[str]:
 
 
 def _replace(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` atomically, keeping its permissions: a crash leaves the
-    old file or the new one, never half of one. A symbolic link stays one: its target is
-    rewritten."""
-    path = path.resolve()
-    if not os.access(path, os.W_OK):
-        raise UserError(f"{path}: the file is read-only", hint="make it writable, or print to stdout")
-    info = path.stat()
-    mode = info.st_mode & 0o7777
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.chmod(tmp, mode)
-        if (info.st_uid, info.st_gid) != (os.getuid(), os.getgid()):
-            with contextlib.suppress(PermissionError):  # kept when allowed (root), as editors do
-                os.chown(tmp, info.st_uid, info.st_gid)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    """Write ``text`` to ``path`` atomically (atomic.py), a read-only file refused first."""
+    if not os.access(path.resolve(), os.W_OK):
+        raise UserError(
+            f"{path.resolve()}: the file is read-only", hint="make it writable, or print to stdout"
+        )
+    replace_file(path, text)

@@ -26,6 +26,7 @@ from cosleec.lang.checker import Options, SymbolTable, check
 from cosleec.lang.deep import deeply
 from cosleec.lang.diagnostics import Diagnostic, DiagnosticSink, Severity, SleecError
 from cosleec.lang.dialect import legos_features, legos_misreads
+from cosleec.lang.extents import rule_extents
 from cosleec.lang.formatter import format_source
 from cosleec.lang.frontend import DIALECTS, CheckResult, analyse, analyse_file, load, parse, read_source
 from cosleec.lang.hedges import HedgeSemantics, Unknowns, candidates, choose, decisive
@@ -96,5 +97,6 @@ __all__ = [
     "parse_untimed",
     "priorities",
     "read_source",
+    "rule_extents",
     "visit",
 ]

@@ -2,12 +2,14 @@
 
 Diagnostics as you type -- ``cosleec check``'s codes, places and hints, checked
 incrementally (:class:`~cosleec.lang.IncrementalAnalyser`) -- and ``cosleec analyse``'s
-findings on save; hover, go-to-definition, find-references, completion, the outline,
-formatting (``cosleec fmt``) and rename. Editors start it as ``cosleec lsp``
+findings on save, with their verified repairs (``cosleec analyse --fix``) as quick fixes;
+hover, go-to-definition, find-references, completion, the outline, formatting
+(``cosleec fmt``) and rename. Editors start it as ``cosleec lsp``
 (docs/editors.md); programs and tests can :func:`build` a server and drive its features
 (features.py) on a :class:`Document` directly.
 
-On floor 3: imports errors, lang and analysis (the on-save analysis), and pygls.
+On floor 3: imports errors, lang, analysis and repair (the on-save analysis and repairs),
+and pygls.
 """
 
 from __future__ import annotations

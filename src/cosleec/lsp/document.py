@@ -17,6 +17,7 @@ from lsprotocol import types as T
 
 from cosleec.lang import WIDTH, CheckResult, Diagnostic, HedgeSemantics, IncrementalAnalyser, Options
 from cosleec.lang import ast as A
+from cosleec.lsp.fixes import Repaired
 from cosleec.lsp.index import Index, Kind, names_of
 from cosleec.lsp.positions import LineIndex
 
@@ -35,7 +36,8 @@ class Settings:
     semantics: HedgeSemantics = HedgeSemantics.LAST_WINS
     format_width: int = WIDTH
     analysis: bool = True  # run `cosleec analyse` on save
-    analysis_timeout: float = 60.0  # seconds for the whole analysis of a file
+    analysis_timeout: float = 60.0  # seconds for the whole analysis of a file (and its repairs)
+    fixes: bool = True  # repair the findings on save too, and offer the fixes as quick fixes
     debounce: float = 0.03  # seconds between an edit and its diagnostics (edits in between coalesce)
 
     @classmethod
@@ -55,6 +57,7 @@ class Settings:
             "formatWidth": int,
             "analysis": bool,
             "analysisTimeout": float,
+            "fixes": bool,
             "debounce": float,
         }
         given: dict[str, object] = {}
@@ -92,7 +95,8 @@ def uri_path(uri: str) -> str:
 class Document:
     """One open document. ``findings`` are the last on-save analysis's diagnostics, shown
     while the text is the one analysed (``findings_text``): after an edit their places may
-    be wrong, so they wait for the next save."""
+    be wrong, so they wait for the next save. ``repairs`` are their verified fixes, offered
+    as quick fixes on the same condition (``repairs.text`` is the text repaired)."""
 
     uri: str
     text: str
@@ -101,6 +105,7 @@ class Document:
     encoding: str = "utf-16"
     findings: list[Diagnostic] = field(default_factory=list)
     findings_text: str | None = None
+    repairs: Repaired | None = None
     _analyser: IncrementalAnalyser | None = field(default=None, init=False, repr=False)
     _result: CheckResult | None = field(default=None, init=False, repr=False)
     _lines: LineIndex | None = field(default=None, init=False, repr=False)

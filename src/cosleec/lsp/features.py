@@ -1,5 +1,6 @@
 """What the language server answers, as plain functions of a :class:`Document` and a place:
-diagnostics, hover, definition, references, completion, the outline, rename, formatting.
+diagnostics, hover, definition, references, completion, the outline, rename, formatting,
+and the on-save repairs as code actions.
 
 Each returns ``lsprotocol`` values and knows nothing of the connection (server.py wires
 them); a request the file cannot answer (rename to a keyword, formatting a file with
@@ -25,10 +26,15 @@ from cosleec.lang import (
 )
 from cosleec.lang import ast as A
 from cosleec.lsp.document import Document
+from cosleec.lsp.fixes import Offer, text_edits
 from cosleec.lsp.index import Extent, Index, Kind, Role, Use
 
 SOURCE = "cosleec"
 ANALYSE_SOURCE = "cosleec analyse"
+FIX_ALL = "source.cosleec.fixAll"
+"""The kind of the "fix all" action: a source action of its own, not ``source.fixAll``, so
+that an editor set to run every ``source.fixAll`` on save never removes or rewrites rules
+unasked."""
 LIST_LIMIT = 12
 """How many rules a hover lists for one role before it says how many more."""
 
@@ -73,6 +79,60 @@ def diagnostics(doc: Document) -> list[T.Diagnostic]:
     if doc.findings_text == doc.text:
         out += [to_lsp(d, doc, ANALYSE_SOURCE) for d in doc.findings]
     return out
+
+
+# ---------------------------------------------------------------- code actions
+
+
+def code_actions(doc: Document, params: T.CodeActionParams) -> list[T.CodeAction]:
+    """The verified fixes of the findings asked about (the request's diagnostics of the
+    analysis, or else the findings its range touches), best first, rank 1 preferred; and
+    "fix all", the patch set that verifies applied together. Nothing once the text is not
+    the one repaired: the fixes' offsets would land in the wrong places."""
+    repaired = doc.repairs
+    if repaired is None or repaired.text != doc.text or doc.findings_text != doc.text:
+        return []
+    only = params.context.only
+    asked = [(d.code, d.range) for d in params.context.diagnostics if d.source == ANALYSE_SOURCE]
+    out: list[T.CodeAction] = []
+    if _wanted(T.CodeActionKind.QuickFix.value, only):
+        for finding, offers in repaired.fixes:
+            if finding not in doc.findings:
+                continue
+            shown = to_lsp(finding, doc, ANALYSE_SOURCE)
+            if (shown.code, shown.range) in asked if asked else _touches(shown.range, params.range):
+                out += [_action(doc, o, o.title, T.CodeActionKind.QuickFix, [shown]) for o in offers]
+    together = repaired.together
+    if together is not None and _wanted(FIX_ALL, only):
+        out.append(_action(doc, together, "Fix all (verified together)", FIX_ALL, None))
+    return out
+
+
+def _action(
+    doc: Document, offer: Offer, title: str, kind: str, diagnostics: list[T.Diagnostic] | None
+) -> T.CodeAction:
+    return T.CodeAction(
+        title=title,
+        kind=kind,
+        diagnostics=diagnostics,
+        is_preferred=True if offer.rank == 1 else None,
+        edit=T.WorkspaceEdit(changes={doc.uri: text_edits(doc.lines, offer.edits)}),
+    )
+
+
+def _wanted(kind: str, only: Sequence[T.CodeActionKind | str] | None) -> bool:
+    """Whether a client asking for the kinds ``only`` (None: any) wants an action of ``kind``
+    (``quickfix`` is wanted by ``quickfix``, ``source.cosleec.fixAll`` by ``source`` too)."""
+    names = [k.value if isinstance(k, T.CodeActionKind) else k for k in only or ()]
+    return only is None or any(kind == k or kind.startswith(f"{k}.") for k in names)
+
+
+def _touches(a: T.Range, b: T.Range) -> bool:
+    """Whether two ranges share a position (a cursor at a range's end touches it)."""
+    return (a.start.line, a.start.character) <= (b.end.line, b.end.character) and (
+        b.start.line,
+        b.start.character,
+    ) <= (a.end.line, a.end.character)
 
 
 # ---------------------------------------------------------------- hover

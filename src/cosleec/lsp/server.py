@@ -4,7 +4,8 @@ Diagnostics follow edits: an edit marks its document changed and schedules a che
 ``debounce`` seconds later (edits in between coalesce into one check); a request that needs
 the current state (hover, definition, ...) checks at once if the check has not run yet. A
 save runs ``cosleec analyse`` in another process (onsave.py) and publishes its findings with
-the check's diagnostics while the text stays the one analysed. Messages are read by wire.py,
+the check's diagnostics while the text stays the one analysed; the same process then
+repairs them, and code actions offer the verified fixes on the same condition. Messages are read by wire.py,
 not pygls's reader: bounded in size and depth, and each one it cannot use answered by the
 protocol (:class:`~cosleec.lsp.wire.Limits`).
 """
@@ -123,6 +124,8 @@ class SleecServer(LanguageServer):
             dialect=s.dialect,
             timeout=s.analysis_timeout,
             legos_compat=s.legos_compat,
+            infer_defs=s.infer_defs,
+            repair=s.fixes,
         )
 
     def _analysed(self, uri: str, outcome: Outcome) -> None:
@@ -134,22 +137,31 @@ class SleecServer(LanguageServer):
         doc = self.documents.get(uri)
         if doc is None:
             return
+        if outcome.of_repairs:
+            self._keep_repairs(doc, outcome)
+            return
         found = list(outcome.diagnostics)
         if outcome.timed_out:
             found = [timeout_note(self.settings.analysis_timeout, doc.path)]
         elif outcome.failed:
-            found = [
-                Diagnostic(
-                    severity=Severity.NOTE,
-                    code="analysis-failed",
-                    message=f"cosleec analyse failed: {outcome.failed} (please report this)",
-                    span=A.Span(1, 1, 1, 1),
-                    path=doc.path,
-                )
-            ]
-        doc.findings, doc.findings_text = found, outcome.text
+            found = [_failure("analysis-failed", f"cosleec analyse failed: {outcome.failed}", doc.path)]
+        doc.findings, doc.findings_text, doc.repairs = found, outcome.text, None
         if doc.text == outcome.text:
             self.publish(uri)
+
+    def _keep_repairs(self, doc: Document, outcome: Outcome) -> None:
+        """Keep the repairs of the findings shown (the code actions offer them); a failure of
+        the repairs is said as a note next to the findings."""
+        if outcome.text != doc.findings_text:
+            return
+        doc.repairs = outcome.repairs
+        if outcome.failed:
+            doc.findings = [
+                *doc.findings,
+                _failure("repair-failed", f"cosleec analyse --fix failed: {outcome.failed}", doc.path),
+            ]
+            if doc.text == outcome.text:
+                self.publish(doc.uri)
 
     def answer(self, fn: Callable[[], R]) -> R:
         """Run a request's answer; a refusal becomes the request's error, with its hint."""
@@ -158,6 +170,17 @@ class SleecServer(LanguageServer):
         except features.Refusal as e:
             message = str(e) + (f" ({e.hint})" if e.hint else "")
             raise JsonRpcException(message, code=int(T.LSPErrorCodes.RequestFailed)) from None
+
+
+def _failure(code: str, message: str, path: str) -> Diagnostic:
+    """The note for a failure of the on-save analysis or repairs: a bug, said in the editor."""
+    return Diagnostic(
+        severity=Severity.NOTE,
+        code=code,
+        message=f"{message} (please report this)",
+        span=A.Span(1, 1, 1, 1),
+        path=path,
+    )
 
 
 def build(limits: Limits | None = None) -> SleecServer:
@@ -238,6 +261,13 @@ def build(limits: Limits | None = None) -> SleecServer:
     @server.feature(T.TEXT_DOCUMENT_FORMATTING)
     def formatting(ls: SleecServer, params: T.DocumentFormattingParams) -> list[T.TextEdit]:
         return ls.answer(lambda: features.formatting(ls.document(params.text_document.uri)))
+
+    @server.feature(
+        T.TEXT_DOCUMENT_CODE_ACTION,
+        T.CodeActionOptions(code_action_kinds=[T.CodeActionKind.QuickFix, features.FIX_ALL]),
+    )
+    def code_action(ls: SleecServer, params: T.CodeActionParams) -> list[T.CodeAction]:
+        return ls.answer(lambda: features.code_actions(ls.document(params.text_document.uri), params))
 
     @server.feature(T.TEXT_DOCUMENT_PREPARE_RENAME)
     def prepare_rename(ls: SleecServer, params: T.PrepareRenameParams) -> T.Range | None:

@@ -54,14 +54,15 @@ def test_no_conflict_where_a_trace_meets_every_rule(tmp_path: Path, name: str) -
     assert subjects(report, "vacuous-conflict") == set()
 
 
-def test_a_conflict_a_declared_priority_settles_is_left_to_it(tmp_path: Path) -> None:
+def test_a_conflict_a_declared_priority_settles_is_settled(tmp_path: Path) -> None:
     """The runtime cancels R2 while R1 is active (cancel semantics): A then B conforms, so no
-    conflict or blocked purpose may be shown as proved; the analysis says it left them."""
+    conflict or blocked purpose may be shown; the encoding models the cancellation, so that
+    is proved, not left to a note."""
     rules = "R1 when A then B within 10 seconds\nR2 when A then not B within 10 seconds"
     purpose = "purpose_start p1 exists A purpose_end"
-    report = run(tmp_path, rules, purpose, priorities=frozenset({("R1", "R2")}), allow_unknown=True)
+    report = run(tmp_path, rules, purpose, priorities=frozenset({("R1", "R2")}))
     assert report.findings == []  # the runtime conflict is settled too
-    assert any("left to the declared priority R1 > R2" in u for u in report.unknown)
+    assert report.unknown == []
     spec = load(tmp_path / "rules.sleec")
     trace = [Step(0, "A"), Step(1, "B"), Step(100)]
     j = judge(spec, trace, Reading(priorities=frozenset({("R1", "R2")})))

@@ -63,6 +63,7 @@ def test_the_fields_keep_the_order_the_encoding_lets_go_of_them_in() -> None:
         "ctx", "spec", "constants", "reading", "bound", "measures", "solver", "timeout_ms", "deadline",
         "slots", "by_event", "fallbacks", "bans", "guard", "situation", "rules_by_event", "rule_lit",
         "relation_lit", "complete", "refusers", "extra", "ids", "fresh", "unfolded", "choices", "truths",
+        "above", "rule", "firing", "cut", "cuts", "raised",  # declared priorities: last, so nothing before moves
     ]  # fmt: skip
 
 
