@@ -113,3 +113,5 @@ INTERNALS  # cosleec.runtime.INTERNALS: the face's internals, read by tests/unit
 _.__doc__  # runtime/core.InForce sets its instance's __doc__: help() and documentation tools read it
 _.task_failures  # runtime/stats.Stats counters are read by name (Stats.__getitem__, to_json)
 task_failures  #
+_.feedback_message  # py_trees Behaviour.feedback_message: what py_trees shows; cosleec.bt sets it
+RosLink  # cosleec.ros.bt_client.RosLink: public API for behaviour trees on ROS 2 (docs/bt.md)

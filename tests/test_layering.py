@@ -30,6 +30,7 @@ ALLOWED: dict[str, set[str]] = {
     "runtime": {"errors", "bulk", "lang", "records", "cop"},
     "nodes": {"errors", "records", "lang", "runtime"},
     "testing": {"errors", "records", "lang", "cop", "runtime", "nodes"},
+    "bt": {"errors", "records", "lang", "runtime"},  # behaviour trees on py_trees (the bt extra); ROS-free
     "views": {"errors", "records", "lang", "semantics", "analysis", "runtime", "nodes"},
     "lsp": {"errors", "records", "lang", "semantics", "analysis", "repair"},
     "demo": {"errors", "records", "lang", "runtime", "nodes", "testing"},

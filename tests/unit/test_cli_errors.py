@@ -84,7 +84,8 @@ def test_subprocess_the_wrong_environment_is_a_user_error(d: Path) -> None:
     p = cli("ros2", "manager", "good.sleec", cwd=d)
     assert p.returncode == 1
     assert "ROS 2 (rclpy) is not available in this Python environment" in p.stderr
-    assert "hint: run ROS 2 nodes with .venv-ros2/bin/cosleec" in p.stderr and "Traceback" not in p.stderr
+    assert "pip install 'cosleec[ros2]'" in p.stderr and "cosleec ros2 setup" in p.stderr
+    assert "Traceback" not in p.stderr
 
 
 def test_subprocess_version() -> None:

@@ -13,6 +13,12 @@ rules do not declare (a newer version of them) are dropped from the log's steps,
 where a written trace is held to the rules (exit 2). ``--json`` writes strict JSON: a number
 that is not finite (a window end past the largest time) is the string ``"inf"``, ``"-inf"``
 or ``"nan"``.
+
+With ``--mapping MAPPING.yaml``, TRACE is a field bag of the robot's own topics (a rosbag2
+directory, MCAP or SQLite 3, or a ROS 1 ``.bag``), replayed through the Context Listener's
+mapping in bag time (:mod:`cosleec.cli.fieldbags`); each verdict names the bag messages
+behind it (topic, bag time). A bag that does not cover the whole mapping is judged with
+those measures unknown and those events absent, and exits 1: it never passes.
 """
 
 from __future__ import annotations
@@ -26,6 +32,7 @@ from typing import Any, TypeGuard
 from rich.text import Text
 
 from cosleec.cli.common import add_clause_options, add_priority_options, console
+from cosleec.cli.fieldbags import BagRun, read_bag
 from cosleec.errors import ConfigurationError, UserError, clip
 from cosleec.lang import (
     IMMEDIATE_S,
@@ -36,6 +43,7 @@ from cosleec.lang import (
     load,
     parse_untimed,
 )
+from cosleec.nodes import is_bag
 from cosleec.semantics import (
     Conflict,
     Judgement,
@@ -55,6 +63,7 @@ STYLE = {
     "cancelled": "yellow",
     "conflict": "magenta",
     "warning": "yellow",
+    "gap": "bold red",
 }
 PRINTED_AT_ONCE = 1000
 """Lines of text output handed to rich together (one call a line is three times slower)."""
@@ -74,7 +83,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "trace",
         metavar="TRACE",
         help='JSON Lines, one object a line: {"t": 0, "set": {"m": true}}, {"t": 0, "event": "E"}, '
-        '{"t": 360}; or a Manager\'s audit log; - reads standard input',
+        '{"t": 360}; or a Manager\'s audit log; - reads standard input; with --mapping, a bag of the '
+        "robot's topics (a rosbag2 directory, MCAP or SQLite 3, or a ROS 1 .bag)",
+    )
+    p.add_argument(
+        "--mapping",
+        metavar="MAPPING.yaml",
+        help="TRACE is a bag: replay it through this Context Listener mapping (needs the bags extra: "
+        "pip install 'cosleec[bags]'); a bag that does not cover the mapping exits 1",
     )
     add_clause_options(
         p,
@@ -111,13 +127,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         given = _given(args)
         spec = load(args.rules, legos_compat=args.legos_compat)
-        recording = read_recording(args.trace)  # once: a pipe cannot be read twice
-        if not recording.steps:  # checking nothing must not look like a pass
-            raise UserError(
-                "the trace is empty",
-                where=recording.source,
-                hint='give one step a line, e.g. {"t": 0, "event": "E"}',
-            )
+        bag = read_bag(args.trace, args.mapping, spec) if args.mapping else None
+        recording = bag.recording if bag else _read(args.trace)
         notes: list[str] = []
         if recording.audit:  # checked against these rules, perhaps a newer version than it ran
             steps, notes = fit_trace(spec, recording.steps)
@@ -131,10 +142,33 @@ def run(args: argparse.Namespace) -> int:
         print(e.render() if isinstance(e, SleecError) else f"cosleec: {e.render()}", file=sys.stderr)
         return USAGE_ERROR
     if args.json:
-        print(json.dumps(json_safe(_document(args, recording, choice, judgement)), indent=2, allow_nan=False))
+        doc = _document(args, recording, choice, judgement)
+        if bag is not None:
+            doc["conforms"] = judgement.conforms and bag.complete
+            doc["bag"] = bag.to_json(judgement)
+        print(json.dumps(json_safe(doc), indent=2, allow_nan=False))
     else:
-        _print(judgement, choice, recording)
-    return 0 if judgement.conforms else 1
+        _print(judgement, choice, recording, bag)
+    return 0 if judgement.conforms and (bag is None or bag.complete) else 1
+
+
+def _read(trace: str) -> Recording:
+    """The trace or audit log at ``trace``, read once (a pipe cannot be read twice); UserError for
+    an empty one (checking nothing must not look like a pass) and for a bag without ``--mapping``."""
+    if trace != "-" and is_bag(trace):
+        raise UserError(
+            "this looks like a bag, and a bag is read through a Context Listener mapping",
+            where=trace,
+            hint="give the mapping of the robot's topics: cosleec conforms RULES BAG --mapping MAPPING.yaml",
+        )
+    recording = read_recording(trace)
+    if not recording.steps:
+        raise UserError(
+            "the trace is empty",
+            where=recording.source,
+            hint='give one step a line, e.g. {"t": 0, "event": "E"}',
+        )
+    return recording
 
 
 def _given(args: argparse.Namespace) -> conformance.Given:
@@ -196,8 +230,8 @@ def json_safe(x: Any) -> Any:
 # ---------------------------------------------------------------------------- human output
 
 
-def _print(j: Judgement, choice: conformance.Choice, recording: Recording) -> None:
-    lines: list[Text] = []
+def _print(j: Judgement, choice: conformance.Choice, recording: Recording, bag: BagRun | None = None) -> None:
+    lines: list[Text] = _bag_head(bag)
     said = _said_options(choice, recording)
     if said:
         line = recording.options.line if recording.options is not None else 0
@@ -208,29 +242,53 @@ def _print(j: Judgement, choice: conformance.Choice, recording: Recording) -> No
         lines.append(_line("note", text))
     cancelled = [v for v in j.verdicts if v.status == "cancelled"]
     for v in j.breaches:
-        lines.append(
-            _line(
-                v.status, f"{_who(v)} at {_s(v.at if v.at is not None else j.end)} s: {_item(v)} -- {_why(v)}"
-            )
-        )
+        at = _s(v.at if v.at is not None else j.end)
+        lines += [_line(v.status, f"{_who(v)} at {at} s: {_item(v)} -- {_why(v)}"), *_behind(bag, j, v)]
     for c in j.conflicts:
         lines.append(_line("conflict", _conflict(c)))
     for v in cancelled:
         at = f" at {_s(v.at)} s" if v.at is not None else ""
         by = f" by {v.by}'s priority" if v.by else " by priority"
-        lines.append(_line("cancelled", f"{_who(v)}{at}: {_item(v)} -- cancelled{by}"))
+        lines += [_line("cancelled", f"{_who(v)}{at}: {_item(v)} -- cancelled{by}"), *_behind(bag, j, v)]
     for v in j.pending:
-        lines.append(_line("pending", f"{_who(v)}: {_item(v)} -- {_open(v)}"))
+        lines += [_line("pending", f"{_who(v)}: {_item(v)} -- {_open(v)}"), *_behind(bag, j, v)]
     for f in j.firings:
         if f.clause is None and f.missing:
             needs = ", ".join(f.missing)
             lines.append(_line("undecided", f"{f.rule} at {_s(f.time)} s: {f.event} -- no value for {needs}"))
+            origin = bag.firing_origin(f) if bag is not None else None
+            if origin is not None:
+                lines.append(_line("", f"  from {origin.describe()}"))
     for what in j.undetermined:
         lines.append(_line("undecided", clip(what, 300)))
-    lines.append(Text(_summary(j, len(cancelled))))
+    lines.append(Text(_summary(j, len(cancelled)) + _uncovered(bag)))
     out = console()
     for n in range(0, len(lines), PRINTED_AT_ONCE):  # in batches: a print a line took 3x as long
         out.print(Text("\n").join(lines[n : n + PRINTED_AT_ONCE]))
+
+
+def _bag_head(bag: BagRun | None) -> list[Text]:
+    """The lines on a bag before the verdicts: what it holds, its gaps (fail closed), its rejections."""
+    if bag is None:
+        return []
+    lines = [_line("bag", bag.trace.describe())]
+    lines += [_line("gap", gap) for gap in bag.trace.gaps]
+    lines += [_line("warning", text) for text in bag.trace.rejections]
+    return lines
+
+
+def _behind(bag: BagRun | None, j: Judgement, v: Verdict) -> list[Text]:
+    """The line under a verdict that names the bag messages behind it (none without a bag)."""
+    said = bag.behind(j, v) if bag is not None else ""
+    return [_line("", f"  from {said}")] if said else []
+
+
+def _uncovered(bag: BagRun | None) -> str:
+    """What the summary adds when the bag does not cover the mapping: it did not pass."""
+    if bag is None or bag.complete:
+        return ""
+    n = len(bag.trace.gaps)
+    return f"; NOT judged whole: the bag does not cover the mapping ({_count(n, 'gap')} above)"
 
 
 def _line(word: str, rest: str) -> Text:

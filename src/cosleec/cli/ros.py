@@ -19,6 +19,7 @@ from collections.abc import Callable
 from typing import Any
 
 from cosleec import ros
+from cosleec.cli import ros_setup
 from cosleec.cli.common import add_clause_options, add_priority_options, input_file, output_file, port
 from cosleec.errors import UserError
 from cosleec.nodes import (
@@ -29,6 +30,7 @@ from cosleec.nodes import (
     ListenerNode,
     ManagerNode,
     Mapping,
+    McapRecorder,
     Route,
     TaskNode,
     load_routes,
@@ -112,7 +114,8 @@ def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
 def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: ignore[type-arg]
     """Register ``cosleec <backend>`` (``ros2`` or ``ros1``) and its sub-commands.
 
-    One per node kind (manager, layers, listener, task, guard), plus ``launch`` and ``demo``.
+    One per node kind (manager, layers, listener, task, guard), plus ``launch`` and ``demo``;
+    on ROS 2 also ``setup``, which builds cosleec's messages into this environment.
     """
     p = sub.add_parser(
         backend, help=f"run CO-SLEEC nodes on {'ROS 2 (rclpy)' if backend == 'ros2' else 'ROS 1 (rospy)'}"
@@ -129,6 +132,8 @@ def add_parser(sub: argparse._SubParsersAction, backend: str) -> None:  # type: 
     )
     d.add_argument("--json", action="store_true", help="print runtime events as JSON lines")
     _add_common(d, backend)
+    if backend == "ros2":
+        ros_setup.add_parser(nodes)
 
 
 def _add_common(q: argparse.ArgumentParser, backend: str) -> None:
@@ -163,7 +168,18 @@ def _add_manager(nodes: argparse._SubParsersAction[argparse.ArgumentParser]) -> 
         "old copy), once; the reset and what was lost are recorded in the audit log",
     )
     add_priority_options(m, lead=True)
-    m.add_argument("--record", metavar="FILE.mcap", help="record the decision stream (Foxglove opens it)")
+    m.add_argument(
+        "--record",
+        metavar="FILE.mcap",
+        help="record the decision stream: a rosbag2 MCAP (ros2 bag, rosbags, Foxglove, cosleec timeline open it)",
+    )
+    m.add_argument(
+        "--record-format",
+        choices=McapRecorder.FORMATS,
+        default=McapRecorder.FORMATS[0],
+        help="with --record: ros2 (default: CDR messages of cosleec_interfaces types, profile ros2) or "
+        "json (the JSON copy: one JSON object per message, for tools without the ROS types)",
+    )
     m.add_argument(
         "--status-each", action="store_true", help="publish status after every message (harnesses)"
     )
@@ -318,8 +334,11 @@ def run(args: argparse.Namespace) -> int:
     """
     backend, node = args.backend, args.node
     if node == "launch":
-        return ros.launch(input_file(args.file, "the launch file", text=True))
+        path = input_file(args.file, "the launch file", text=True)
+        ros_setup.require_launch_middleware(path)  # once, not once per node
+        return ros.launch(path)
     if node == "demo":
+        ros_setup.require_middleware(backend, args.wire)
         return ros.run_demo(backend, args.namespace, args.json, wire=args.wire)
     ros_args = list(getattr(args, "ros_args", []) or [])
     _refuse_on_ros1(args, backend, node, ros_args)
@@ -327,6 +346,7 @@ def run(args: argparse.Namespace) -> int:
     _check_types(backend, _robot_types(args, node))
     if node == "task" and args.module:  # imported now: a module without install(node) is said at once
         ros.load_module(args.module, args.path)
+    ros_setup.require_middleware(backend, args.wire)  # after the files: their mistakes are said first
     name = node_name(args.namespace, node if node != "task" else args.name)
     lifecycle = backend == "ros2" and node == "manager"
     make = _maker(args, node, lifecycle)
@@ -467,6 +487,7 @@ def _manager(t: Any, o: argparse.Namespace, args: argparse.Namespace, lifecycle:
             sim_time=sim,
             audit=o.audit,
             record=o.record,
+            record_format=args.record_format,
             status_each=o.status_each,
             unknown=o.unknown,
             journal=o.journal,

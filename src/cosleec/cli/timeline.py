@@ -21,8 +21,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "otherwise chains as arrows.",
     )
     p.add_argument(
-        "run_file", metavar="AUDIT.jsonl|RUN.mcap", help="the audit log or MCAP recording of a run"
+        "run_file",
+        metavar="AUDIT.jsonl|RUN.mcap|BAG",
+        help="the audit log or MCAP recording of a run, or (with --mapping and --rules) a field bag of the "
+        "robot's own topics",
     )
+    p.add_argument(
+        "--mapping",
+        metavar="MAPPING.yaml",
+        help="with a field bag (rosbag2 MCAP or SQLite 3, ROS 1 .bag): the Context Listener's mapping that "
+        "turns its topics into measures and events",
+    )
+    p.add_argument("--rules", metavar="RULES", help="with --mapping: the rule file the bag is run through")
     p.add_argument(
         "-o",
         "--output",
@@ -45,12 +55,25 @@ def run(args: argparse.Namespace) -> int:
             where=str(out),
             hint="give -o another file name (.png, .svg or .html)",
         )
-    tl = Timeline.read(source)
+    tl = _bag(args, source) if args.mapping is not None or args.rules is not None else Timeline.read(source)
     write(tl, out, fmt)
     print(
         f"{out}: {len(tl.rules)} rule(s), {len(tl.bars)} obligation(s), t = {tl.start:g} to {tl.end:g} s ({fmt})"
     )
     return 0
+
+
+def _bag(args: argparse.Namespace, source: Path) -> Timeline:
+    """A field bag's timeline: its steps through the mapping and the rules (bag_timeline.py)."""
+    if args.mapping is None or args.rules is None:
+        given, missing = ("--mapping", "--rules") if args.mapping is not None else ("--rules", "--mapping")
+        raise UserError(
+            f"{given} draws a field bag, which also needs {missing}",
+            hint="cosleec timeline BAG --mapping MAPPING.yaml --rules RULES.sleec",
+        )
+    from cosleec.cli.bag_timeline import bag_records  # (rosbags: the bags extra, only here)
+
+    return Timeline.from_records(bag_records(str(source), args.mapping, args.rules), source=str(source))
 
 
 def check_output(out: Path, option: str) -> str:

@@ -8,6 +8,7 @@ Each node is built from a :class:`~cosleec.runtime.RuleSet`
 """
 
 from cosleec.nodes.base import LogLimiter, MessageError, Node
+from cosleec.nodes.fieldbag import BagError, BagStep, BagTrace, Origin, is_bag, replay
 from cosleec.nodes.guard_node import GuardError, GuardNode, Route, load_routes, route
 from cosleec.nodes.layers_node import LayersNode
 from cosleec.nodes.listener import ListenerNode
@@ -33,6 +34,9 @@ __all__ = [
     "DEFAULT_DECIDE",
     "DEFAULT_NAMESPACE",
     "LATCHED",
+    "BagError",
+    "BagStep",
+    "BagTrace",
     "GuardError",
     "GuardNode",
     "Handler",
@@ -48,15 +52,18 @@ __all__ = [
     "McapRecorder",
     "MessageError",
     "Node",
+    "Origin",
     "Qos",
     "QosError",
     "Route",
     "TaskNode",
     "Transport",
     "dumps",
+    "is_bag",
     "load_routes",
     "read_recording",
     "record",
+    "replay",
     "route",
     "topic",
 ]

@@ -109,6 +109,7 @@ class ManagerNode(Node):
         sim_time: bool = False,
         audit: str | None = None,
         record: str | None = None,
+        record_format: str | None = None,
         status_each: bool = False,
         rules_path: str | None = None,
         load: Callable[[str], RuleSet] | None = None,
@@ -141,7 +142,7 @@ class ManagerNode(Node):
         self.status_each = status_each
         self.sim_time, self._on_manager = sim_time, on_manager
         self._options = {"semantics": semantics, "audit": audit, "dispatch": False, **manager_kw}
-        self.recorder = McapRecorder(record) if record else None
+        self.recorder = McapRecorder(record, fmt=record_format) if record else None
         for t in ("decisions", "obligations", "violations", "conflicts", "refusals", "request_reply"):
             self.advertise(t)
         self._start(rules)

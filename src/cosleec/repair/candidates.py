@@ -50,6 +50,19 @@ class Candidates:
                 out.append(p)
         return out
 
+    def unrepairable(self, f: Finding) -> str:
+        """Why no rule edit can repair ``f`` ('' when one may): a concern that only says an
+        event can happen in some state (``exists``) is about the world, which rules do not
+        forbid; the concern itself, or a relation about the world, has to change."""
+        s = next((x for x in self.spec.concerns if x.name == f.subject), None)
+        if f.code == "concern-raised" and s is not None and s.kind == "exists" and not s.responses:
+            return (
+                f"concern {s.name} says only that {s.trigger.event} can happen in that state; no rule "
+                "can forbid what the world does: change the concern (what should the robot then do?) "
+                "or declare a relation that rules the state out"
+            )
+        return ""
+
     def cause(self, f: Finding) -> list[A.Rule]:
         """The rules of ``f``'s cause (relations left out), in file order."""
         return [self.ops.rules[n] for n in f.rules if n in self.ops.rules]

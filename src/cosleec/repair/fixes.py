@@ -80,14 +80,15 @@ class Repairs:
     rejected: list[tuple[Patch, tuple[str, ...]]] = field(default_factory=list)
     seconds: float = 0.0
     skipped: str = ""  # why it was not tried at all (the run's deadline)
+    cannot: str = ""  # why no rule edit can repair it (the finding's own form)
 
     @property
     def why_none(self) -> str:
         """Why there is no fix (empty when there is one)."""
         if self.fixes:
             return ""
-        if self.skipped:
-            return self.skipped
+        if self.skipped or self.cannot:
+            return self.skipped or self.cannot
         if not self.rejected:
             return f"no repair operator applies to a {self.finding.code} finding of this form"
         reasons = sorted({r for _, rs in self.rejected for r in rs[:1]})

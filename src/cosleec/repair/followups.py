@@ -20,15 +20,17 @@ from cosleec.repair.verify import Verdict, key
 
 LOCAL = frozenset({"remove-rule", "declare-priority"})
 """The operators a follow-up uses: each changes nothing but the new finding's cause."""
-NEW_AT_MOST = 2
+NEW_AT_MOST = 3
 """New findings a follow-up takes on; a candidate that makes more is not followed up."""
 OPTIONS = 2
 """Follow-up patches tried per new finding."""
 
 
-def follow_ups(first: Patch, verdict: Verdict, source: str) -> Iterator[Patch]:
+def follow_ups(first: Patch, verdict: Verdict, source: str, before: frozenset[str]) -> Iterator[Patch]:
     """``first`` with each new finding it made repaired too, when all it did wrong was to
-    make at most :data:`NEW_AT_MOST` new findings (its own finding gone)."""
+    make at most :data:`NEW_AT_MOST` new findings (its own finding gone). ``before``: the
+    original file's rule names. A priority that lets the rules ``first`` wrote or added
+    prevail is tried first: they are the repair."""
     if not verdict.new or len(verdict.new) > NEW_AT_MOST or verdict.checked is None:
         return
     if any(not r.startswith("new finding: ") for r in verdict.reasons):
@@ -40,7 +42,11 @@ def follow_ups(first: Patch, verdict: Verdict, source: str) -> Iterator[Patch]:
     made = [f for f in verdict.after if key(f) in verdict.new]
     candidates = Candidates(text, patched.spec)
     # (removing the rule the first patch added would undo it: verification says so)
-    options = [[p for p in candidates.of(f) if p.operator in LOCAL][:OPTIONS] for f in made]
+    mine = set(first.rules) | {r.name for r in patched.spec.rules if r.name not in before}
+    options = [
+        sorted((p for p in candidates.of(f) if p.operator in LOCAL), key=lambda p: _order(p, mine))[:OPTIONS]
+        for f in made
+    ]
     seen: set[str] = set()
     for combination in itertools.product(*options):
         chosen = list({p.summary: p for p in combination}.values())  # one finding's fix may serve two
@@ -61,6 +67,14 @@ def follow_ups(first: Patch, verdict: Verdict, source: str) -> Iterator[Patch]:
         said = "; ".join(dict.fromkeys(p.summary for p in chosen))
         rules = tuple(dict.fromkeys([*first.rules, *(r for p in chosen for r in p.rules)]))
         yield Patch(first.operator, f"{first.summary}; then {said}", rules, edits_between(source, final))
+
+
+def _order(p: Patch, mine: set[str]) -> int:
+    """Follow-ups in the order to try: a priority for the repair's own rules, then one against
+    them, then removals."""
+    if p.operator == "declare-priority":
+        return 0 if p.rules[0] in mine else 1
+    return 2
 
 
 __all__ = ["follow_ups"]

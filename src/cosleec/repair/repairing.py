@@ -58,7 +58,10 @@ def repairs_of(
         found, unknown = analyse_spec(changed, constants, reading.settings, [target.code], reading.coverage)
         return key(target) not in {key(x) for x in found} and not any(target.subject in u for u in unknown)
 
-    queue = Candidates(source, spec, gone, reading.settings.reading.untimed_seconds).of(f)[: budget.tried]
+    candidates = Candidates(source, spec, gone, reading.settings.reading.untimed_seconds)
+    out.cannot = candidates.unrepairable(f)
+    queue = candidates.of(f)[: budget.tried]
+    names = frozenset(r.name for r in spec.rules)
     second = 0  # follow-ups tried (followups.py), at most half the budget again
     while queue:
         patch = queue.pop(0)
@@ -68,7 +71,7 @@ def repairs_of(
         verdict = verify(reading, spec, found, text, [key(f)], budget.deadline)
         if not verdict.verified:
             out.rejected.append((patch, verdict.reasons))
-            more = list(follow_ups(patch, verdict, source))[: max(0, budget.tried // 2 - second)]
+            more = list(follow_ups(patch, verdict, source, names))[: max(0, budget.tried // 2 - second)]
             second += len(more)
             queue.extend(more)
             continue

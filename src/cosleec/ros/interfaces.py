@@ -358,7 +358,7 @@ Codec._decoders = {
 }
 
 #: service kind -> cosleec_interfaces service type
-SERVICES = {"request": "Request", "decide": "Decide", "reload": "Reload"}
+SERVICES = {"request": "AskPermission", "decide": "Decide", "reload": "Reload"}
 
 
 class ServiceCodec:

@@ -76,7 +76,8 @@ def _audit_records(p: Path) -> list[dict[str, Any]]:
 
 
 def _mcap_records(p: Path) -> list[dict[str, Any]]:
-    """The runtime records of a recording's ``/…/<kind>`` channels, in the order written."""
+    """The runtime records of a recording's ``/…/<kind>`` channels, in the order written: a
+    rosbag2 recording (``--record-format ros2``, the default) or its JSON copy (``json``)."""
     try:
         messages = read_mcap(p)
     except ModuleNotFoundError as e:
@@ -85,6 +86,9 @@ def _mcap_records(p: Path) -> list[dict[str, Any]]:
             where=str(p),
             hint="pip install 'cosleec[record]'",
         ) from None
+    except UserError as e:  # not MCAP, or a channel of a type that holds no record: said where
+        e.where = e.where or str(p)
+        raise
     records = [m for _, m in messages if isinstance(m, dict) and isinstance(m.get("kind"), str)]
     if not records:
         raise UserError(

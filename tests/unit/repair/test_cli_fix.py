@@ -48,8 +48,8 @@ CONCERN = HEAD + (
 )
 UNREPAIRABLE = HEAD + (
     "rule_start\n  R1 when A then B within 5 seconds\nrule_end\n"
-    "concern_start\n  c1 when C and {x} then B\nconcern_end\n"
-)
+    "concern_start\n  c1 exists C and {x}\nconcern_end\n"
+)  # a concern about what the world does: no rule edit repairs it
 CONFLICT = HEAD + (
     "rule_start\n  R1 when A then B within 5 seconds\n  R2 when A then not B within 10 seconds\nrule_end\n"
 )
@@ -149,7 +149,7 @@ def test_a_finding_without_a_fix_says_why_under_it_and_in_the_patch_set(
     out = "\n".join(lines)
     (no_fix,) = [line for line in lines if line.startswith("    no fix of its own: ")]
     why = no_fix.removeprefix("    no fix of its own: ")
-    assert "none verified" in why and "runtime-conflict" in why
+    assert why.startswith("concern c1 says only that C can happen in that state")
     assert f"{path}: patch set: empty, nothing for --write to apply" in out
     assert f"{path}: unrepaired: concern-raised c1: {why}" in out
 
@@ -374,7 +374,7 @@ def test_json_names_what_is_left_unrepaired_and_what_went_along(
 ) -> None:
     doc = _doc(capsys, str(_file(tmp_path, UNREPAIRABLE)))
     (f,) = doc["findings"]
-    assert f["fixes"] == [] and "none verified" in f["why_unrepaired"]
+    assert f["fixes"] == [] and "no rule can forbid what the world does" in f["why_unrepaired"]
     assert doc["patch_set"]["unrepaired"] == [
         {"code": "concern-raised", "subject": "c1", "why": f["why_unrepaired"]}
     ]

@@ -232,3 +232,11 @@ def test_findings_repaired_side_by_side_give_what_one_process_gives() -> None:
     assert len(alone.repairs) >= SIDE_BY_SIDE_FROM
     assert seen(together) == seen(alone)
     assert together.plan is not None and alone.plan is not None and together.plan.text == alone.plan.text
+
+
+def test_a_concern_about_what_the_world_does_says_why_no_rule_repairs_it() -> None:
+    text = rules("    R1 when E then X\n", "concern_start\n    c1 exists E and {m}\nconcern_end\n")
+    r = repaired(text).repairs[0]
+    assert key(r.finding) == ("concern-raised", "c1")
+    assert not r.fixes and not r.rejected
+    assert r.why_none.startswith("concern c1 says only that E can happen in that state")
