@@ -16,7 +16,7 @@ its JSON result), ``skipped`` (name -> why) and ``failed`` (name -> why: a crash
 timeout, or a benchmark that reported a broken promise with its exit status, such as
 ``scaling``'s exponents; its result, when it printed one, is kept under ``benchmarks``).
 It goes to stdout with ``--json`` (the tables then go to stderr), to FILE with ``-o``.
-``bash scripts/bench-table FILE`` makes the README's table from it. Exit status: 0 when
+``bash scripts/bench-table FILE`` makes the benchmark table (docs/benchmarks.md) and the README's headline from it. Exit status: 0 when
 every benchmark that ran succeeded, 1 otherwise.
 """
 

@@ -1,8 +1,12 @@
-"""The README's benchmark table, made from the JSON document of ``bash benchmarks/run all``.
+"""The benchmark table of the docs site, and its headline in the README, made from the JSON
+document of ``bash benchmarks/run all``.
 
-``bash scripts/bench-table FILE.json`` rewrites the table in README.md between the markers
-``<!-- bench-table:start -->`` and ``<!-- bench-table:end -->``; ``--print`` writes it to
-stdout instead, ``--check`` exits 1 when README.md's table is not the one FILE makes.
+``bash scripts/bench-table FILE.json`` rewrites the table in docs/benchmarks.md between the
+markers ``<!-- bench-table:start -->`` and ``<!-- bench-table:end -->``, and the headline in
+README.md (a few of the same rows, ``HEADLINE``) between ``<!-- bench-headline:start -->``
+and ``<!-- bench-headline:end -->``: one document, one source for both, so the README's
+figures are never typed by hand. ``--print`` writes the table to stdout instead, ``--check``
+exits 1 when either is not the one FILE makes.
 
 ``ROWS`` lists what the table shows: one row per key, in this order, each with its
 benchmark, how to print it and the target issue 16 sets (if any). A key the document does
@@ -20,7 +24,11 @@ from pathlib import Path
 
 START = "<!-- bench-table:start -->"
 END = "<!-- bench-table:end -->"
-README = Path(__file__).resolve().parent.parent / "README.md"
+HEAD_START = "<!-- bench-headline:start -->"
+HEAD_END = "<!-- bench-headline:end -->"
+ROOT = Path(__file__).resolve().parent.parent
+PAGE = ROOT / "docs" / "benchmarks.md"
+README = ROOT / "README.md"
 NOT_MEASURED = "not measured"
 PROG = "bash scripts/bench-table"
 
@@ -236,6 +244,16 @@ ROWS = [
 ]
 
 
+#: the rows of the README's headline, in the table's order: (benchmark, key) of ``ROWS``
+HEADLINE = [
+    ("parse_corpus", "rules_per_s"),
+    ("scalability_grid", "mean_us_at_60x20"),
+    ("scalability_grid", "update_flip_median_us_10k_rules"),
+    ("ros2_latency", "e2e_p99_us"),
+    ("analyse_case_studies", "total_s"),
+]
+
+
 def lookup(doc: dict[str, object], row: Row) -> object:
     """The figure for ``row`` in the suite document, or None."""
     benches = doc.get("benchmarks")
@@ -279,8 +297,9 @@ def target_text(row: Row, value: float | None) -> str:
     return f"{want}: {'met' if met else '**missed**'}"
 
 
-def table(doc: dict[str, object]) -> str:
-    """The Markdown table (with the line that says where and when it was measured)."""
+def table(doc: dict[str, object], rows: list[Row] | None = None) -> str:
+    """The Markdown table of ``rows`` (all of ``ROWS`` by default), with the line that says
+    where and when it was measured."""
     quick = " `--quick`," if doc.get("quick") else ""
     cores = doc.get("cores")
     where = (
@@ -295,11 +314,13 @@ def table(doc: dict[str, object]) -> str:
         "| benchmark | measure | figure | target | baseline or reference |",
         "|---|---|---|---|---|",
     ]
-    for row in ROWS:
+    for row in ROWS if rows is None else rows:
         value = lookup(doc, row)
         shown = NOT_MEASURED if value is None else figure(float(value), row.unit)  # type: ignore[arg-type]
         target = target_text(row, None if value is None else float(value))  # type: ignore[arg-type]
         lines.append(f"| `{row.benchmark}` | {row.label} | {shown} | {target} | {row.baseline} |")
+    if rows is not None:
+        return "\n".join(lines) + "\n"
     notes = []
     for kind in ("skipped", "failed"):
         entries = doc.get(kind)
@@ -310,13 +331,19 @@ def table(doc: dict[str, object]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def replace(readme: str, body: str) -> str:
-    """``readme`` with what is between the markers replaced by ``body``."""
-    if readme.count(START) != 1 or readme.count(END) != 1 or readme.index(START) > readme.index(END):
-        raise ValueError(f"README.md needs one {START} and, after it, one {END}")
-    head, rest = readme.split(START)
-    _, tail = rest.split(END)
-    return f"{head}{START}\n{body}{END}{tail}"
+def headline(doc: dict[str, object]) -> str:
+    """The README's few figures: the ``HEADLINE`` rows of :func:`table`, made the same way
+    from the same document (skipped and failed benchmarks are listed on the docs page only)."""
+    return table(doc, [row for row in ROWS if (row.benchmark, row.key) in HEADLINE])
+
+
+def replace(text: str, body: str, start: str = START, end: str = END) -> str:
+    """``text`` with what is between the markers ``start`` and ``end`` replaced by ``body``."""
+    if text.count(start) != 1 or text.count(end) != 1 or text.index(start) > text.index(end):
+        raise ValueError(f"needs one {start} and, after it, one {end}")
+    head, rest = text.split(start)
+    _, tail = rest.split(end)
+    return f"{head}{start}\n{body}{end}{tail}"
 
 
 def load(path: Path) -> object:
@@ -333,10 +360,11 @@ def main(argv: list[str] | None = None) -> int:
         prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     p.add_argument("results", help="the JSON document of `bash benchmarks/run all --json` (or -o FILE)")
-    p.add_argument("--readme", default=str(README), help="the file whose table to rewrite (README.md)")
+    p.add_argument("--page", default=str(PAGE), help="the page whose table to rewrite (docs/benchmarks.md)")
+    p.add_argument("--readme", default=str(README), help="the file whose headline to rewrite (README.md)")
     how = p.add_mutually_exclusive_group()
     how.add_argument("--print", action="store_true", help="write the table to stdout, change nothing")
-    how.add_argument("--check", action="store_true", help="exit 1 when the README's table is not this one")
+    how.add_argument("--check", action="store_true", help="exit 1 when table or headline differ")
     a = p.parse_args(argv)
     try:
         doc = load(Path(a.results))
@@ -346,20 +374,30 @@ def main(argv: list[str] | None = None) -> int:
     if not isinstance(doc, dict):
         print(f"bench-table: {a.results} is not a JSON object", file=sys.stderr)
         return 2
-    body = table(doc)
     if a.print:
-        sys.stdout.write(body)
+        sys.stdout.write(table(doc))
         return 0
-    path = Path(a.readme)
-    old = path.read_text(encoding="utf-8")
+    status = 0
+    for path, body, start, end in (
+        (Path(a.page), table(doc), START, END),
+        (Path(a.readme), headline(doc), HEAD_START, HEAD_END),
+    ):
+        status = max(status, rewrite(path, body, start, end, check=a.check, results=a.results))
+    return status
+
+
+def rewrite(path: Path, body: str, start: str, end: str, *, check: bool, results: str) -> int:
+    """Put ``body`` between the markers of ``path`` (or, with ``check``, say whether it is
+    there): 0 done or already so, 1 not so (``check``), 2 the file or its markers are wrong."""
     try:
-        new = replace(old, body)
-    except ValueError as e:
+        old = path.read_text(encoding="utf-8")
+        new = replace(old, body, start, end)
+    except (OSError, ValueError) as e:
         print(f"bench-table: {path}: {e}", file=sys.stderr)
         return 2
-    if a.check:
+    if check:
         if new != old:
-            print(f"bench-table: the table in {path} is not the one {a.results} makes", file=sys.stderr)
+            print(f"bench-table: the figures in {path} are not the ones {results} makes", file=sys.stderr)
             return 1
         return 0
     if new != old:

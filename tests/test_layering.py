@@ -1,5 +1,5 @@
 """The house guards itself: every import of src/cosleec, function bodies included, checked
-against the floors of the architecture (README, "Architecture").
+against the floors of the architecture (docs/development.md, "Architecture").
 
 floor 4   cli                         the only place that prints and calls sys.exit
 floor 3   ros  demo  views  lsp       adapters and front ends (ros runs the demo over middleware; views draw;

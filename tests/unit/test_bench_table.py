@@ -1,5 +1,6 @@
-"""The README's benchmark table generator (benchmarks/_table.py, run as scripts/bench-table),
-on a small fixture document: no benchmark runs here (they are slow and timing-flaky)."""
+"""The benchmark table generator (benchmarks/_table.py, run as scripts/bench-table): the table of
+docs/benchmarks.md and its headline in README.md, on a small fixture document: no benchmark runs
+here (they are slow and timing-flaky)."""
 
 from __future__ import annotations
 
@@ -119,18 +120,36 @@ def test_every_key_issue_16_names_is_in_the_table() -> None:
     assert named <= keys
 
 
-def test_the_readme_is_rewritten_between_its_markers_only(tmp_path: Path, doc: dict[str, object]) -> None:
+def test_the_page_and_the_readme_are_rewritten_between_their_markers_only(
+    tmp_path: Path, doc: dict[str, object]
+) -> None:
+    page = tmp_path / "benchmarks.md"
+    page.write_text(f"# title\nbefore\n{bt.START}\nold table\n{bt.END}\nafter\n", encoding="utf-8")
     readme = tmp_path / "README.md"
-    readme.write_text(f"# title\nbefore\n{bt.START}\nold table\n{bt.END}\nafter\n", encoding="utf-8")
+    readme.write_text(f"# title\nbefore\n{bt.HEAD_START}\nold\n{bt.HEAD_END}\nafter\n", encoding="utf-8")
     results = tmp_path / "bench.json"
     results.write_text(json.dumps(doc), encoding="utf-8")
-    assert bt.main([str(results), "--readme", str(readme), "--check"]) == 1
-    assert bt.main([str(results), "--readme", str(readme)]) == 0
-    text = readme.read_text(encoding="utf-8")
+    files = [str(results), "--page", str(page), "--readme", str(readme)]
+    assert bt.main([*files, "--check"]) == 1
+    assert bt.main(files) == 0
+    text = page.read_text(encoding="utf-8")
     assert text == f"# title\nbefore\n{bt.START}\n{bt.table(doc)}{bt.END}\nafter\n"
-    assert bt.main([str(results), "--readme", str(readme), "--check"]) == 0
-    assert bt.main([str(results), "--readme", str(readme)]) == 0
-    assert readme.read_text(encoding="utf-8") == text  # a second run changes nothing
+    head = readme.read_text(encoding="utf-8")
+    assert head == f"# title\nbefore\n{bt.HEAD_START}\n{bt.headline(doc)}{bt.HEAD_END}\nafter\n"
+    assert bt.main([*files, "--check"]) == 0
+    assert bt.main(files) == 0
+    assert page.read_text(encoding="utf-8") == text  # a second run changes nothing
+    assert readme.read_text(encoding="utf-8") == head
+    readme.write_text(head.replace(bt.headline(doc), "stale\n"), encoding="utf-8")
+    assert bt.main([*files, "--check"]) == 1  # a stale headline alone is caught
+
+
+def test_the_headline_is_rows_of_the_table(doc: dict[str, object]) -> None:
+    head, whole = bt.headline(doc).splitlines(), bt.table(doc).splitlines()
+    assert head[0] == whole[0]  # the same "Measured ..." line
+    rows = [line for line in head if line.startswith("| `")]
+    assert len(rows) == len(bt.HEADLINE) and all(line in whole for line in rows)
+    assert {(r.benchmark, r.key) for r in bt.ROWS} >= set(bt.HEADLINE)
 
 
 def test_a_captured_run_whose_last_line_is_the_document_is_read(
@@ -148,11 +167,18 @@ def test_a_readme_without_markers_is_refused(tmp_path: Path) -> None:
         bt.replace(f"{bt.END}\n{bt.START}\n", "table")
 
 
-def test_the_repository_readme_has_the_markers_inside_its_benchmark_section() -> None:
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = text.split("--8<-- [start:benchmarks]", 1)[1].split("--8<-- [end:benchmarks]", 1)[0]
-    assert section.count(bt.START) == 1 and section.count(bt.END) == 1
-    assert text.count(bt.START) == 1 and text.count(bt.END) == 1
+def test_the_repository_has_the_table_on_its_page_and_the_headline_in_its_readme() -> None:
+    page = (ROOT / "docs" / "benchmarks.md").read_text(encoding="utf-8")
+    assert page.count(bt.START) == 1 and page.count(bt.END) == 1
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert readme.count(bt.HEAD_START) == 1 and readme.count(bt.HEAD_END) == 1
+    assert bt.START not in readme and bt.END not in readme
+    # one source: the README's figures are lines of the page's table, from the same run
+    table = page.split(bt.START, 1)[1].split(bt.END, 1)[0].strip().splitlines()
+    head = readme.split(bt.HEAD_START, 1)[1].split(bt.HEAD_END, 1)[0].strip().splitlines()
+    assert head[0] == table[0] and head[0].startswith("Measured")
+    rows = [line for line in head if line.startswith("| `")]
+    assert rows and all(line in table for line in rows), "run bash scripts/bench-table on the same JSON"
 
 
 def test_scaling_plot_draws_a_png_with_matplotlib(tmp_path: Path) -> None:

@@ -2,7 +2,7 @@
 
 Each is one satisfiability question per rule (or concern, purpose, pair of clauses) over
 the traces of :mod:`cosleec.analysis.encoding`, with N-Check's meanings
-(``docs/reference/sleec-language.md`` §9 and the README's "Analysing rules"):
+(``docs/reference/sleec-language.md`` §9 and docs/cli.md, "Analysing a rule set"):
 
 vacuous conflict
     rule R's trigger (with its condition) can never occur in a trace that meets every rule.
