@@ -18,7 +18,9 @@ obligation that trace meets, one occurrence that meets it, recursively: a tree o
 which is exactly what the unfolding builds. Two things besides obligations can be what a
 trace needs, so they are demands too: the occurrence that raises a prohibition which
 *refuses* an obligation with an ``otherwise`` (the fallback then starts at once, not at the
-deadline), and the event that ends an ``until`` relation. When the unfolding finishes
+deadline) -- the trigger of its rule, also when the prohibition is inside an ``otherwise``
+(what starts that fallback is the rule's own demand) -- and the event that ends an ``until``
+relation. When the unfolding finishes
 within ``bound`` (:attr:`Encoding.complete`), "unsatisfiable" is a proof about *all* traces;
 when it stops at the bound (a chain of demands that feeds itself), "unsatisfiable" holds for
 the traces the unfolding can hold -- the probe and at most ``bound`` occurrences per event,
@@ -37,11 +39,14 @@ that instant), at the first occurrence that breaks its prohibition, or when a pr
 in force covers the obligation's whole remaining window (a refusal), and reads the values of
 that moment. Numeric measures are reals, as at run time; scale measures are their literal's
 position. A measure always has a value (the runtime's policy for unknown values is not part
-of the rules' meaning). A rule's own clause items refuse, and so do prohibitions in its
-braced inner clauses (:func:`~cosleec.analysis.refusals.raised_items`); one known limit: a
-prohibition inside an ``otherwise`` does not, where the reference's does
-(:class:`cosleec.analysis.session.Session` names such rules per file). Declared priorities
-cancel the lower rule's firings (:mod:`~cosleec.analysis.priorities`).
+of the rules' meaning). Every prohibition a firing raises refuses, as the reference's does:
+a rule's own clause items and those of its braced inner clauses, raised at the trigger
+(:func:`~cosleec.analysis.refusals.raised_items`), and those inside an ``otherwise``, raised
+when that fallback starts (:func:`~cosleec.analysis.refusals.fallback_items`), each for its
+own window; a refused obligation's ``otherwise`` counts what comes after the refusing step
+(:class:`~cosleec.analysis.slots.Step`: the step that raised the later of the two, or the
+end of an instant whose deadline closed). Declared priorities cancel the lower rule's
+firings (:mod:`~cosleec.analysis.priorities`).
 
 :class:`Encoding` unfolds the slots (:mod:`~cosleec.analysis.slots`) and solves; the formulas
 over them are built by the parts it holds, one concern each: :mod:`~cosleec.analysis.terms`
@@ -62,7 +67,7 @@ import z3
 from cosleec.analysis.deadline import Deadline, OutOfTime, question_ms
 from cosleec.analysis.obligations import Obligations
 from cosleec.analysis.priorities import Priorities
-from cosleec.analysis.refusals import Refusals, clause_items, raised_items
+from cosleec.analysis.refusals import Refusals, clause_items, fallback_items, raised_items
 from cosleec.analysis.relations import Relations
 from cosleec.analysis.slots import Z3, After, Fallback, Slot
 from cosleec.analysis.state import State
@@ -102,10 +107,15 @@ class Encoding:
         for r in spec.rules:
             rules_by_event.setdefault(r.trigger.event, []).append(r)
         refusers: dict[str, set[str]] = {}  # event -> the triggers of rules that can forbid it
+        deferred: set[str] = set()  # the events some otherwise forbids
         for r in spec.rules:
             for _, it in raised_items(r.response):
                 if it.occurrence.negated:
                     refusers.setdefault(it.occurrence.event, set()).add(r.trigger.event)
+            for it in fallback_items(r.response):
+                if it.occurrence.negated:
+                    refusers.setdefault(it.occurrence.event, set()).add(r.trigger.event)
+                    deferred.add(it.occurrence.event)
         self.state = State(  # every z3 object the encoding keeps (state.py: why nothing else holds one)
             ctx=ctx,
             spec=spec,
@@ -123,6 +133,7 @@ class Encoding:
             complete=not any(isinstance(r, A.UntilRelation) for r in spec.relations),
             refusers=refusers,
             above=closure([*reading.priorities, *pairs(spec)]),
+            deferred=frozenset(deferred),
         )
         self.terms = Terms(self.state)
         self.windows = Windows(self.state, self.terms)
@@ -248,6 +259,7 @@ class Encoding:
         ``children``, only the probes: a question about the values one trigger reads."""
         if not children:
             self.state.unfolded = True
+            self.refusals.settle()  # no rule encoded: a refusal asked later has every case at once
             return
         queue: deque[tuple[Slot, str, str]] = deque()
         for s in list(self.state.slots):
@@ -276,6 +288,7 @@ class Encoding:
         for lit, rel in zip(self.state.relation_lit, self.state.spec.relations):
             self.state.solver.add(z3.Implies(lit, self.relations.holds(rel)))
         self.priorities.settle()
+        self.refusals.settle()
 
     def _demands(self, s: Slot) -> Iterator[tuple[str, str]]:
         """The events an occurrence ``s`` can need (with why): what its rules owe, what can

@@ -11,14 +11,15 @@ its prohibition, or at a refusal, and reads the values of that moment (a
 from __future__ import annotations
 
 import contextlib
+import functools
 from collections.abc import Callable, Iterator
 
 import z3
 
 from cosleec.analysis.priorities import Priorities
-from cosleec.analysis.refusals import Refusals
+from cosleec.analysis.refusals import Owed, Refusal, Refusals
 from cosleec.analysis.relations import Relations
-from cosleec.analysis.slots import Z3, After, Cut, Fallback, Slot, before
+from cosleec.analysis.slots import Z3, After, Cut, Fallback, Slot, Step, before
 from cosleec.analysis.state import State
 from cosleec.analysis.terms import Terms
 from cosleec.analysis.windows import Windows
@@ -49,8 +50,12 @@ class Obligations:
         """``rule`` is met at slot ``x``: if ``x`` is present and triggers it, its response holds
         (up to the moment a declared priority cancels that firing)."""
         fires = z3.And(x.present, self.terms.truth(rule.trigger.condition, x.snap))
-        with self.priorities.firing(rule, x, record=True):
-            return z3.Implies(fires, self.holds(rule.response, x, guard=fires))
+        self.state.imposed = True  # its prohibitions inside an otherwise refuse (refusals.py)
+        try:
+            with self.priorities.firing(rule, x, record=True):
+                return z3.Implies(fires, self.holds(rule.response, x, guard=fires))
+        finally:
+            self.state.imposed = False
 
     def holds(
         self,
@@ -80,6 +85,15 @@ class Obligations:
             return self._response(response, x.t, After(slot=x), x.snap, u)
         finally:
             self.state.situation = False
+
+    @contextlib.contextmanager
+    def _fallback_of(self, refusal: Refusal | None) -> Iterator[None]:
+        """Encode an ``otherwise`` (of an obligation ``refusal`` may refuse; None: of a prohibition)."""
+        self.state.within.append(refusal)
+        try:
+            yield
+        finally:
+            self.state.within.pop()
 
     @contextlib.contextmanager
     def _within(self, condition: Z3) -> Iterator[None]:
@@ -132,6 +146,8 @@ class Obligations:
         self.priorities.note(it, lo, hi, start, after)
         cut = None if self.state.situation else self.state.cut
         if occ.negated:
+            if self.state.imposed and self.state.within and not self.state.situation:
+                self.refusals.raise_in_fallback(it, lo, hi, after.step, snap)  # type: ignore[attr-defined]
             counts = after if cut is None else _BeforeCut(after, cut)
             ok = z3.Not(self.windows.occurs(occ.event, lo, hi, counts))
             if it.otherwise is None:
@@ -143,7 +159,7 @@ class Obligations:
             firsts = []
             for y, by in breaks:
                 first = z3.And(by, *(z3.Not(z3.And(bz, before(z, y))) for (z, bz) in breaks if z is not y))
-                with self._within(first):
+                with self._within(first), self._fallback_of(None):
                     fallback = self._response(it.otherwise, y.t, After(slot=y), y.snap, untimed)
                 firsts.append(z3.And(first, fallback))
             return z3.Or(ok, *firsts)
@@ -153,17 +169,17 @@ class Obligations:
         if it.otherwise is None and it.alternative is None and hi is not None and not self.state.situation:
             # refused at once by a prohibition that covers its whole window: a breach, even if
             # the event then occurs (breaking that prohibition, whose own otherwise may be met)
-            refused, when, _ = self.refusals.refusal(occ.event, lo, hi, start, after, snap)
-            if refused is not None:
-                ok = z3.And(z3.Not(refused), ok)
+            refusal = self.refusals.refusal(Owed(occ.event, lo, hi, start, after, snap))
+            if refusal is not None:
+                ok = z3.And(z3.Not(refusal.refused), ok)
             if cut is not None:
-                ok = z3.Or(ok, self._saved(cut, lo, hi, refused, when))
+                ok = z3.Or(ok, self._saved(cut, lo, hi, refusal))
         elif cut is not None and (it.otherwise is None or hi is None):
             ok = z3.Or(ok, cut.saves(lo, hi))
         if it.otherwise is not None and hi is not None:
-            ok, at, refused, when, fb = self._fallback_start(it, ok, lo, hi, start, after, snap)
-            later = _FallbackStart(at, hi < lo, after, refused, when)
-            with self._within(z3.Not(ok)):
+            ok, at, refusal, fb = self._fallback_start(it, ok, lo, hi, start, after, snap)
+            later = _FallbackStart(at, hi < lo, after, refusal)
+            with self._within(z3.Not(ok)), self._fallback_of(refusal):
                 fallback = self._response(it.otherwise, at, later, fb.snap, untimed)
             ok = z3.Or(ok, fallback)
         return ok
@@ -177,37 +193,34 @@ class Obligations:
         start: Z3,
         after: Callable[[Slot], Z3],
         snap: dict[str, Z3],
-    ) -> tuple[Z3, Z3, Z3 | None, Z3, Fallback]:
+    ) -> tuple[Z3, Z3, Refusal | None, Fallback]:
         """Where the ``otherwise`` of an obligation (met when ``ok``) starts: at its deadline,
         or at once when a prohibition refuses the obligation, which ``ok`` then also needs not
-        to be -> (ok, the start, refused, when refused, the snapshot the fallback reads)."""
+        to be -> (ok, the start, the refusal, the snapshot the fallback reads)."""
         terms = self.terms
         at = z3.If(hi < lo, start, hi)
         fresh = {m: terms.var(m, f"o{terms.fresh_number()}") for m in self.state.measures}
-        refused, when, reads = (
-            self.refusals.refusal(it.occurrence.event, lo, hi, start, after, snap)
+        refusal = (
+            self.refusals.refusal(Owed(it.occurrence.event, lo, hi, start, after, snap), moment=True)
             if it.alternative is None and not self.state.situation  # an `else` may still meet it
-            else (None, None, [])
+            else None
         )
-        if refused is not None:  # refused: its fallback starts then, not at the deadline
-            ok = z3.And(z3.Not(refused), ok)
-            at = z3.If(refused, when, at)
-            for cond, values in reads:
-                self.state.solver.add(
-                    z3.Implies(cond, z3.And(*(fresh[m] == values[m] for m in fresh), self.state.ctx))
-                )
+        if refusal is not None:  # refused: its fallback starts then, not at the deadline
+            ok = z3.And(z3.Not(refusal.refused), ok)
+            at = z3.If(refusal.refused, refusal.when, at)
+            self.refusals.read_into(refusal, fresh)
         if self.state.cut is not None and not self.state.situation:  # cancelled first: no fallback
-            ok = z3.Or(ok, self._saved(self.state.cut, lo, hi, refused, when))
-        return ok, at, refused, when, self._fallback(at, z3.And(self.state.guard, z3.Not(ok)), fresh)
+            ok = z3.Or(ok, self._saved(self.state.cut, lo, hi, refusal))
+        return ok, at, refusal, self._fallback(at, z3.And(self.state.guard, z3.Not(ok)), fresh)
 
-    def _saved(self, cut: Cut, lo: Z3, hi: Z3, refused: Z3 | None, when: Z3) -> Z3:
+    def _saved(self, cut: Cut, lo: Z3, hi: Z3, refusal: Refusal | None) -> Z3:
         """A declared priority cancels the firing while the obligation's window ``[lo, hi]`` is
-        open, and no later than a prohibition refuses it (a refusal at ``when`` is a breach
-        already; at the same step, the cancellation comes first)."""
-        if refused is None:
+        open, and no later than a prohibition refuses it (a refusal is a breach already; at the
+        same step, the cancellation comes first)."""
+        if refusal is None:
             return cut.saves(lo, hi)
-        _, step = self.refusals.steps.get(id(when), (when, None))
-        return z3.And(cut.saves(lo, hi), z3.Or(z3.Not(refused), cut.by(when, step)))
+        by = cut.by(refusal.when) if refusal.step is None else cut.by_step(refusal.step)
+        return z3.And(cut.saves(lo, hi), z3.Or(z3.Not(refusal.refused), by))
 
     def _fallback(self, at: Z3, started: Z3, snap: dict[str, Z3]) -> Fallback:
         """A new fallback snapshot, read at ``at`` when ``started``: in its measures' domains,
@@ -275,21 +288,33 @@ class _BeforeCut:
 class _FallbackStart:
     """Which occurrences count for an ``otherwise``: strictly after the deadline it follows;
     after the step that raised the obligation when its window closed at once (a negative
-    deadline); after the refusal when a prohibition refused the obligation."""
+    deadline); after the refusing step when a prohibition refused the obligation (the step
+    that raised the later of the two: the reference starts the fallback there)."""
 
     def __init__(
-        self, at: Z3, closed_at_once: Z3, creation: Callable[[Slot], Z3], refused: Z3 | None, when: Z3
+        self, at: Z3, closed_at_once: Z3, creation: Callable[[Slot], Z3], refusal: Refusal | None
     ) -> None:
         self.at, self.closed_at_once, self.creation = at, closed_at_once, creation
-        self.refused, self.when = refused, when
+        self.refusal = refusal
 
     def __call__(self, y: Slot) -> Z3:
         """``y`` comes after the fallback's start."""
         plain = z3.If(self.closed_at_once, self.creation(y), y.t > self.at)
-        if self.refused is None:
+        if self.refusal is None:
             return plain
-        by_refusal = z3.Or(y.t > self.when, z3.And(y.t == self.when, self.creation(y)))
-        return z3.If(self.refused, by_refusal, plain)
+        assert self.refusal.step is not None  # asked for (Obligations._fallback_start)
+        return z3.If(self.refusal.refused, self.refusal.step.follows(y), plain)
+
+    @functools.cached_property
+    def step(self) -> Step:
+        """The moment the fallback starts (:class:`~cosleec.analysis.slots.Step`)."""
+        ctx = self.at.ctx
+        deadline = Step(self.at, z3.IntVal(0, ctx), z3.BoolVal(True, ctx))
+        plain = Step.choose(self.closed_at_once, self.creation.step, deadline)  # type: ignore[attr-defined]
+        if self.refusal is None:
+            return plain
+        assert self.refusal.step is not None
+        return Step.choose(self.refusal.refused, self.refusal.step, plain)
 
 
 __all__ = ["Obligations"]

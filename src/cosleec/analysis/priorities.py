@@ -2,7 +2,7 @@
 :mod:`cosleec.analysis.encoding`).
 
 The meaning is the reference semantics' (:mod:`cosleec.semantics.reference`, language
-reference §13): with ``H > L`` (closed transitively), an *instance* -- one firing of a rule --
+reference, docs/reference/sleec-language.md §13): with ``H > L`` (closed transitively), an *instance* -- one firing of a rule --
 is active while one of its items (``otherwise`` included) is pending.
 
 cancel

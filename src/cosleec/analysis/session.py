@@ -20,9 +20,8 @@ import z3
 
 from cosleec.analysis.cores import Undecided, minimal_core
 from cosleec.analysis.deadline import Deadline
-from cosleec.analysis.encoding import Encoding, Slot, fallible_events
+from cosleec.analysis.encoding import Encoding, Slot
 from cosleec.analysis.findings import MORE, Finding
-from cosleec.analysis.refusals import raised_items
 from cosleec.lang import (
     HedgeSemantics,
     PrioritySemantics,
@@ -31,7 +30,6 @@ from cosleec.lang import (
     Untimed,
     closure,
     pairs,
-    visit,
 )
 from cosleec.lang import ast as A
 
@@ -91,23 +89,6 @@ class Session:
 
     def __post_init__(self) -> None:
         self.above = frozenset(closure([*self.settings.priorities, *pairs(self.spec)]))
-        fallible = {e for r in self.spec.rules for e in fallible_events(r.response)}
-        top = {(r.name, id(it)) for r in self.spec.rules for _, it in raised_items(r.response)}
-        nested = sorted(
-            {
-                r.name
-                for r in self.spec.rules
-                for resp in visit.responses(r.response)
-                for it in resp.items
-                if it.occurrence.negated and it.occurrence.event in fallible and (r.name, id(it)) not in top
-            }
-        )
-        if nested:  # said once per file: the encoding's known limit (README, "What is not modelled")
-            self.unknown.append(
-                f"{', '.join(nested)}: a prohibition inside an otherwise can refuse an "
-                "obligation here, which the analysis does not model; a finding that involves "
-                f"{'it' if len(nested) == 1 else 'them'} may miss that"
-            )
 
     def fresh_context(self) -> None:
         """Start a check in a z3 context of its own: what other checks solved before it (or

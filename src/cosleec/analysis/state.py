@@ -11,11 +11,12 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, field
+from typing import Any
 
 import z3
 
 from cosleec.analysis.deadline import Deadline
-from cosleec.analysis.slots import Z3, Ban, Cut, Fallback, Raised, Slot
+from cosleec.analysis.slots import Z3, Ban, Cut, Fallback, FallbackBan, Raised, Slot
 from cosleec.lang import HedgeSemantics, Reading, Specification
 from cosleec.lang import ast as A
 
@@ -72,6 +73,14 @@ class State:
     cut: Cut | None = None
     cuts: dict[tuple[str, int], Cut] = field(default_factory=dict)
     raised: dict[tuple[str, int], list[Raised]] = field(default_factory=dict)
+    # prohibitions inside an otherwise (Refusals): the events some otherwise forbids, those
+    # prohibitions, the refusals they may still complete, and while a rule is encoded
+    # (``imposed``) the refusals of the fallbacks being encoded (None: a prohibition's fallback)
+    deferred: frozenset[str] = frozenset()
+    fallback_bans: dict[str, list[FallbackBan]] = field(default_factory=dict)
+    owed: list[Any] = field(default_factory=list)
+    within: list[Any] = field(default_factory=list)
+    imposed: bool = False
 
 
 __all__ = ["State"]

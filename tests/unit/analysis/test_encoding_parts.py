@@ -64,6 +64,8 @@ def test_the_fields_keep_the_order_the_encoding_lets_go_of_them_in() -> None:
         "slots", "by_event", "fallbacks", "bans", "guard", "situation", "rules_by_event", "rule_lit",
         "relation_lit", "complete", "refusers", "extra", "ids", "fresh", "unfolded", "choices", "truths",
         "above", "rule", "firing", "cut", "cuts", "raised",  # declared priorities: last, so nothing before moves
+        # prohibitions inside an otherwise (refusals.py): after those, for the same reason
+        "deferred", "fallback_bans", "owed", "within", "imposed",
     ]  # fmt: skip
 
 
