@@ -278,8 +278,8 @@ def run_file(path: Path, settings: Settings) -> dict[str, Any]:
         "analysis_s": round(analysis_s, 3),
         "repair_s": round(repair_s, 3),
         "repair_cpu_s": round(repair_cpu_s, 3),
-        # the file's own analysis inside repair_file, and its patch set
-        "analysis_and_set_s": round(repair_s - sum(r.seconds for r in rep.repairs), 3),
+        # the findings' repairs summed: more than the wall time when they run side by side
+        "findings_s": round(sum(r.seconds for r in rep.repairs), 3),
         "findings": [x for x in rows if x["code"] in KINDS],
         "other_findings": [x for x in rows if x["code"] not in KINDS],
         "undecided": len(rep.unknown),

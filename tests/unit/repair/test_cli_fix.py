@@ -478,7 +478,10 @@ def test_insertions_at_one_place_become_one_replacement_as_the_patch_applies_the
 # -- a case study -------------------------------------------------------------------------
 
 
-@pytest.mark.slow  # about 40 s on two shared cores
+@pytest.mark.slow  # about 40 s on two shared cores: on demand (CI runs the small files above)
+@pytest.mark.skipif(
+    not os.environ.get("COSLEEC_SLOW"), reason="on demand: COSLEEC_SLOW=1 (a case study, ~40 s)"
+)
 def test_the_csi_patch_set_verifies_together_and_leaves_no_new_finding(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

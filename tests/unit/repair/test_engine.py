@@ -7,6 +7,7 @@ import pytest
 
 from cosleec.analysis import Settings
 from cosleec.repair import Budget, Reading, RepairReport, repair_text
+from cosleec.repair.repairing import repairs_of
 from cosleec.repair.run import SIDE_BY_SIDE_FROM
 from cosleec.repair.verify import key, untouched, verify
 
@@ -160,8 +161,10 @@ def test_a_file_that_does_not_check_is_reported_not_repaired() -> None:
 
 def test_windows_that_clash_move_apart_by_the_exact_step() -> None:
     text = rules("    R1 when E then X within 5 minutes\n    R2 when E then not X within 10 minutes\n")
-    report = repaired(text, Budget(tried=30, kept=30))
-    r = report.repairs[0]
+    reading = Reading("t.sleec", Settings())
+    checked = reading.check(text)
+    found, _, _ = reading.analyse(checked)
+    r = repairs_of(found[0], text, checked, found, reading, Budget(tried=8, kept=3))
     assert key(r.finding) == ("vacuous-conflict", "R1")
     moved = {p.apply(text): why for p, why in r.rejected if p.operator == "change-deadline"}
     shrunk = text.replace("not X within 10", "not X within 4")  # the largest window that works
