@@ -79,6 +79,8 @@ _.event_measure_relation  #
 _.until_relation  #
 _.for_relation  #
 _.priority_block  #
+_.semantics_block  # a Lark transformer callback (the semantics_start block)
+_.semantics_entry  #
 _.chain_first  #
 measure_rel  #
 event_measure_rel  #

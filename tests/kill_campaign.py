@@ -465,7 +465,7 @@ def live(
         elif kind == "event":
             m.event(arg)
         elif kind == "request":
-            log({"k": "answer", "step": j, "allowed": m.request(arg)})
+            log({"k": "answer", "step": j, "allowed": m.request(arg).permitted})
         elif kind == "advance":
             clock.set(times[j + 1])
             m.tick()

@@ -24,22 +24,30 @@ class CosleecError(Exception):
 class UserError(CosleecError):
     """A mistake the user can fix: bad input, a wrong option, a missing file.
 
-    The CLI prints ``str(error)``, then ``where`` and ``hint`` when they are set, and exits
-    with status 1 -- never a traceback. Raise it (or a subclass named after the situation)
-    whenever the cause is something the user wrote or chose, not a bug of ours.
+    The CLI prints :meth:`render` (``where``, the message, the hint) and exits with status 1
+    -- never a traceback. Raise it (or a subclass named after the situation) whenever the
+    cause is something the user wrote or chose, not a bug of ours.
 
-    ``hint`` says how to fix it ("did you mean `userUndressed`?"); ``where`` says where
-    the problem is ("rules.sleec:3:14", "mapping.yaml", a topic name).
+    ``message`` says what is wrong; ``hint`` says how to fix it ("did you mean
+    `userUndressed`?"); ``where`` says where the problem is ("rules.sleec:3:14",
+    "mapping.yaml", a topic name). ``str(error)`` is the message with the hint on a second
+    line (``unknown event 'FallDetect'\n  hint: did you mean FallDetected?``), so that a
+    traceback, a log line or ``print(e)`` shows the fix too; a caller that words the hint
+    itself reads ``message``.
     """
 
     def __init__(self, message: str, *, hint: str = "", where: str = "") -> None:
         super().__init__(message)
+        self.message = str(message)
         self.hint = hint
         self.where = where
 
+    def __str__(self) -> str:
+        return f"{self.message}\n  hint: {self.hint}" if self.hint else self.message
+
     def render(self) -> str:
         """The message as the CLI prints it: ``where: message`` and the hint on its own line."""
-        head = f"{self.where}: {self}" if self.where else str(self)
+        head = f"{self.where}: {self.message}" if self.where else self.message
         return f"{head}\n  hint: {self.hint}" if self.hint else head
 
 

@@ -114,7 +114,9 @@ class Campaign:
         # heartbeats later its count is complete. The next life may publish a decision again
         # (decided, perhaps never published): the task node counts it as a duplicate.
         seq = self.driver.status["task"]["seq"]
-        self.driver.wait(lambda: self.driver.status["task"]["seq"] >= seq + 2, 10, "the task node's heartbeat")
+        self.driver.wait(
+            lambda: self.driver.status["task"]["seq"] >= seq + 2, 10, "the task node's heartbeat"
+        )
         task = self.driver.status["task"]
         self.base = task.get("handled", 0) + task["counters"].get("duplicates", 0)
 

@@ -1,4 +1,4 @@
-"""``cosleec conforms``: exit 0 conforms (pending printed), 1 violated or refused, 2 input errors."""
+"""``cosleec conforms``: exit 0 conforms (pending printed), 1 violated or blocked, 2 input errors."""
 
 from __future__ import annotations
 
@@ -54,7 +54,7 @@ def test_conforms_up_to_the_last_time_prints_what_is_pending(
     rc, out, _ = conforms(capsys, rules, trace)
     assert rc == 0
     assert "pending   Rule3 (default): not CallSupport in [0, 600]" in out
-    assert out.splitlines()[-1] == "0 violations, 0 refused, 1 pending, 0 conflicts (trace up to 60 s)"
+    assert out.splitlines()[-1] == "0 violations, 1 pending, 0 conflicts (trace up to 60 s)"
 
 
 def test_a_violation_names_rule_clause_window_and_cause(
@@ -70,7 +70,7 @@ def test_a_violation_names_rule_clause_window_and_cause(
         in out
     )
     assert "conflict  at 120 s: Rule21 (default) owes CallSupport, Rule3 (default) forbids it" in out
-    assert out.splitlines()[-1] == "1 violation, 0 refused, 0 pending, 1 conflict (trace up to 120 s)"
+    assert out.splitlines()[-1] == "1 violation, 0 pending, 1 conflict (trace up to 120 s)"
 
 
 def test_tiago_priorities(rules: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -89,15 +89,15 @@ def test_tiago_priorities(rules: str, tmp_path: Path, capsys: pytest.CaptureFixt
         assert "cancelled Rule3 (default)" in out
 
 
-def test_without_priority_the_prohibition_wins_and_the_obligation_is_refused(
+def test_without_priority_the_prohibition_wins_and_the_obligation_is_blocked(
     rules: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     trace = write(tmp_path, [*FALL_THEN_SMOKE, {"t": 200}])
     rc, out, _ = conforms(capsys, rules, trace)
     assert rc == 1
-    assert "refused   Rule21 (default) at 120 s: CallSupport in [120, 420] -- " in out
+    assert "blocked   Rule21 (default) at 120 s: CallSupport in [120, 420] -- " in out
     assert "no priority settles the conflict" in out
-    assert out.splitlines()[-1] == "0 violations, 1 refused, 1 pending, 1 conflict (trace up to 200 s)"
+    assert out.splitlines()[-1] == "1 violation (1 blocked), 1 pending, 1 conflict (trace up to 200 s)"
 
 
 def test_json_is_one_document_with_the_options(
@@ -305,7 +305,7 @@ def test_the_options_the_run_used_are_used(
     violation at 380) or, with a 60 s lead, at 360 s (no violation). The log says which."""
     plain = audit_log(tmp_path, name="plain.jsonl")
     rc, out, _ = conforms(capsys, rules, plain)
-    assert rc == 1 and "refused   Rule21" in out  # no options record: the defaults
+    assert rc == 1 and "blocked   Rule21" in out  # no options record: the defaults
     assert "note      the audit log records no options" in out
     log = audit_log(tmp_path, options_record(1, 0, priority_lead=60, semantics="last-wins", untimed="none"))
     rc, out, _ = conforms(capsys, rules, log)
@@ -525,7 +525,7 @@ def test_an_old_audit_log_is_checked_against_new_rules(
     assert "violated  Rule3 (default) at 130 s" in out
     assert "note      not in these rules, ignored: SmokeDetected, temperature" in out
     assert (
-        "note      not of the type these rules declare, read as unknown: level (boolean): 'medium' (line 1)"
+        "note      not of the type these rules declare, read as unknown: level (boolean): 'medium' (line 2)"
         in out
     )
     rc, out, _ = conforms(capsys, str(rules), str(log), "--json")

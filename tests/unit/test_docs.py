@@ -46,7 +46,13 @@ def pages() -> list[Path]:
 
 @pytest.mark.parametrize(
     "block",
-    [b for p in pages() for b in PYTHON.findall(p.read_text(encoding="utf-8")) if "rclpy" not in b],
+    [
+        b
+        for p in pages()
+        if p.name != "tutorial.md"  # run by tests/unit/test_tutorial.py, with its files
+        for b in PYTHON.findall(p.read_text(encoding="utf-8"))
+        if "rclpy" not in b
+    ],
     ids=lambda b: b.strip().splitlines()[0][:40],
 )
 def test_every_python_block_of_the_docs_runs(block: str, monkeypatch: pytest.MonkeyPatch) -> None:

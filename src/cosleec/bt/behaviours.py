@@ -2,7 +2,9 @@
 
 - :class:`Permitted` -- a condition: SUCCESS when the event is permitted now, FAILURE when
   a prohibition (or a Manager that cannot answer) forbids it; the Manager's reason is its
-  ``feedback_message``, so a tree's display says why a branch was not taken.
+  ``feedback_message``, so a tree's display says why a branch was not taken. A question
+  (:meth:`Manager.permission <cosleec.runtime.Manager.permission>`), asked every tick:
+  embedded, it records nothing; put the action itself under :class:`Guarded`.
 - :class:`Guarded` -- a decorator: asks before its child starts (FAILURE with the reason
   when refused: the child never runs) and reports the event when the child succeeds.
   That is the "real attempt" path of :meth:`Manager.request <cosleec.runtime.Manager.request>`
@@ -42,7 +44,7 @@ class Permitted(py_trees.behaviour.Behaviour):
 
     def update(self) -> Status:
         """Ask the Manager; the answer's reason becomes :attr:`feedback_message`."""
-        answer = self.link.permission(self.event, source=self.name)
+        answer = self.link.permission(self.event)
         self.feedback_message = answer.reason
         return Status.SUCCESS if answer.permitted else Status.FAILURE
 
@@ -72,7 +74,7 @@ class Guarded(py_trees.decorators.Decorator):
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         """Ask before a new run of the child (refused: FAILURE, child untouched); else tick it."""
         if self.status != Status.RUNNING:
-            answer = self.link.permission(self.event, source=self.name)
+            answer = self.link.request(self.event, source=self.name)
             self.feedback_message = answer.reason
             if not answer.permitted:
                 if self.decorated.status != Status.INVALID:

@@ -19,15 +19,20 @@ from cosleec.runtime import Decision, Manager, Permission
 
 @runtime_checkable
 class Link(Protocol):
-    """The Manager as a tree sees it: the four questions the behaviours ask.
+    """The Manager as a tree sees it: what the behaviours ask and report.
 
     Implementations fail closed: a Manager that cannot be reached permits nothing
     (:class:`~cosleec.runtime.Permission` with ``permitted=False`` and the reason) and
     decides nothing (:class:`LinkError`, which the rule task turns into FAILURE).
     """
 
-    def permission(self, event: str, *, source: str = "") -> Permission:
-        """May ``event`` happen now, and if not, why not (a refusal is recorded by the Manager)."""
+    def request(self, event: str, *, source: str = "") -> Permission:
+        """The robot is about to do ``event``: may it, and if not, why not (a refusal is
+        counted and recorded by the Manager, with ``source``)."""
+        ...
+
+    def permission(self, event: str) -> Permission:
+        """Would ``event`` be permitted now: a question (a condition in the tree), not an attempt."""
         ...
 
     def event(self, name: str) -> object:
@@ -75,9 +80,13 @@ class EmbeddedLink:
     def __init__(self, manager: Manager) -> None:
         self.manager = manager
 
-    def permission(self, event: str, *, source: str = "") -> Permission:
-        """:meth:`Manager.permission <cosleec.runtime.Manager.permission>`: the refusal is recorded."""
-        return self.manager.permission(event, source=source)
+    def request(self, event: str, *, source: str = "") -> Permission:
+        """:meth:`Manager.request <cosleec.runtime.Manager.request>`: a refusal is recorded."""
+        return self.manager.request(event, source=source)
+
+    def permission(self, event: str) -> Permission:
+        """:meth:`Manager.permission <cosleec.runtime.Manager.permission>`: nothing is recorded."""
+        return self.manager.permission(event)
 
     def event(self, name: str) -> object:
         """:meth:`Manager.event <cosleec.runtime.Manager.event>`: an occurrence, in the audit trail."""

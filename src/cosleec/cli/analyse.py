@@ -1,9 +1,11 @@
 """``cosleec analyse``: conflicting, redundant and dead rules, found before the robot runs them.
 
-Exit codes: 0 nothing found, 1 something found, 2 a usage or input error (a file with errors
-among them), 3 nothing found but the analysis is partial: ``--deadline`` passed before every
-check had decided every rule (what was not decided is listed; 1 wins over 3, a finding is
-proved whether or not the run finished). ``--timeout`` bounds each solver question,
+Exit codes: 0 nothing found (or only findings below ``--fail-on``), 1 a finding at or above
+``--fail-on`` (``error``, ``warning`` -- the default -- or ``note``: a note alone does not
+fail CI unless asked), 2 a usage or input error (a file with errors among them), 3 nothing
+that fails found but the analysis is partial: ``--deadline`` passed before every check had
+decided every rule (what was not decided is listed; 1 wins over 3, a finding is proved
+whether or not the run finished). ``--timeout`` bounds each solver question,
 ``--deadline`` the whole run. Text output is compiler style (file:line:col, the line with a caret, notes at the
 rules involved, a hint), then whether the finding is proved or holds up to a bound, and the
 witness as a timeline; ``--json`` prints one document; ``--sarif FILE`` writes SARIF 2.1.0;
@@ -27,6 +29,7 @@ import math
 import os
 import re
 import sys
+from dataclasses import replace
 from pathlib import Path
 from types import ModuleType
 
@@ -52,6 +55,7 @@ from cosleec.lang import (
     PrioritySemantics,
     SleecError,
     Untimed,
+    clause_semantics_for,
     cycle,
     load,
     parse_priority,
@@ -64,6 +68,8 @@ USAGE_ERROR = 2
 PARTIAL = 3
 """Nothing found, but the deadline passed before the analysis was complete."""
 STYLE = {"error": "bold red", "warning": "yellow", "note": "cyan"}
+FAIL_ON = ("error", "warning", "note")
+"""The levels ``--fail-on`` takes, most serious first: a finding at or above the one given fails the run."""
 LEGOS_DEFECTS = frozenset({"scale-literal", "duplicate-rule", "duplicate-name"})
 """Errors of files LEGOS accepts: ``--legos-compat`` reads them as LEGOS does."""
 
@@ -74,10 +80,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "analyse",
         aliases=["analyze"],
         help="find conflicting, redundant and dead rules (z3), with minimal causes and witnesses",
-        description="Analyse rule sets with z3 on the reference semantics. Exit 0: nothing found; 1: "
-        "something found; 2: a usage or input error; 3: nothing found, but --deadline passed before "
-        "the analysis was complete (what was not decided is listed). Checks: "
-        + "; ".join(f"{k}: {v}" for k, v in CHECKS.items()),
+        description="Analyse rule sets with z3 on the reference semantics. Exit 0: nothing found (or only "
+        "findings below --fail-on); 1: a finding at or above --fail-on; 2: a usage or input error; 3: "
+        "nothing that fails found, but --deadline passed before the analysis was complete (what was "
+        "not decided is listed). Checks: " + "; ".join(f"{k}: {v}" for k, v in CHECKS.items()),
     )
     p.add_argument(
         "files", nargs="+", metavar="FILE", help="rule files (a directory means its *.sleec files)"
@@ -90,6 +96,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     p.add_argument("--json", action="store_true", help="print one JSON document instead of text")
     p.add_argument("--sarif", metavar="FILE", help="also write the findings as SARIF 2.1.0 to FILE")
     p.add_argument("--witnesses", metavar="DIR", help="write each witness as a JSON Lines trace in DIR")
+    p.add_argument(
+        "--fail-on",
+        choices=FAIL_ON,
+        default="warning",
+        help="exit 1 when a finding of this severity or a more serious one is found (default: warning; "
+        "a note alone exits 0)",
+    )
     _add_limits(p)
     p.add_argument(
         "--untimed",
@@ -98,7 +111,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         help="an untimed obligation: none = must happen some time (default), or within S seconds "
         "(0: at the same instant, as LEGOS/N-Check)",
     )
-    add_clause_options(p, unknown=False)
+    add_clause_options(
+        p,
+        unknown=False,
+        semantics_help="how the unless clauses of a rule combine (default: the file's semantics block, else "
+        "last-wins, as SLEEC); one that contradicts the file's semantics block is an error",
+    )
+    p.set_defaults(semantics=None)  # not given: each file's own declaration (_file_settings)
     add_priority_options(p)
     _add_inputs(p)
     _add_fix(p)
@@ -274,7 +293,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"cosleec: {unknown}", file=sys.stderr)
         return USAGE_ERROR
     settings = Settings(
-        semantics=HedgeSemantics(args.semantics),
+        semantics=HedgeSemantics(args.semantics or HedgeSemantics.LAST_WINS),  # per file: _file_settings
         untimed=untimed,
         bound=args.bound,
         timeout=args.timeout,
@@ -312,9 +331,15 @@ def _report(args: argparse.Namespace, reports: list[FileReport], repaired: list[
         return USAGE_ERROR
     if any(r.failed for r in reports):
         return USAGE_ERROR  # a rule file that cannot be analysed is an input error
-    if any(r.findings for r in reports):
+    if _fails(reports, args.fail_on):
         return 1
     return PARTIAL if any(not r.complete for r in reports) else 0
+
+
+def _fails(reports: list[FileReport], level: str) -> bool:
+    """Is a finding of severity ``level`` (``--fail-on``) or a more serious one among ``reports``?"""
+    worst = FAIL_ON.index(level)
+    return any(FAIL_ON.index(str(f.severity)) <= worst for r in reports for f in r.findings)
 
 
 def _analyse(
@@ -332,9 +357,10 @@ def _analyse(
     else:
         for f in files:
             coverage = _coverage(args, f)
+            own = _file_settings(args, f, settings)
             reports.append(
                 analyse_file(
-                    f, settings, checks, legos_compat=args.legos_compat, infer_defs=args.infer_defs,
+                    f, own, checks, legos_compat=args.legos_compat, infer_defs=args.infer_defs,
                     coverage=coverage, deadline=deadline,
                 )
             )  # fmt: skip
@@ -367,11 +393,26 @@ def _repair(
     )
     return [
         repair_file(
-            f, settings, legos_compat=args.legos_compat, infer_defs=args.infer_defs,
+            f, own, legos_compat=args.legos_compat, infer_defs=args.infer_defs,
             coverage=_coverage(args, f), budget=budget,
         )
         for f in files
+        for own in (_file_settings(args, f, settings),)
     ]  # fmt: skip
+
+
+def _file_settings(args: argparse.Namespace, path: Path, settings: Settings) -> Settings:
+    """``settings`` with the clause semantics to analyse ``path`` under: ``--semantics`` when
+    given, else the file's semantics block, else last-wins (:func:`clause_semantics_for`).
+
+    UserError when ``--semantics`` contradicts the file's block, naming both: the rules were
+    written for one reading and would be analysed under the other. A file that does not
+    parse keeps ``settings``: the analysis reports its errors.
+    """
+    spec = check_file(path, legos_compat=args.legos_compat, infer_defs=args.infer_defs).spec
+    if spec is None:
+        return settings
+    return replace(settings, semantics=clause_semantics_for(spec, args.semantics, option="--semantics"))
 
 
 def _unknown_rules(given: list[tuple[str, str]], files: list[Path], legos_compat: bool) -> str:

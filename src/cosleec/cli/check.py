@@ -8,7 +8,17 @@ import json
 from rich.text import Text
 
 from cosleec.cli.common import add_clause_options, console, expand
-from cosleec.lang import HedgeSemantics, Options, analyse_file
+from cosleec.errors import ConfigurationError
+from cosleec.lang import (
+    CheckResult,
+    Diagnostic,
+    HedgeSemantics,
+    Options,
+    Severity,
+    analyse_file,
+    ast,
+    clause_semantics_for,
+)
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -41,27 +51,32 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     add_clause_options(
         p,
         unknown=False,
-        semantics_help="clause semantics the unreachable-clause warnings assume (as the runtime's)",
+        semantics_help="clause semantics the unreachable-clause warnings assume (as the runtime's); "
+        "default: the file's semantics block, else last-wins; one that contradicts the file is an error",
     )
-    p.set_defaults(run=run)
+    p.set_defaults(run=run, semantics=None)  # None: the file's own (its semantics block)
 
 
 def run(args: argparse.Namespace) -> int:
     """Check every file and print its diagnostics, as text or one JSON document.
 
-    Returns 0 when no file has an error (warnings do not count), 1 otherwise.
+    Returns 0 when no file has an error (warnings do not count), 1 otherwise. A file's
+    semantics block decides the clause semantics unless ``--semantics`` is given; one given
+    that contradicts the file is an error of that file.
     """
     files = expand(args.files)
     opts = Options(
         strict_precedence=args.strict_precedence,
         lint=args.lint,
-        semantics=HedgeSemantics(args.semantics),
+        semantics=HedgeSemantics(args.semantics or HedgeSemantics.LAST_WINS),
         legos_compat=args.legos_compat,
     )
     results = [
         analyse_file(f, dialect=args.dialect, strict=args.strict, infer_defs=args.infer_defs, options=opts)
         for f in files
     ]
+    for r in results:
+        _agree(r, args.semantics)
     if args.json:
         print(json.dumps({"files": [r.to_json() for r in results]}, indent=2))
     else:
@@ -90,3 +105,25 @@ def run(args: argparse.Namespace) -> int:
                     Text.assemble(f"{r.path}: ", (f"{n_err} error{'s' if n_err != 1 else ''}", "bold red"))
                 )
     return 0 if all(r.ok for r in results) else 1
+
+
+def _agree(result: CheckResult, given: str | None) -> None:
+    """An error on ``result`` when ``--semantics`` contradicts the file's semantics block."""
+    if given is None or result.spec is None:
+        return
+    try:
+        clause_semantics_for(result.spec, given, option="--semantics")
+    except ConfigurationError as e:
+        declared = next(
+            (d for d in result.spec.semantics if d.value == str(result.spec.clause_semantics)), None
+        )
+        result.diagnostics.append(
+            Diagnostic(
+                severity=Severity.ERROR,
+                code="semantics-conflict",
+                message=e.message,
+                span=declared.span if declared is not None else ast.NO_SPAN,
+                path=result.path,
+                hint=e.hint,
+            )
+        )

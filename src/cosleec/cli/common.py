@@ -108,8 +108,10 @@ def add_clause_options(
     p.add_argument(
         "--semantics",
         choices=[str(s) for s in HedgeSemantics],
-        default=str(HedgeSemantics.LAST_WINS),
-        help=semantics_help or "how the unless clauses of a rule combine (default: last-wins, as SLEEC)",
+        default=None,  # not given: the rule file's semantics block, else last-wins
+        help=semantics_help
+        or "how the unless clauses of a rule combine (default: the rule file's semantics block, else "
+        "last-wins, as SLEEC); one that contradicts the file's block is an error",
     )
     if unknown:
         p.add_argument(

@@ -3,7 +3,8 @@
 The run is judged ex post by the reference semantics (:mod:`cosleec.semantics`), not by the
 runtime, so a Manager's audit log can be checked against the rules it ran or against a new
 version of them (issue 12). Exit codes: 0 the trace conforms up to its last time (what is
-still pending is printed), 1 something is violated or refused, 2 a usage or input error --
+still pending is printed), 1 there is a violation (an obligation or prohibition violated, or
+an obligation blocked by another rule's prohibition), 2 a usage or input error --
 a bad trace line, a rule file with errors, a name the rules do not know.
 
 The trace is read once, whole (a pipe -- ``/dev/stdin``, ``<(...)``, ``-`` -- is judged
@@ -45,6 +46,7 @@ from cosleec.lang import (
 )
 from cosleec.nodes import is_bag
 from cosleec.semantics import (
+    BLOCKED,
     Conflict,
     Judgement,
     Recording,
@@ -59,7 +61,7 @@ from cosleec.semantics import (
 USAGE_ERROR = 2
 STYLE = {
     "violated": "bold red",
-    "refused": "bold red",
+    "blocked": "bold red",
     "cancelled": "yellow",
     "conflict": "magenta",
     "warning": "yellow",
@@ -75,7 +77,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
         "conforms",
         help="check a recorded run (a JSON Lines trace or a Manager's audit log) against the rules",
         description="Judge a recorded run by the reference semantics. Exit 0: conforms up to the trace's "
-        "last time; 1: something is violated or refused; 2: a usage or input error. When TRACE is a "
+        "last time; 1: something is violated or blocked; 2: a usage or input error. When TRACE is a "
         "Manager's audit log, an option not given here is the one the run used.",
     )
     p.add_argument("rules", metavar="RULES", help="the rule file")
@@ -296,10 +298,14 @@ def _line(word: str, rest: str) -> Text:
 
 
 def _summary(j: Judgement, cancelled: int) -> str:
-    """``1 violation, 0 refused, 2 pending, 1 conflict (trace up to 420 s)``."""
-    violated = sum(1 for v in j.verdicts if v.status == "violated")
-    refused = sum(1 for v in j.verdicts if v.status == "refused")
-    parts = [_count(violated, "violation"), f"{refused} refused", f"{len(j.pending)} pending"]
+    """``2 violations (1 blocked), 2 pending, 1 conflict (trace up to 420 s)``: the violations
+    counted as ``Manager.stats["violations"]`` counts them (violated and blocked)."""
+    violations = len(j.breaches)
+    blocked = sum(1 for v in j.verdicts if v.status == BLOCKED)
+    parts = [
+        _count(violations, "violation") + (f" ({blocked} blocked)" if blocked else ""),
+        f"{len(j.pending)} pending",
+    ]
     parts.append(_count(len(j.conflicts), "conflict"))
     if cancelled:
         parts.append(f"{cancelled} cancelled")
@@ -327,7 +333,7 @@ def _ends(hi: float | None) -> TypeGuard[float]:
 
 def _why(v: Verdict) -> str:
     """One line on what breached ``v``."""
-    if v.status == "refused":
+    if v.status == BLOCKED:
         forbids = (
             clip(v.note, 200)
             if v.note

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import sys
 from collections.abc import Iterable
 
@@ -33,6 +34,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-ar
     add_clause_options(p, unknown=False)
     p.add_argument("--json", action="store_true", help="print one JSON document instead of text")
     p.add_argument(
+        "--explanations",
+        metavar="FILE",
+        help="what the robot says to people, rule by rule (YAML); each decision's sentence is printed",
+    )
+    p.add_argument(
         "--infer-defs", action="store_true", help="infer declarations for files without a def block"
     )
     p.set_defaults(run=run)
@@ -47,7 +53,15 @@ def run(args: argparse.Namespace) -> int:
     reports with exit 1.
     """
     rules = RuleSet.from_file(args.rules, infer_defs=args.infer_defs)  # SleecError: the CLI shows it, exit 1
-    m = Manager(rules, semantics=args.semantics, clock=VirtualClock(), dispatch=False)
+    m = Manager(
+        rules, semantics=args.semantics, clock=VirtualClock(), dispatch=False, explanations=args.explanations
+    )  # ExplanationsError at file:line:col for a sentence the rules do not fit: exit 1
+    quiet = logging.getLogger("cosleec.runtime")
+    level, quiet.level = quiet.level, logging.ERROR  # whether the rules can conflict is `analyse`'s to say
+    try:
+        m.start(check=False)  # nothing is dispatched: nothing to implement
+    finally:
+        quiet.setLevel(level)
     conflicts: list[dict[str, object]] = []
     cancelled: list[dict[str, object]] = []
     m.subscribe(lambda ev: conflicts.append(ev.data) if ev.kind == "conflict" else None)
@@ -73,7 +87,10 @@ def run(args: argparse.Namespace) -> int:
         try:
             values[name] = spec.external(spec.parse(text))
         except ContextError as e:
-            print(f"cosleec decide: --set {name}: {e}\n  hint: {_kind_hint(spec, text)}", file=sys.stderr)
+            print(
+                f"cosleec decide: --set {name}: {e.message}\n  hint: {_kind_hint(spec, text)}",
+                file=sys.stderr,
+            )
             return 2
     if args.event not in m.ruleset.events:
         hint = _hint(args.event, m.ruleset.events, "event")
@@ -106,6 +123,7 @@ def run(args: argparse.Namespace) -> int:
                     "layer": d.layer,
                     "obligations": [o.to_json() for o in d.obligations],
                     "explanation": d.explanation,  # whole: the text view shortens long conditions
+                    "for_people": d.for_people,
                 }
                 for d in decisions
             ],
@@ -118,6 +136,8 @@ def run(args: argparse.Namespace) -> int:
             print(f"{args.event}: no rule applies")
         for d in decisions:
             print(d.explain(width=CONDITION_WIDTH))
+            if args.explanations:
+                print(f"  says: {d.for_people}")
         for c in conflicts:
             print(f"conflict: {c['explanation']}")
         for c in cancelled:

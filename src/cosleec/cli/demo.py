@@ -12,6 +12,7 @@ from cosleec import demo
 from cosleec.cli import timeline
 from cosleec.cli.common import add_clause_options, output_file, port
 from cosleec.errors import UserError
+from cosleec.lang import HedgeSemantics
 from cosleec.runtime import Manager
 from cosleec.views import Timeline, View, load_view
 
@@ -124,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
     )
     return demo.main(
         as_json=args.json,
-        semantics=args.semantics,
+        semantics=args.semantics or str(HedgeSemantics.LAST_WINS),  # the demo's rules declare none
         audit=args.audit,
         journal=args.journal,
         reset_journal=args.reset_journal,

@@ -157,6 +157,11 @@ def _add_manager(nodes: argparse._SubParsersAction[argparse.ArgumentParser]) -> 
     m.add_argument("--sim-time", action="store_true", help="take time from /clock (use_sim_time)")
     m.add_argument("--audit", metavar="FILE", help="append-only JSON Lines audit trail")
     m.add_argument(
+        "--explanations",
+        metavar="FILE",
+        help="what the robot says to people, rule by rule (YAML): each decision's for_people",
+    )
+    m.add_argument(
         "--journal",
         metavar="FILE",
         help="keep the Manager's state in this SQLite journal: a restarted Manager restores it",
@@ -494,6 +499,7 @@ def _manager(t: Any, o: argparse.Namespace, args: argparse.Namespace, lifecycle:
             priorities=o.priority,
             priority_semantics=o.priority_semantics,
             priority_lead=o.priority_lead,
+            explanations=args.explanations,
             rules_path=o.rules,
             active=active,
             on_manager=attach_web,
@@ -557,7 +563,7 @@ def _check_types(backend: str, typed: list[tuple[str, str, str]]) -> None:
             message_class(type_name)
         except MessageTypeError as e:
             raise MessageTypeError(
-                f"{what}: {e}",
+                f"{what}: {e.message}",
                 where=where,
                 hint=e.hint
                 or "give the type as package/msg/Type (std_msgs/msg/Bool); "

@@ -11,6 +11,9 @@ Typical use::
 Rule priorities (cosleec's extension, a file's ``priority_start`` block) are
 ``spec.priorities``; priorities from elsewhere go through ``parse_priority("Rule21 > Rule3")``,
 and ``closure`` and ``cycle`` answer questions about any set of pairs (priorities.py).
+The clause semantics a file declares (its ``semantics_start`` block) is
+``spec.clause_semantics``; ``clause_semantics_for(spec, given)`` is the one rule for which
+semantics to read it with (declared.py).
 How rules are read -- clause semantics, unknowns, untimed responses, priorities -- is one
 value, :class:`Reading` (reading.py): the runtime, the reference semantics, ``conforms`` and
 ``analyse`` take it, and it is the audit log's ``options`` record.
@@ -23,6 +26,7 @@ from __future__ import annotations
 from cosleec.lang import ast, priorities, visit
 from cosleec.lang.ast import Dialect, Specification
 from cosleec.lang.checker import Options, SymbolTable, check
+from cosleec.lang.declared import clause_semantics_for
 from cosleec.lang.deep import deeply
 from cosleec.lang.diagnostics import Diagnostic, DiagnosticSink, Severity, SleecError
 from cosleec.lang.dialect import legos_features, legos_misreads
@@ -80,6 +84,7 @@ __all__ = [
     "candidates",
     "check",
     "choose",
+    "clause_semantics_for",
     "closure",
     "cycle",
     "decisive",

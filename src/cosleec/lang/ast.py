@@ -14,6 +14,9 @@ from enum import StrEnum
 from typing import Literal, NamedTuple, TypeAlias
 
 from cosleec.bulk import quick_init
+from cosleec.lang.hedges import HedgeSemantics
+
+_HEDGE_VALUES = frozenset(str(h) for h in HedgeSemantics)
 
 
 class Span(NamedTuple):
@@ -394,7 +397,23 @@ class Priority:
     lower_span: Span = _span()
 
 
-BlockKind: TypeAlias = Literal["def", "rule", "concern", "purpose", "relation", "priority"]
+@dataclass(frozen=True, slots=True)
+class SemanticsDecl:
+    """One entry of the semantics block, as written: ``unless nested`` is aspect ``unless``,
+    value ``nested``.
+
+    A cosleec extension (docs/reference/sleec-language.md §7.4): the file says which clause
+    semantics it is written for. The checker reports a value that is no
+    :class:`~cosleec.lang.HedgeSemantics`; :attr:`Specification.clause_semantics` reads a valid one.
+    """
+
+    aspect: str
+    value: str
+    span: Span = _span()
+    value_span: Span = _span()
+
+
+BlockKind: TypeAlias = Literal["def", "rule", "concern", "purpose", "relation", "priority", "semantics"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -417,6 +436,7 @@ class Specification:
     purposes: tuple[Situation, ...] = ()
     relations: tuple[Relation, ...] = ()
     priorities: tuple[Priority, ...] = ()  # cosleec's extension: pairs in file order, chains expanded
+    semantics: tuple[SemanticsDecl, ...] = ()  # cosleec's extension: the semantics block's entries
     dialect: Dialect = field(default=Dialect.TK, compare=False)
     path: str = field(default="<string>", compare=False)
     blocks: tuple[BlockMark, ...] = field(default=(), compare=False, repr=False)
@@ -440,6 +460,16 @@ class Specification:
     def constants(self) -> tuple[ConstantDecl, ...]:
         """The constant declarations, in file order."""
         return tuple(d for d in self.definitions if isinstance(d, ConstantDecl))
+
+    @property
+    def clause_semantics(self) -> HedgeSemantics | None:
+        """The clause semantics the file declares (its semantics block, ``unless nested``), or
+        None when it declares none. Whoever reads the rules -- ``check``, ``analyse``, the
+        runtime -- uses it when not told otherwise; see ``cosleec.lang.clause_semantics_for``."""
+        for d in self.semantics:
+            if d.aspect == "unless" and d.value in _HEDGE_VALUES:
+                return HedgeSemantics(d.value)
+        return None
 
     def rule(self, name: str) -> Rule:
         """The (first) rule called ``name``; raises KeyError if there is none."""

@@ -8,7 +8,8 @@ literal's measure), exposed as a :class:`SymbolTable`.
 :class:`~cosleec.lang.scope.Scope`: the def block (declarations.py), the rules (here: their
 names; their triggers and responses, responses.py, whose expressions are typed by
 expressions.py and whose ``unless`` clauses are asked about by unreachable.py), LEGOS-SLEEC's
-concern, purpose and relation blocks (legos.py), and the priorities (priorities.py). Under
+concern, purpose and relation blocks (legos.py), the priorities (priorities.py) and the
+declared clause semantics (declared.py). Under
 ``legos_compat`` what LEGOS-SLEEC lets through is read as it reads it (compat.py).
 """
 
@@ -17,6 +18,7 @@ from __future__ import annotations
 from cosleec.lang import ast as A
 from cosleec.lang.compat import LegosReader, LegosReading, apply
 from cosleec.lang.declarations import Declarations, check_name
+from cosleec.lang.declared import check_semantics
 from cosleec.lang.diagnostics import DiagnosticSink, clip
 from cosleec.lang.expressions import Expressions
 from cosleec.lang.legos import check_relations, check_situations
@@ -65,6 +67,7 @@ class Checker:
             strict=scope.opt.strict_extensions,
             repeat_limit=scope.opt.repeat_limit,
         )
+        check_semantics(spec, sink, strict=scope.opt.strict_extensions)
         return scope.table
 
     def _rules(self) -> None:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 from cosleec.lang import ast as A
 from cosleec.lang.diagnostics import DiagnosticSink
+from cosleec.lang.mistakes import untimed_otherwise
 
 Feature = tuple[str, A.Span]
 """A construct (as a message names it) and where it is."""
@@ -33,7 +34,9 @@ class DialectFacts:
     (textX, ``sleec-gramar.tx``), as complete messages; ``legos_misreads`` the names that
     LEGOS-SLEEC's parser would cut in two (:data:`LEGOS_PREFIXES`), as complete messages;
     ``extensions`` cosleec's own constructs, which neither tool accepts and which therefore
-    say nothing about the dialect (the priority block).
+    say nothing about the dialect (the priority and semantics blocks); ``untimed_otherwise``
+    each ``otherwise`` after a response without ``within`` (LEGOS-only, and in a SLEEC-TK file
+    a forgotten deadline), as a message naming it and the fix.
     """
 
     legos: tuple[Feature, ...]
@@ -42,6 +45,7 @@ class DialectFacts:
     extensions: tuple[Feature, ...] = ()
     legos_rejects: tuple[Feature, ...] = ()
     legos_misreads: tuple[Feature, ...] = ()
+    untimed_otherwise: tuple[tuple[str, str, A.Span], ...] = ()  # (message, fix, where): see check_mixed
 
 
 def collect(spec: A.Specification, text: str) -> DialectFacts:
@@ -112,10 +116,20 @@ def collect(spec: A.Specification, text: str) -> DialectFacts:
         *w.deadline[1],
         *w.tk_other,
     )
-    extensions = tuple(
-        ("a priority block (`priority_start`)", b.span) for b in spec.blocks if b.kind == "priority"
+    named = {
+        "priority": "a priority block (`priority_start`)",
+        "semantics": "a semantics block (`semantics_start`)",
+    }
+    extensions = tuple((named[b.kind], b.span) for b in spec.blocks if b.kind in named)
+    return DialectFacts(
+        legos,
+        tk,
+        tuple(w.tk_rejects),
+        extensions,
+        tuple(w.legos_rejects),
+        tuple(w.misreads),
+        tuple(w.untimed_otherwise),
     )
-    return DialectFacts(legos, tk, tuple(w.tk_rejects), extensions, tuple(w.legos_rejects), tuple(w.misreads))
 
 
 def legos_features(spec: A.Specification) -> tuple[Feature, ...]:
@@ -141,8 +155,25 @@ def detect(facts: DialectFacts) -> tuple[A.Dialect, Feature | None]:
 
 
 def check_mixed(facts: DialectFacts, evidence: Feature, sink: DiagnosticSink) -> None:
-    """A file with LEGOS-only syntax must not also use what LEGOS rejects: no tool reads a mix."""
+    """A file with LEGOS-only syntax must not also use what LEGOS rejects: no tool reads a mix.
+
+    The error goes where the mix is likeliest a mistake: when the file's only LEGOS syntax is
+    an ``otherwise`` after a response without ``within`` -- a SLEEC-TK file with a forgotten
+    deadline -- it goes to each such ``otherwise``, with the fix; otherwise to each TK construct.
+    """
     what_legos, where = evidence
+    accidental = {span for _, _, span in facts.untimed_otherwise}
+    if facts.tk and accidental and all(span in accidental for _, span in facts.legos):
+        what_tk, where_tk = facts.tk[0]
+        for message, fix, span in facts.untimed_otherwise:
+            sink.error(
+                "mixed-dialect",
+                f"{message}; so written it is LEGOS syntax, but the rest of this file is TK "
+                f"syntax ({what_tk} at line {where_tk.line}), and no SLEEC tool accepts a mix",
+                span,
+                hint=fix,
+            )
+        return
     for what, span in facts.tk:
         sink.error(
             "mixed-dialect",
@@ -246,6 +277,7 @@ class _Walk:
         self.tk_rejects: list[Feature] = []
         self.legos_rejects: list[Feature] = []
         self.misreads: list[Feature] = []
+        self.untimed_otherwise: list[tuple[str, str, A.Span]] = []
         # names that LEGOS-SLEEC cannot resolve (textX: "name X is not unique"): carried by
         # two named things of any kind (``any``: measures, constants and scale literals are
         # looked up among everything with a name, rules and concerns included), or declared
@@ -338,6 +370,8 @@ class _Walk:
                     self.items.append(
                         ("`otherwise` after a prohibition or an untimed response", item.otherwise.span)
                     )
+                if occ.limit is None and not occ.eventually:
+                    self.untimed_otherwise.append((*untimed_otherwise(item), item.otherwise.span))
                 if occ.negated and occ.limit is not None:
                     self.tk_rejects.append(
                         ("SLEEC-TK allows no `otherwise` after `not E within T`", item.otherwise.span)

@@ -21,6 +21,7 @@ from cosleec.lang.diagnostics import Diagnostic, DiagnosticSink, Severity, Sleec
 from cosleec.lang.dialect import check_mixed, check_strict, collect, detect
 from cosleec.lang.infer import infer_definitions
 from cosleec.lang.parser import assemble, looks_like_paper, parse_blocks, parse_paper_rules
+from cosleec.lang.recovery import keep, salvage
 from cosleec.lang.transformer import Block
 
 DIALECTS = ("auto", "tk", "legos", "paper")
@@ -153,6 +154,8 @@ def _analyse(
     parsed: list[A.Rule] | list[Block] | None
     parsed = parse_paper_rules(text, sink) if paper else parse_dsl(text, sink)
     if parsed is None:
+        if not paper:
+            _check_what_parsed(text, path, dialect, infer_defs, opts, sink)
         return CheckResult(
             path=path,
             source=text,
@@ -170,6 +173,23 @@ def _analyse(
         return _passes(text, path, dialect, paper, parsed, infer_defs, opts, sink)
 
     return deeply(passes)
+
+
+def _check_what_parsed(
+    text: str, path: str, dialect: str, infer_defs: bool, opts: Options, sink: DiagnosticSink
+) -> None:
+    """After syntax errors, add to ``sink`` what the checks find in the rules that parsed
+    (recovery.py); the file still has no specification."""
+    found = salvage(text, sink.items)
+    if found is None:
+        return
+    sink.items.extend(replace(d, path=path) for d in found.errors)  # heard once others were blanked
+    blocks = found.blocks
+    if blocks is None:
+        return
+    rest = DiagnosticSink(path)
+    deeply(lambda: _passes(text, path, dialect, False, blocks, infer_defs, opts, rest))
+    sink.items.extend(d for d in rest.items if keep(d, found.dropped))
 
 
 def _passes(
@@ -203,9 +223,18 @@ def _passes(
             check_mixed(facts, evidence, sink)
         spec = replace(spec, dialect=detected)
     spec, symbols = check_and_read(spec, sink, opts)
+    _said_once(sink)
     return CheckResult(
         path=path, source=text, spec=spec, dialect=detected, diagnostics=sink.sorted(), symbols=symbols
     )
+
+
+def _said_once(sink: DiagnosticSink) -> None:
+    """Drop the checker's ``untimed-otherwise`` warning where the mixed-dialect check has
+    already made that ``otherwise`` an error with the same words (dialect.check_mixed)."""
+    mixed = {d.span for d in sink.items if d.code == "mixed-dialect"}
+    if mixed:
+        sink.items[:] = [d for d in sink.items if not (d.code == "untimed-otherwise" and d.span in mixed)]
 
 
 def read_source(path: str | Path) -> tuple[str | None, Diagnostic | None]:

@@ -34,7 +34,7 @@ Key = tuple[str, int | str]
 """An anchor: ``("rule", 3)`` (an item of a block, by kind and index in the AST), or
 ``("start", "rule")`` / ``("end", "rule")`` (a block's start and end words)."""
 
-ITEM_KINDS = ("def", "rule", "concern", "purpose", "relation", "priority")
+ITEM_KINDS = ("def", "rule", "concern", "purpose", "relation", "priority", "semantics")
 _PREFIXES = frozenset({"EVENT", "MEASURE", "CONSTANT", "FLUENT", "WHEN"})  # keywords before a name
 
 
@@ -47,6 +47,7 @@ def items(spec: A.Specification) -> Iterator[tuple[Key, object]]:
         spec.purposes,
         spec.relations,
         spec.priorities,
+        spec.semantics,
     )
     for kind, group in zip(ITEM_KINDS, groups, strict=True):
         for i, node in enumerate(group):

@@ -15,6 +15,7 @@ May import: lark (public API), the other lang modules below the front end.
 
 from __future__ import annotations
 
+import bisect
 import difflib
 import itertools
 import re
@@ -29,6 +30,7 @@ from cosleec.lang import ast as A
 from cosleec.lang.diagnostics import DiagnosticSink
 from cosleec.lang.lalr import END, CompiledLALR, SyntaxProblem, read_lark_tables
 from cosleec.lang.lexer import BAD_CHAR, ContextualKeywords, Lexicon, Token
+from cosleec.lang.mistakes import natural_mistake
 from cosleec.lang.paper import PaperToAst
 from cosleec.lang.transformer import Block, ToAst
 
@@ -145,10 +147,11 @@ def assemble(blocks: list[Block], path: str, sink: DiagnosticSink) -> A.Specific
     """Blocks -> Specification, checking that each block appears once and in order.
 
     The priority block (cosleec's extension, docs/reference/sleec-language.md §13.4) stands
-    outside the standard order: anywhere after the rule block, whose rules it names.
+    outside the standard order: anywhere after the rule block, whose rules it names. The
+    semantics block (§7.4) names nothing, and may stand anywhere.
     """
     seen: dict[str, A.Span] = {}
-    parts: dict[str, list[Any]] = {k: [] for k in (*_ORDER, "priority")}
+    parts: dict[str, list[Any]] = {k: [] for k in (*_ORDER, "priority", "semantics")}
     last_rank = -1
     marks = []
     first_rule = next((i for i, b in enumerate(blocks) if b.kind == "rule"), len(blocks))
@@ -163,6 +166,9 @@ def assemble(blocks: list[Block], path: str, sink: DiagnosticSink) -> A.Specific
             )
         else:
             seen[b.kind] = b.span
+        if b.kind == "semantics":
+            parts["semantics"].extend(b.items)
+            continue
         if b.kind == "priority":
             if i < first_rule:
                 sink.error(
@@ -192,6 +198,7 @@ def assemble(blocks: list[Block], path: str, sink: DiagnosticSink) -> A.Specific
         purposes=tuple(parts["purpose"]),
         relations=tuple(parts["relation"]),
         priorities=tuple(parts["priority"]),
+        semantics=tuple(parts["semantics"]),
         path=path,
         blocks=tuple(marks),
     )
@@ -223,6 +230,12 @@ def _report(
         unit_message, unit_hint, limit = _missing_unit(tok, text)
         sink.error("missing-unit", unit_message, limit or span, hint=unit_hint)
         return
+    if parens is not None:
+        before, after = parens.around(tok)
+        mistake = natural_mistake(tok, before, after, expected_values, paper=g.name == "paper")
+        if mistake is not None:
+            sink.error(mistake.code, mistake.message, mistake.span, hint=mistake.hint)
+            return
     special = _special_message(g, tok, p.expected, expected_values, text)
     if special is not None:
         code, message, hint = special
@@ -248,8 +261,9 @@ _CONDITION_WORDS = frozenset({"and", "or", "not", "true", "false"})
 
 
 class _Parens:
-    """Which `(` is left open where the parser met a problem: asked about a file's problems
-    in order, it reads the file's tokens once in all."""
+    """Which `(` is left open where the parser met a problem, and the tokens around a problem
+    (:meth:`around`): asked about a file's problems in order, it reads the file's tokens once
+    in all, and only for a file with a syntax error."""
 
     def __init__(self, g: Grammar, text: str) -> None:
         self.g = g
@@ -258,6 +272,22 @@ class _Parens:
         self.at = 0  # the tokens before this one have been read into `open`
         self.open: list[Token] = []
 
+    def scanned(self) -> list[Token]:
+        """The file's tokens, scanned when first asked for."""
+        if self.tokens is None:
+            self.tokens = self.g.lexicon.tokens(self.text)
+        return self.tokens
+
+    def around(self, tok: Token) -> tuple[list[Token], Token | None]:
+        """Up to four tokens before ``tok`` (nearest last) and the one after it."""
+        tokens = self.scanned()
+        k = (
+            bisect.bisect_left(tokens, tok.start_pos, key=lambda t: t.start_pos)
+            if tok.type != END
+            else len(tokens)
+        )
+        return tokens[max(0, k - 4) : k], tokens[k + 1] if k + 1 < len(tokens) else None
+
     def unclosed(self, p: SyntaxProblem) -> Token | None:
         """The `(` left open where the parser met ``p``'s token, if one is and nothing closes
         it before the text goes on with what cannot be inside parentheses (`then`, `unless`,
@@ -265,9 +295,7 @@ class _Parens:
         g = self.g
         if not any(g.display.get(t) == "`)`" for t in p.expected):
             return None
-        if self.tokens is None:
-            self.tokens = g.lexicon.tokens(self.text)
-        tokens = self.tokens
+        tokens = self.scanned()
         end = p.token.type == END
         while self.at < len(tokens) and (end or tokens[self.at].start_pos < p.token.start_pos):
             t = tokens[self.at]

@@ -59,10 +59,13 @@ class Printer:
 
     # ------------------------------------------------------------------ whole file
     def specification(self) -> str:
-        """The whole file: def and rule blocks (always), then non-empty concern, purpose,
-        relation and priority blocks (the last one pair a line, chains written as pairs)."""
+        """The whole file: a non-empty semantics block, def and rule blocks (always), then
+        non-empty concern, purpose, relation and priority blocks (the last one pair a line,
+        chains written as pairs)."""
         spec = self.spec
         out = _Lines(self)
+        # how the rules are read comes before them (wherever the file had it)
+        self.block(out, "semantics", [[f"{d.aspect} {d.value}"] for d in spec.semantics])
         if not any(b.kind == "def" for b in spec.blocks):  # declarations inferred: printed first,
             first = ("start", "rule") if ("start", "rule") in self.layout.leading else ("rule", 0)
             out.comments(self.layout.leading.pop(first, []))  # under the file's header comments
@@ -447,6 +450,7 @@ class PaperPrinter(Printer):
             ("purpose", spec.purposes),
             ("relation", spec.relations),
             ("priority", spec.priorities),
+            ("semantics", spec.semantics),
         ):
             for node in group[:1]:
                 self.cannot(f"{kind} block", node.span)

@@ -15,6 +15,7 @@ import difflib
 from cosleec.lang import ast as A
 from cosleec.lang.diagnostics import clip
 from cosleec.lang.expressions import NUM, Expressions, type_word
+from cosleec.lang.mistakes import untimed_otherwise
 from cosleec.lang.scope import Scope
 from cosleec.lang.unreachable import check_clauses
 
@@ -27,6 +28,10 @@ class Responses:
         self.sink = scope.sink
         self.opt = scope.opt
         self.expressions = expressions
+        # the file's own clause semantics (its semantics block) comes first: the lint judges
+        # the rules as they are meant; the option is for files that declare none
+        self.declared = scope.spec.clause_semantics is not None
+        self.semantics = scope.spec.clause_semantics or scope.opt.semantics
 
     def trigger(self, trig: A.Trigger) -> None:
         """A trigger: its event, and its condition if it has one."""
@@ -72,11 +77,14 @@ class Responses:
                         item.otherwise.span,
                     )
                 elif occ.limit is None:
+                    message, fix = untimed_otherwise(item)
                     self.sink.warning(
                         "untimed-otherwise",
-                        f"`otherwise` after untimed `{clip(occ.event)}` is read as `within 0 seconds`",
+                        f"{message}, so it is read as `within 0 seconds`",
                         item.otherwise.span,
+                        hint=fix,
                     )
+                self._untimed_fallback(item.otherwise)
                 self.response(item.otherwise)
             if item.alternative is not None:
                 self.response(item.alternative)
@@ -91,7 +99,26 @@ class Responses:
             self.expressions.condition(d.condition)
             if d.response is not None:
                 self.response(d.response)
-        check_clauses(self.sink, self.opt.semantics, resp)
+        check_clauses(self.sink, self.semantics, resp, declared=self.declared)
+
+    def _untimed_fallback(self, fallback: A.Response) -> None:
+        """Warn about each obligation of an ``otherwise`` written without ``within``: read with
+        the default ``untimed="none"`` (the runtime's, ``analyse``'s and ``conforms``'), it stays
+        pending for ever, so the fallback that should catch a failure can never fail itself.
+        ``untimed="immediate"`` or a number of seconds gives it a deadline, hence "default"."""
+        for item in fallback.items:
+            occ = item.occurrence
+            if occ.negated or occ.limit is not None or occ.eventually:
+                continue
+            name = clip(occ.event)
+            self.sink.warning(
+                "untimed-fallback",
+                f"`otherwise {name}` has no deadline: read with the default `untimed` (none), it "
+                "stays pending for ever and can never be violated",
+                occ.span,
+                hint=f"write `otherwise {name} within 1 minutes` (or give every untimed response a "
+                "deadline with `--untimed immediate` or `--untimed SECONDS`)",
+            )
 
     def _time_limit(self, lim: A.TimeLimit) -> None:
         hi = self.duration(lim.hi)

@@ -26,7 +26,8 @@ class Options:
     strict_extensions: bool = False  # cosleec extensions (response conjunction, priorities) are errors
     lint: bool = False  # naming conventions and style suggestions
     tk_names: bool = False  # warn about names SLEEC-TK rejects
-    semantics: hedges.HedgeSemantics = hedges.HedgeSemantics.LAST_WINS  # for the hedge lint
+    # for the hedge lint, when the file declares no semantics (its semantics block comes first)
+    semantics: hedges.HedgeSemantics = hedges.HedgeSemantics.LAST_WINS
     # per rule (or concern, purpose), diagnostics of one code kept before the rest are
     # folded into one "... and N more" summary (DiagnosticSink.folding); 0 keeps them all
     repeat_limit: int = 20

@@ -180,6 +180,20 @@ class ToAst(Transformer[Token, Any]):
                 )
         return Block("priority", tok_span(c[0]), pairs)
 
+    def semantics_block(self, c: list[Any]) -> Block:
+        return Block("semantics", tok_span(c[0]), c[1] or [])
+
+    def semantics_entry(self, c: list[Any]) -> A.SemanticsDecl:
+        """``unless last-wins``: the value's names joined by `-`, as written."""
+        words = c[1]
+        value_span = join(tok_span(words[0]), tok_span(words[-1]))
+        return A.SemanticsDecl(
+            c[0].value,
+            "-".join(w.value for w in words),
+            span=join(tok_span(c[0]), value_span),
+            value_span=value_span,
+        )
+
     def chain_first(self, c: list[Any]) -> list[Any]:
         """``A > B``: the first two name tokens of a chain (``list_more`` adds the others)."""
         return [c[0], c[1]]

@@ -28,8 +28,11 @@ longer rule gets only what holds under every semantics, at one look per clause: 
 whose condition is the literal ``false`` never applies."""
 
 
-def check_clauses(sink: DiagnosticSink, semantics: hedges.HedgeSemantics, resp: A.Response) -> None:
-    """Warn about ``resp``'s hedge clauses that no situation selects under ``semantics``.
+def check_clauses(
+    sink: DiagnosticSink, semantics: hedges.HedgeSemantics, resp: A.Response, *, declared: bool = False
+) -> None:
+    """Warn about ``resp``'s hedge clauses that no situation selects under ``semantics``
+    (``declared``: the file's semantics block chose it; otherwise the hint says how to).
 
     That is asked of :func:`hedges.reachable` only for a rule of at most
     :data:`MAX_LINT_CLAUSES` clauses, and it gives an answer only when few enough conditions
@@ -51,9 +54,27 @@ def check_clauses(sink: DiagnosticSink, semantics: hedges.HedgeSemantics, resp: 
             if not value:
                 _never(sink, ds, i)
         return
+    hint = _hint(semantics, declared)
     for i in range(1, len(ds) + 1):
         if i not in chosen:
-            _unreachable(sink, semantics, ds, i, fixed, implies)
+            _unreachable(sink, semantics, ds, i, fixed, implies, hint)
+
+
+def _hint(semantics: hedges.HedgeSemantics, declared: bool) -> str:
+    """How to make a clause reachable: reorder, or -- the file declaring no semantics -- say
+    that the rules are written for the other one."""
+    order = (
+        "reorder the unless clauses (the last that holds wins)"
+        if semantics == hedges.HedgeSemantics.LAST_WINS
+        else "reorder the unless clauses (each needs the ones before it)"
+    )
+    if declared:
+        return order
+    other = next(h for h in hedges.HedgeSemantics if h != semantics)
+    return (
+        f"{order}; or, if the rules are written for {other} semantics, declare it in the file: "
+        f"`semantics_start unless {other} semantics_end` (check, analyse and the runtime read it)"
+    )
 
 
 def _never(sink: DiagnosticSink, ds: tuple[A.Defeater, ...], i: int) -> None:
@@ -68,6 +89,7 @@ def _unreachable(
     i: int,
     fixed: dict[int, bool],
     implies: Callable[[int, int], bool],
+    hint: str,
 ) -> None:
     """Report clause ``i`` as never chosen, naming the clause that blocks it (found by
     :func:`hedges.blockers`, so that no semantics is restated here)."""
@@ -77,7 +99,9 @@ def _unreachable(
         return
     culprits = hedges.blockers(i, len(ds), semantics, fixed=fixed, implies=implies)
     if not culprits:
-        sink.warning("unreachable-hedge", f"clause {i} never applies under {semantics} semantics", span)
+        sink.warning(
+            "unreachable-hedge", f"clause {i} never applies under {semantics} semantics", span, hint=hint
+        )
         return
     j = culprits[0]
     related = (("the clause that blocks it", ds[j - 1].span),)
@@ -88,6 +112,7 @@ def _unreachable(
             f"clause {i} never applies",
             span,
             related=related,
+            hint=hint,
         )
         return
     if fixed.get(j) is not None:
@@ -101,6 +126,7 @@ def _unreachable(
         f"clause {i} never applies under {semantics} semantics: {why}",
         span,
         related=related,
+        hint=hint,
     )
 
 

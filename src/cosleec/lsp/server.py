@@ -168,7 +168,7 @@ class SleecServer(LanguageServer):
         try:
             return fn()
         except features.Refusal as e:
-            message = str(e) + (f" ({e.hint})" if e.hint else "")
+            message = e.message + (f" ({e.hint})" if e.hint else "")
             raise JsonRpcException(message, code=int(T.LSPErrorCodes.RequestFailed)) from None
 
 

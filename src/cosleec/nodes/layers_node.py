@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from cosleec.lang import clause_semantics_for
 from cosleec.nodes.base import MessageError, Node, context_values
 from cosleec.nodes.transport import DEFAULT_NAMESPACE, Transport
 from cosleec.runtime import (
@@ -37,15 +38,14 @@ class LayersNode(Node):
         rules: RuleSet,
         *,
         namespace: str = DEFAULT_NAMESPACE,
-        semantics: HedgeSemantics = HedgeSemantics.LAST_WINS,
+        semantics: HedgeSemantics | None = None,
         unknown: Unknowns = Unknowns.UNDETERMINED,
     ) -> None:
         super().__init__(transport, namespace)
         self.ruleset = rules
         self.context = Context(rules.measures)
-        self.layer_manager = LayerManager(
-            rules, semantics, unknown
-        )  # as the Manager node's, or they disagree
+        # as the Manager node's (the option, else the rule file's block), or they disagree
+        self.layer_manager = LayerManager(rules, clause_semantics_for(rules.spec, semantics), unknown)
         self.advertise("layers")
         self.on("context", self._context)
         self._publish([])

@@ -105,7 +105,7 @@ class ManagerNode(Node):
         rules: RuleSet,
         *,
         namespace: str = DEFAULT_NAMESPACE,
-        semantics: HedgeSemantics = HedgeSemantics.LAST_WINS,
+        semantics: HedgeSemantics | None = None,
         sim_time: bool = False,
         audit: str | None = None,
         record: str | None = None,
@@ -341,7 +341,7 @@ class ManagerNode(Node):
     def _permission(self, event: str, source: str = "") -> Permission:
         if not self.active:
             return Permission(event=event, permitted=False, rules=(), reason=self._inactive())
-        return self.manager.permission(event, source=source)
+        return self.manager.request(event, source=source)  # the service is asked before acting: an attempt
 
     def _serve_request(self, req: dict[str, Any]) -> dict[str, Any]:
         name = req.get("event")
@@ -351,7 +351,7 @@ class ManagerNode(Node):
             p = self._permission(name, str(req.get("source", ""))[:MAX_NAME])
         except ContextError as e:  # an event no rule declares (unknown_events="raise"): refused, and why
             hint = f" ({e.hint})" if e.hint else ""
-            return {"permitted": False, "rules": [], "reason": f"{e}{hint}"}
+            return {"permitted": False, "rules": [], "reason": f"{e.message}{hint}"}
         return {"permitted": p.permitted, "rules": list(p.rules), "reason": p.reason}
 
     def _serve_decide(self, req: dict[str, Any]) -> dict[str, Any]:

@@ -19,7 +19,9 @@ evaluated as code; ``docs/mapping.md`` describes every key::
       CleanRequest:       {topic: /voice/command, type: std_msgs/String, equals: clean, fire: each}
 
 ``fire: edge`` (the default) fires an event when its condition becomes true, not again
-while it stays true; ``fire: each`` fires on every message for which it holds.
+while it stays true; ``fire: each`` fires on every message for which it holds. An event
+with ``every_message: true`` has no condition and fires on every message of its topic; an
+event with neither a condition nor that key is an error (a forgotten condition).
 
 ``qos`` (a profile ``sensor_data``, ``reliable``, ``latched``, or a table
 ``{reliability, durability, depth}``; :mod:`cosleec.nodes.qos`) says how a topic is
@@ -37,7 +39,11 @@ and publishes is :class:`cosleec.nodes.listener.ListenerNode`.
 A mistake in a mapping is a :class:`MappingError` that names the file, the line and
 column, and the entry: ``mapping.yaml:7:3: events.Clean: ...``. A threshold or band bound
 must be a finite number (``below: .nan`` would be taken by YAML, and the event never fire),
-and band bounds must rise; the error then points at the value itself. The same loader
+and band bounds must rise; the error then points at the value itself. A comparison's value
+is one boolean, number or text (never null), an ordering compares numbers, and where the
+message type says what the field holds (the plain ``std_msgs`` types,
+:mod:`cosleec.nodes.mapping_values`) the value is of that kind: a comparison no message
+could match is refused here, not found on the robot as every message rejected. The same loader
 (:func:`read_yaml`) reads the guard's routes, so a key given twice is an error there too.
 """
 
@@ -56,9 +62,12 @@ import yaml
 
 from cosleec.errors import UserError, closest, show
 from cosleec.nodes.base import MessageError
+from cosleec.nodes.mapping_values import field_kind, field_problem, value_problem
 from cosleec.nodes.qos import Qos, QosError
 from cosleec.runtime import MeasureSpec
 
+#: the key of an event that fires on every message of its topic, without a condition
+EVERY_MESSAGE = "every_message"
 COMPARISONS = {
     "above": lambda x, t: x > t,
     "below": lambda x, t: x < t,
@@ -67,7 +76,7 @@ COMPARISONS = {
     "equals": lambda x, t: x == t,
     "not_equals": lambda x, t: x != t,
 }
-KEYS = {"topic", "type", "field", "json", "bands", "qos", "fire", *COMPARISONS}
+KEYS = {"topic", "type", "field", "json", "bands", "qos", "fire", EVERY_MESSAGE, *COMPARISONS}
 #: ``guards`` belongs to the guard (:mod:`cosleec.nodes.guard_node`): one file maps a robot
 SECTIONS = ("namespace", "measures", "events", "guards")
 #: how an event fires: when its condition becomes true (edge), or on every message it holds for
@@ -277,6 +286,8 @@ class Entry:
     fire: str = "edge"
     #: where the entry is written (``mapping.yaml:7:3``), for messages
     where: str = ""
+    #: an event that fires on every message of its topic (``every_message: true``): no condition
+    every_message: bool = False
 
     @property
     def label(self) -> str:
@@ -292,8 +303,10 @@ class Entry:
         """The measure value (or event condition) for one message; MessageError if it has none.
 
         Non-finite or oversized numbers and values of the wrong kind are refused here,
-        before they reach the Manager.
+        before they reach the Manager. An ``every_message`` event holds for any message.
         """
+        if self.every_message:
+            return True
         x: Any = message
         if self.json:
             raw = message.get("data")
@@ -496,14 +509,17 @@ def _bands(source: str, at: str, where: str, raw: Any) -> tuple[tuple[float, str
         raise MappingError(f"{where}: `bands` is a list of [upper bound, literal], the last just [literal]")
     out: list[tuple[float, str]] = []
     for i, band in enumerate(raw):
-        last = i == len(raw) - 1
-        if last and isinstance(band, list) and len(band) == 1:
-            out.append((math.inf, str(band[0])))
-            continue
-        if not (isinstance(band, list) and len(band) == 2 and isinstance(band[0], int | float)):
+        tail = i == len(raw) - 1 and isinstance(band, list) and len(band) == 1  # [literal]
+        if not tail and not (isinstance(band, list) and len(band) == 2 and isinstance(band[0], int | float)):
             raise MappingError(f"{where}: band {i + 1} must be [upper bound, literal] (the last: [literal])")
-        bound, label = band[0], f"{_item_at(source, band, 0, at)}: {where.split(': ')[-1]}"
-        shown = _not_finite(bound)
+        bound, literal = (math.inf, band[0]) if tail else (band[0], band[1])
+        label = f"{_item_at(source, band, 0, at)}: {where.split(': ')[-1]}"
+        if not isinstance(literal, str):
+            raise MappingError(
+                f"{_item_at(source, band, 0 if tail else 1, at)}: {where.split(': ')[-1]}: band {i + 1}'s literal must be a word of the scale, not {show(literal)}",
+                hint="give the scale literal the band stands for, such as [0.3, low]",
+            )
+        shown = None if tail else _not_finite(bound)
         if shown is not None:
             raise MappingError(
                 f"{label}: band {i + 1}'s bound must be a finite number, not {shown}: every finite reading "
@@ -514,9 +530,9 @@ def _bands(source: str, at: str, where: str, raw: Any) -> tuple[tuple[float, str
             before = raw[i - 1][0]
             raise MappingError(
                 f"{label}: band {i + 1}'s bound {bound!r} must be above band {i}'s {before!r}: bands are "
-                f"tried in order, so {str(band[1])!r} could never be given; list the bounds rising"
+                f"tried in order, so {literal!r} could never be given; list the bounds rising"
             )
-        out.append((float(bound), str(band[1])))
+        out.append((float(bound), literal))
     if out[-1][0] != math.inf:
         out.append((math.inf, out[-1][1]))
     return tuple(out)
@@ -586,7 +602,42 @@ def _comparison(w: _Written) -> tuple[str, Any] | None:
             f"{w.value(op)}: `{op}` must be a finite number, not {shown}: {FIXED}; "
             f"give a number such as `{op}: 10`"
         )
+    problem = value_problem(op, w.spec[op], None, str(w.spec["type"]))  # null, a list, a word to order
+    if problem is not None:
+        raise MappingError(f"{w.value(op)}: {problem[0]}", hint=problem[1])
     return op, w.spec[op]
+
+
+def _every(w: _Written) -> bool:
+    """Whether the entry is an event that fires on every message of its topic (``every_message: true``).
+
+    Said, never implied: an event without a condition is a forgotten condition unless it
+    says so. Such an event has no condition and reads no field, so a key that makes a
+    value (a comparison, ``bands``, ``field``, ``json``) or says when it fires (``fire``)
+    is refused beside it: it would be ignored.
+    """
+    if EVERY_MESSAGE not in w.spec:
+        return False
+    at, every = w.key(EVERY_MESSAGE), w.spec[EVERY_MESSAGE]
+    if w.kind != "event":
+        raise MappingError(
+            f"{at}: `{EVERY_MESSAGE}` is for events; a measure's value is sent with every message already",
+            hint=f"leave out `{EVERY_MESSAGE}`",
+        )
+    if not isinstance(every, bool):
+        raise MappingError(
+            f"{at}: `{EVERY_MESSAGE}` is true or false, not {show(every)}",
+            hint=f"write `{EVERY_MESSAGE}: true`",
+        )
+    clash = [k for k in (*COMPARISONS, "bands", "field", "json", "fire") if k in w.spec]
+    if every and clash:
+        raise MappingError(
+            f"{w.key(clash[0])}: an `{EVERY_MESSAGE}` event fires on every message without a condition, "
+            f"so `{clash[0]}` would be ignored",
+            hint=f"leave out `{clash[0]}`; or, to fire on every message for which a condition holds, leave "
+            f"out `{EVERY_MESSAGE}` and give the condition with `fire: each`",
+        )
+    return every
 
 
 def _fire(w: _Written) -> str:
@@ -623,8 +674,12 @@ def _check_event(
             f"{w.where}: the rules declare no event {w.name!r}"
             f"{_undeclared(w.name, 'event', events, measures or ())}"
         )
-    if e.comparison is None:
-        raise MappingError(f"{w.where}: an event needs a condition (e.g. `equals: true`)")
+    if e.comparison is None and not e.every_message:
+        raise MappingError(
+            f"{w.where}: an event needs a condition (e.g. `equals: true`)",
+            hint=f"give a comparison (`equals: true`, `above: 0.5`); to fire on every message of the "
+            f"topic, say so: `{EVERY_MESSAGE}: true`",
+        )
 
 
 def _check_measure(
@@ -651,8 +706,63 @@ def _check_measure(
                 )
     elif e.bands is not None:
         raise MappingError(f"{w.where}: `bands` give scale literals, but {w.name} is {ms.kind}")
-    if ms.kind == "numeric" and e.comparison is not None:
-        raise MappingError(f"{w.where}: a comparison gives a boolean, but {w.name} is numeric")
+    if ms.kind != "boolean" and e.comparison is not None:
+        raise MappingError(
+            f"{w.where}: a comparison gives a boolean, but {w.name} is {ms.kind}",
+            hint="leave out the comparison to take the value as it is"
+            + (", or give `bands` to turn a number into a literal" if ms.kind == "scale" else ""),
+        )
+    _check_as_is(w, e, ms)
+
+
+#: per measure kind: the kind of field it can be taken from as it is, and how to make it from another
+AS_IS = {
+    "boolean": ("boolean", "give a comparison that makes the boolean (`below: 0.2`, `equals: open`)"),
+    "numeric": (
+        "number",
+        "read a number: a number type (std_msgs/Float64), or JSON text (`json: true`, `field`)",
+    ),
+    "scale": (
+        "text",
+        "give `bands` ([[0.3, low], [high]]) to turn a number into a literal, or read the literal as text",
+    ),
+}
+
+
+def _check_as_is(w: _Written, e: Entry, ms: MeasureSpec) -> None:
+    """A measure taken as it is (no comparison, no bands) reads a field of its kind, where the
+    message type says the field's kind: else every message would be rejected on the robot."""
+    held = field_kind(e.type, e.field, e.json)
+    if e.comparison is not None or e.bands is not None or held is None:
+        return
+    needed, fix = AS_IS[ms.kind]
+    if held != needed:
+        raise MappingError(
+            f"{w.where}: {e.type}'s data is a {held}, but {w.name} is {ms.kind}: taken as it is, "
+            "every message would be rejected",
+            hint=fix,
+        )
+
+
+def _check_field(w: _Written, e: Entry) -> None:
+    """The entry reads a field its message type has, and compares it with a value of its kind
+    (:mod:`cosleec.nodes.mapping_values`: known for the plain ``std_msgs`` types)."""
+    if e.every_message:
+        return
+    problem = field_problem(e.type, e.field, e.json)
+    if problem is not None:
+        raise MappingError(f"{w.key('json' if e.json else 'field')}: {problem[0]}", hint=problem[1])
+    held = field_kind(e.type, e.field, e.json)
+    if e.comparison is not None:
+        op, value = e.comparison
+        problem = value_problem(op, value, held, e.type)
+        if problem is not None:
+            raise MappingError(f"{w.value(op)}: {problem[0]}", hint=problem[1])
+    if e.bands is not None and held not in (None, "number"):
+        raise MappingError(
+            f"{w.key('bands')}: `bands` sort numbers, but {e.type}'s data is a {held}",
+            hint="read a number type (std_msgs/Float64); a text that is a literal is taken as it is",
+        )
 
 
 def _entry(
@@ -667,15 +777,17 @@ def _entry(
     """One checked entry ``name`` of section ``kind``s, written at ``at`` (``mapping.yaml:7:3``).
 
     Checked in the order its mistakes are reported: the keys, the value it makes
-    (comparison or bands), ``fire``, ``json`` and ``qos``; then, with the rules, that it
-    names one of their measures or events and makes a value of its kind.
+    (comparison or bands), ``every_message``, ``fire``, ``json`` and ``qos``, the field and
+    the comparison's value against the message type (where it is known); then, with the
+    rules, that it names one of their measures or events and makes a value of its kind.
     """
     w = _Written(source, at, kind, name, spec)
     _check_keys(w)
     comparison = _comparison(w)
     bands = _bands(source, at, w.where, spec["bands"]) if "bands" in spec else None
-    fire = _fire(w)
-    field_path = _field(w)
+    every = _every(w)
+    fire = "each" if every else _fire(w)
+    field_path = () if every else _field(w)  # it reads no field: a message without one still fires it
     e = Entry(
         name=name,
         kind=kind,
@@ -688,7 +800,9 @@ def _entry(
         qos=_qos(w.key("qos"), kind, spec["type"], spec["qos"]) if "qos" in spec else None,
         fire=fire,
         where=at,
+        every_message=every,
     )
+    _check_field(w, e)
     if kind == "measure" and measures is not None and name in measures:
         spec_of = measures[name]
         e = replace(e, measure_kind=spec_of.kind, literals=tuple(spec_of.literals))

@@ -133,9 +133,12 @@ FIELDS: Mapping[Kind, tuple[Field, ...]] = {
         _may("missing", Json.LIST),
         _may("reason", Json.TEXT),
         _may("explanation", Json.TEXT),
+        _may("for_people", Json.TEXT),  # what the robot says to people (Decision.for_people)
         _may("context_version", Json.INT),
         _may("violated", Json.INT, Json.NULL),  # the missed obligation a fallback answers
         _may("unknowns", Json.TEXT),
+        _may("origin", Json.TEXT),  # trigger, or otherwise (a fallback)
+        _may("missed", Json.OBJECT, Json.NULL),  # a fallback's missed obligation
         _may("dispatch", Json.TEXT),  # held or withheld, when it was not handed on at once
     ),
     Kind.OBLIGATION: (  # Tracked.to_json

@@ -49,7 +49,12 @@ class RosLink:
         self.t.subscribe(topic(namespace, "status"), self._status)
 
     # ------------------------------------------------------------------ the Link
-    def permission(self, event: str, *, source: str = "") -> Permission:
+    def permission(self, event: str) -> Permission:
+        """Asked as :meth:`request` is: the node has one permission service, whose refusals
+        it records (a question that records nothing needs a field the service lacks)."""
+        return self.request(event)
+
+    def request(self, event: str, *, source: str = "") -> Permission:
         """The node's ``request`` service; no answer in time is a refusal (fail closed)."""
         answer = self._call("request", {"event": event, "source": source})
         if answer is None:

@@ -24,8 +24,9 @@ from cosleec.records import RuntimeEvent
 from cosleec.runtime.audit import AuditLog, read_audit
 from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
 from cosleec.runtime.context import Context as Context
-from cosleec.runtime.decision import Decision
+from cosleec.runtime.decision import Decision, DecisionOrigin
 from cosleec.runtime.errors import BindingError, ConfigurationError, ContextError, ReloadError
+from cosleec.runtime.explanations import Explanations, ExplanationsError
 from cosleec.runtime.implementations import Capability
 from cosleec.runtime.implementations import Implementations as Implementations
 from cosleec.runtime.implementations import Ran as Ran
@@ -62,6 +63,9 @@ __all__ = [
     "ContextError",
     "DeadlineError",
     "Decision",
+    "DecisionOrigin",
+    "Explanations",
+    "ExplanationsError",
     "HedgeSemantics",
     "Journal",
     "JournalError",

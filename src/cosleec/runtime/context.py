@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from cosleec.errors import show
+from cosleec.errors import closest, show
 from cosleec.runtime.errors import ContextError
 from cosleec.runtime.values import MeasureSpec, Value
 
@@ -57,9 +57,17 @@ class Context:
             if spec is None and not isinstance(name, str):
                 raise ContextError(f"a measure is named by a string, not {type(name).__name__}")
             if spec is None:
-                raise ContextError(f"unknown measure {show(name)}")
+                raise ContextError(f"unknown measure {show(name)}", hint=self._suggest(name))
             out[name] = spec.coerce(value)
         return out
+
+    def _suggest(self, name: str) -> str:
+        """The hint for an unknown measure: the declared one it most likely misspells, else
+        where measures are declared."""
+        close = closest(name, self.measures)
+        if close is not None:
+            return f"did you mean {close}?"
+        return "declare it in the rules' def block (measure NAME : boolean), or check its spelling"
 
     def apply(self, stored: Mapping[str, Any], now: float) -> set[str]:
         """Apply validated values; return the measures whose value changed (or became known)."""

@@ -23,6 +23,7 @@ from cosleec.runtime.clock import Clock, VirtualClock, boot
 from cosleec.runtime.context import Context
 from cosleec.runtime.decider import Decider
 from cosleec.runtime.decision import Decision
+from cosleec.runtime.explanations import Explanations
 from cosleec.runtime.implementations import Implementations
 from cosleec.runtime.issuer import Issuer
 from cosleec.runtime.layers import LayerManager, LayerSwitch
@@ -80,6 +81,7 @@ class Core:
         self.decisions: deque[Decision] = deque(maxlen=history)
         self.dispatch = dispatch
         steps.meta, steps.rules = weakly(self.meta), weakly(self.digest)  # (no cycle: see weakly)
+        self.explanations: Explanations | None = None  # sentences for people (explain()); a reload keeps them
         self.install(rules, Context(rules.measures, max_age), layers, priorities, Implementations(rules))
 
     @classmethod
@@ -123,6 +125,14 @@ class Core:
         self.decider = Decider(
             context, layers, self.issuer, functools.partial(self.steps.count, "decision"), self.stats
         )
+        self.decider.explain_with(self.explanations, rules.rules)
+
+    def explain(self, explanations: Explanations | None) -> None:
+        """Give decisions from now on the sentences for people ``explanations`` (checked against
+        the rules by the caller); after a reload, sentences of rules or clauses the new rules
+        no longer have are never said, and a measure they no longer declare reads ``unknown``."""
+        self.explanations = explanations
+        self.decider.explain_with(explanations, self.ruleset.rules)
 
     def index(self) -> None:
         """Index the tracker as the priorities need (priorities act on activations)."""

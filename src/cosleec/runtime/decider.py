@@ -13,16 +13,18 @@ and the enforcer do).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 from cosleec.lang import Unknowns
 from cosleec.runtime.context import Context
-from cosleec.runtime.decision import OTHERWISE, Decision
+from cosleec.runtime.decision import OTHERWISE, Decision, DecisionOrigin
+from cosleec.runtime.explanations import Explanations
 from cosleec.runtime.issuer import Issuer
 from cosleec.runtime.layers import LayerManager
 from cosleec.runtime.model import CompiledRule
 from cosleec.runtime.obligations import Tracked
 from cosleec.runtime.stats import Stats
+from cosleec.runtime.values import Value
 
 
 class Decider:
@@ -36,6 +38,16 @@ class Decider:
         self.issuer = issuer
         self.next_id = next_id
         self.stats = stats
+        self.explanations: Explanations | None = None
+        self._reads: dict[str, tuple[str, ...]] = {}  # rule -> the measures its sentences name
+
+    def explain_with(self, explanations: Explanations | None, rules: Iterable[CompiledRule]) -> None:
+        """Give every decision from now on ``explanations`` (None: sentences in plain words only),
+        and keep the values of the measures its sentences name (``{name}``) in decisions."""
+        self.explanations = explanations
+        self._reads = {}
+        if explanations is not None:
+            self._reads = {r.name: n for r in rules if (n := explanations.reads(r.name))}
 
     def decide(self, rule: CompiledRule, event: str, now: float) -> Decision | None:
         """``rule``'s decision at its trigger ``event``: None when its condition is false."""
@@ -62,6 +74,8 @@ class Decider:
             x = values[n]
             if x is not None:
                 values[n] = lits[x]
+        if self._reads:
+            self._spoken(rule.name, values)
         # the explanation is computed from these parts when first read (Decision.explanation)
         return Decision.made(
             id=self.next_id(),
@@ -77,7 +91,14 @@ class Decider:
             missing=missing,
             context_version=self.context.version,
             unknown=self.layers.unknown,
+            explanations=self.explanations,
         )
+
+    def _spoken(self, rule: str, values: dict[str, Value | None]) -> None:
+        """Add the values the sentences of ``rule`` name and the decision did not read."""
+        more = [n for n in self._reads.get(rule, ()) if n not in values and n in self.context.measures]
+        if more:
+            values.update(self.context.external(more))
 
     def _fired(self, rule: CompiledRule, v: dict[str, object]) -> tuple[bool | None, tuple[str, ...]]:
         """Did the trigger condition hold (None: unknown), and the measures it lacked."""
@@ -102,7 +123,10 @@ class Decider:
         what = " and ".join(o.describe() for o in issued.obligations) or "nothing is required"
         if not issued.determined:
             what = f"undetermined (no value for {', '.join(issued.missing)}); meanwhile {what}"
-        why = f"{rule.name}: {ob.describe()} was violated at {start:g}; otherwise {what}"
+        why = f"{rule.name}: {ob.describe()} was violated; otherwise {what}"
+        values: dict[str, Value | None] = {}
+        if self._reads:
+            self._spoken(rule.name, values)
         d = Decision.made(
             id=self.next_id(),
             time=start,
@@ -111,12 +135,15 @@ class Decider:
             clause=t.clause if issued.determined else None,
             layer=None,
             semantics=self.layers.semantics,
-            values={},
+            values=values,
             conditions=(),
             obligations=issued.obligations,
             missing=issued.missing,
             reason=why,
             context_version=self.context.version,
             violated=t.id,
+            origin=DecisionOrigin.OTHERWISE,
+            missed=ob,
+            explanations=self.explanations,
         )
         return d, issued.determined

@@ -1,10 +1,12 @@
 """Decision records: everything a trigger decided, and why, in one immutable value.
 
-Every decision renders as a short explanation a person (or an ``ExplainWhy`` obligation)
-can use: ``R1: Refuse and ExplainWhy [clause 1 (unless userUndressed)], because
-userUndressed was true; userDistressed >= high was false``. Which condition values are
-named is decided by :func:`cosleec.lang.hedges.decisive`, so the explanation follows the
-same clause semantics as the choice itself.
+Every decision renders as a short explanation for developers (:attr:`Decision.explanation`:
+``R1: Refuse and ExplainWhy [clause 1 (unless userUndressed)], because userUndressed was
+true; userDistressed >= high was false``) and as a sentence for the person the robot talks
+to (:attr:`Decision.for_people`: the author's sentence from an explanations file, else
+plain words, :mod:`cosleec.runtime.people`). Which condition values are named is decided
+by :func:`cosleec.lang.hedges.decisive`, so both follow the same clause semantics as the
+choice itself. Both are made when first read, not when the decision is made.
 
 :meth:`Decision.to_json` and :meth:`Decision.from_json` are the one wire format: the audit
 log, the ROS topics and the task nodes all use them.
@@ -15,26 +17,41 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import Any
 
 from cosleec.lang import HedgeSemantics, Unknowns, decisive
+from cosleec.runtime import people
+from cosleec.runtime.explanations import Explanations
 from cosleec.runtime.model import Obligation
+from cosleec.runtime.plain import mentioned
 from cosleec.runtime.values import Value
 
 #: the ``event`` of a fallback decision (no event triggered it: an obligation was missed)
 OTHERWISE = "otherwise"
 
 
+class DecisionOrigin(StrEnum):
+    """What made a decision: a trigger (its rule's event), or a missed obligation (an ``otherwise``)."""
+
+    TRIGGER = "trigger"
+    OTHERWISE = "otherwise"
+
+
 @dataclass(frozen=True, kw_only=True)
 class Decision:
     """What one trigger decided for one rule (or what an ``otherwise`` started).
 
+    ``origin`` says what made it: :attr:`DecisionOrigin.TRIGGER`, or
+    :attr:`DecisionOrigin.OTHERWISE` for an ``otherwise`` (a *fallback*, :attr:`fallback`).
     ``clause`` is 0 for the default response, i for clause i (layer ``R.i``), None when
-    undetermined (a measure it needed had no value: nothing is done). ``conditions``
-    holds ``(clause, condition text, value)`` with clause 0 for the trigger condition.
-    A fallback decision (:attr:`fallback`) has ``violated``, the obligation whose miss
-    started it, and its explanation in ``reason``; its ``event`` is :data:`OTHERWISE` (no
-    event triggered it), as its records say.
+    undetermined (a measure it needed had no value: nothing is done); a fallback's is the
+    clause whose obligation was missed, and its ``layer`` None. ``conditions`` holds
+    ``(clause, condition text, value)`` with clause 0 for the trigger condition. A fallback
+    has ``violated``, the id of the obligation whose miss started it, ``missed``, that
+    obligation, and its explanation in ``reason``; its ``event`` is :data:`OTHERWISE` (no
+    event triggered it), as its records say. ``explanations`` are the sentences for people
+    of its rules (:attr:`for_people`), when the Manager was given some.
     """
 
     id: int
@@ -52,7 +69,11 @@ class Decision:
     context_version: int = 0
     violated: int | None = None
     unknown: Unknowns = Unknowns.UNDETERMINED  # how unknown condition values were read
+    origin: DecisionOrigin = DecisionOrigin.TRIGGER
+    missed: Obligation | None = None  # a fallback's missed obligation
+    explanations: Explanations | None = field(default=None, compare=False, repr=False)
     _explanation: list[str] = field(default_factory=list, init=False, compare=False, repr=False)
+    _for_people: list[str] = field(default_factory=list, init=False, compare=False, repr=False)
 
     @classmethod
     def made(
@@ -73,9 +94,12 @@ class Decision:
         context_version: int = 0,
         violated: int | None = None,
         unknown: Unknowns = Unknowns.UNDETERMINED,
+        origin: DecisionOrigin = DecisionOrigin.TRIGGER,
+        missed: Obligation | None = None,
+        explanations: Explanations | None = None,
     ) -> Decision:
         """The same as the constructor, for the Manager's hot path: a frozen dataclass sets
-        each of its 16 fields through ``object.__setattr__`` (about 5 us a decision here);
+        each of its fields through ``object.__setattr__`` (about 5 us a decision here);
         this fills the instance's dict in one call. The parameters are the fields, with the
         same defaults (a test keeps them so)."""
         d = object.__new__(cls)
@@ -95,7 +119,11 @@ class Decision:
             context_version=context_version,
             violated=violated,
             unknown=unknown,
+            origin=origin,
+            missed=missed,
+            explanations=explanations,
             _explanation=[],
+            _for_people=[],
         )
         return d
 
@@ -105,6 +133,16 @@ class Decision:
         if not self._explanation:
             self._explanation.append(self.reason or _because(self))
         return self._explanation[0]
+
+    @property
+    def for_people(self) -> str:
+        """What the robot says to the person in front of it: the sentence of the Manager's
+        explanations file for this case of the rule, its ``{measure}`` placeholders filled,
+        else one in plain words (``I will refuse and explain why, because requester is
+        patient is no.``); made when first asked for."""
+        if not self._for_people:
+            self._for_people.append(people.sentence(self))
+        return self._for_people[0]
 
     def explain(self, width: int | None = None) -> str:
         """:attr:`explanation`, or with ``width`` a version for a screen: each condition
@@ -117,9 +155,9 @@ class Decision:
 
     @property
     def fallback(self) -> bool:
-        """True for an ``otherwise`` decision: started by a missed obligation (``violated``),
-        not by a trigger."""
-        return self.violated is not None
+        """True for an ``otherwise`` decision (``origin``): started by a missed obligation
+        (``violated``), not by a trigger."""
+        return self.origin is DecisionOrigin.OTHERWISE
 
     @property
     def undetermined(self) -> bool:
@@ -143,19 +181,26 @@ class Decision:
             "missing": list(self.missing),
             "reason": self.reason,
             "explanation": self.explanation,
+            "for_people": self.for_people,
             "context_version": self.context_version,
             "violated": self.violated,
             "unknowns": str(self.unknown),
+            "origin": str(self.origin),
+            "missed": None if self.missed is None else self.missed.to_json(),
         }
 
     @classmethod
     def from_json(cls, d: Mapping[str, Any]) -> Decision:
-        """A decision read back from :meth:`to_json`; raises KeyError/ValueError/TypeError when malformed."""
+        """A decision read back from :meth:`to_json`; raises KeyError/ValueError/TypeError when
+        malformed. A record of an older Manager, without ``origin``, is a fallback when it has
+        ``violated``; one without ``for_people`` gets the sentence in plain words."""
         clause = d.get("clause")
         violated = d.get("violated")
+        missed = d.get("missed")
         if isinstance(clause, bool) or not (clause is None or isinstance(clause, int)):
             raise ValueError(f"decision clause must be a whole number or null, not {clause!r}")
-        return cls(
+        origin = d.get("origin", DecisionOrigin.TRIGGER if violated is None else DecisionOrigin.OTHERWISE)
+        decision = cls(
             id=int(d["id"]),
             time=float(d.get("time", 0.0)),
             event=str(d.get("event", "")),
@@ -173,7 +218,13 @@ class Decision:
             context_version=int(d.get("context_version", 0)),
             violated=None if violated is None else int(violated),
             unknown=Unknowns(d.get("unknowns", Unknowns.UNDETERMINED)),
+            origin=DecisionOrigin(origin),
+            missed=None if missed is None else Obligation.from_json(missed),
         )
+        said = d.get("for_people")
+        if isinstance(said, str):  # what was said then, whatever the explanations are now
+            decision._for_people.append(said)
+        return decision
 
 
 def _fmt(v: Value | None) -> str:
@@ -187,7 +238,6 @@ def _fmt(v: Value | None) -> str:
 SHOWN_VALUES = 8
 """How many measure values a shortened explanation (:meth:`Decision.explain`) names per condition."""
 
-_WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _TERM = re.compile(r"[A-Za-z_][A-Za-z0-9_]*|[0-9]+(?:\.[0-9]+)?")
 _CONNECTIVES = frozenset({"and", "or", "not"})
 
@@ -225,10 +275,7 @@ def _because(d: Decision, width: int | None = None) -> str:
     def reason(t: str, v: bool | None) -> str:
         if t in d.values:  # a boolean measure: "userUndressed was true"
             return f"{t} was {_fmt(v)}"
-        words = set(_WORD.findall(t))  # one pass over the text, not one per value
-        named = [
-            (n, x) for n, x in d.values.items() if (n in words if _WORD.fullmatch(n) else _mentions(t, n))
-        ]
+        named = mentioned(t, d.values)
         more = ""
         if width is not None and len(named) > SHOWN_VALUES:
             more = f", … ({len(named) - SHOWN_VALUES:,} more)"
@@ -244,7 +291,3 @@ def _because(d: Decision, width: int | None = None) -> str:
         + (f" (unless {cond(hedges[clause - 1][1])})" if clause <= len(hedges) else "")
     )
     return f"{rule}: {what} [{head}], because {because}"
-
-
-def _mentions(text: str, name: str) -> bool:
-    return re.search(rf"\b{re.escape(name)}\b", text) is not None

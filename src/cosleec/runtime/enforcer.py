@@ -24,7 +24,8 @@ from cosleec.runtime.core import Core
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.jobs import Job
 from cosleec.runtime.model import Obligation
-from cosleec.runtime.obligations import CANCELLED, PENDING, REFUSED, Outcome, Tracked
+from cosleec.runtime.obligations import BLOCKED, CANCELLED, PENDING, Outcome, Tracked
+from cosleec.runtime.plain import duration
 from cosleec.runtime.priorities import covers, forced
 from cosleec.runtime.steps import Step
 
@@ -255,9 +256,9 @@ class Enforcer:
             how = f"{higher} has priority ({CONFLICT_AWARE}): the other is kept as long as possible"
             self.conflict(o, p, now, CONFLICT_AWARE, higher, how, step)
             return []  # settled later, at the deadline that forces it (forced())
-        how = "the prohibition forbids the whole window and wins: the obligation is refused"
+        how = "the prohibition forbids the whole window and wins: the obligation is blocked"
         self.conflict(o, p, now, "prohibition-wins", p.rule, how, step)
-        core.tracker.finish(o, REFUSED, now, p.rule)
+        core.tracker.finish(o, BLOCKED, now, p.rule)
         core.stats.violations += 1
         core.track(o, step)
         if o.obligation.otherwise is None:
@@ -269,7 +270,9 @@ class Enforcer:
     ) -> None:
         """Record that obligation ``o`` and prohibition ``p`` conflict, and how it is resolved."""
         self.core.stats.conflicts += 1
-        until = "ever" if p.hi is None else f"{p.hi:g} s"
+        until = (
+            "with no end" if p.hi is None else f"for another {duration(p.hi - now)}"
+        )  # never a clock reading
         step.emit(
             Kind.CONFLICT,
             {
@@ -282,6 +285,6 @@ class Enforcer:
                 "resolution": resolution,
                 "winner": winner,
                 "explanation": f"{o.rule} requires {o.obligation.describe()} and {p.rule} forbids {o.event} "
-                f"until {until}: {how}",
+                f"{until}: {how}",
             },
         )

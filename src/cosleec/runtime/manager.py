@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import itertools
 import logging
+import threading
 import uuid
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
@@ -29,7 +30,7 @@ from typing import Any
 
 from cosleec.bulk import paused_gc
 from cosleec.errors import clip, show
-from cosleec.lang import HedgeSemantics, Specification, one_of
+from cosleec.lang import HedgeSemantics, Specification, clause_semantics_for, one_of
 from cosleec.records import Kind, RuntimeEvent
 from cosleec.runtime import reload as reloading
 from cosleec.runtime.audit import AuditLog
@@ -38,14 +39,14 @@ from cosleec.runtime.context import Context
 from cosleec.runtime.core import Core, InForce
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.enforcer import Enforcer
-from cosleec.runtime.errors import ConfigurationError, ContextError
+from cosleec.runtime.errors import BindingError, ConfigurationError, ContextError
 from cosleec.runtime.gate import Gate
 from cosleec.runtime.implementations import Capability, Implementations
 from cosleec.runtime.jobs import Job
 from cosleec.runtime.journal import Journal, JournalError
 from cosleec.runtime.layers import LayerManager, LayerSwitch
 from cosleec.runtime.obligations import Tracked, Tracker
-from cosleec.runtime.options import Options, UnknownEvents
+from cosleec.runtime.options import Options, UnknownEvents, explanations_of
 from cosleec.runtime.permission import Answers, Permission, undeclared
 from cosleec.runtime.priorities import PossibleConflict, Priorities, warn_conflicts, warn_lead
 from cosleec.runtime.reload import Reloaded
@@ -55,6 +56,7 @@ from cosleec.runtime.runner import Runner
 from cosleec.runtime.steps import Step, Steps, weakly
 from cosleec.runtime.tasks import Task
 from cosleec.runtime.timer import Timer
+from cosleec.runtime.watch import ClockWatch
 
 log = logging.getLogger("cosleec.runtime")
 
@@ -68,11 +70,12 @@ class Manager:
     one). Build it from a :class:`RuleSet` or with :meth:`from_file` / :meth:`from_text`;
     bind tasks (:meth:`bind`) or capabilities (:meth:`capability`), :meth:`start` it, then
     feed it measures (:meth:`update`) and events (:meth:`event`), and ask before acting
-    (:meth:`request`; :meth:`permission` also says why not). :meth:`reload` puts new rules
+    (:meth:`request`, an attempt: a refusal is recorded; :meth:`permission`, a question:
+    nothing is). :meth:`reload` puts new rules
     in force while it runs. The options (``semantics``, ``clock``, ``unknown``,
     ``unknown_events``, ``untimed``, ``audit``, ``journal``, ``reset_journal``, ``max_age``,
     ``history``, ``max_depth``, ``dispatch``, ``priorities``, ``priority_semantics``,
-    ``priority_lead``) are those of :class:`~cosleec.runtime.options.Options`, which says
+    ``priority_lead``, ``explanations``) are those of :class:`~cosleec.runtime.options.Options`, which says
     what each means; give them as keywords, or one ``options=Options(...)``.
     """
 
@@ -93,11 +96,12 @@ class Manager:
             (r.name for r in rules.rules), o.all_priorities(rules.spec), o.priority_semantics, o.priority_lead
         )
         self._given = list(o.priorities)  # the caller's priorities (not the file's): a reload keeps them
+        self._semantics = o.semantics  # the caller's clause semantics (None: each rule file's own)
         steps = Steps(self.clock, run_id=self.run_id)
         core = Core(
             rules,
             steps,
-            layers=LayerManager(rules, o.semantics, o.unknown),
+            layers=LayerManager(rules, clause_semantics_for(rules.spec, o.semantics), o.unknown),
             tracker=Tracker(o.untimed),
             priorities=prio,
             max_age=dict(o.max_age or {}),
@@ -105,6 +109,8 @@ class Manager:
             dispatch=o.dispatch,
         )
         core.index()
+        words = explanations_of(o.explanations)
+        core.explain(None if words is None else words.check(rules))  # before anything is opened
         self.core, self.stats, self.decisions, self.tracker = core, core.stats, core.decisions, core.tracker
         self._answers = Answers(core)
         self._gate = Gate(core, self._answers)
@@ -114,6 +120,9 @@ class Manager:
         self._timer = Timer(core, self._enforcer, self._gate, weakly(self.tick))
         self.possible_conflicts: list[PossibleConflict] = []  # item pairs that can conflict (start() warns)
         self._check = False  # start() checked the bindings: a reload checks the new rules' too
+        self._started = False  # start() ran, or the first event/update/request started it
+        self._starting = threading.Lock()
+        self._watch = ClockWatch(weakly(self._judge), core.steps)  # a virtual clock's moves judge
         self.audit: AuditLog | None = None
         self.journal: Journal | None = None
         self._open(o)  # last: what it opens (files, locks) is not left open by a refusal above
@@ -225,13 +234,27 @@ class Manager:
         BindingError listing what is missing (skipped with ``check=False`` or without
         dispatch). With a journal, deadlines that passed while down are judged now (their
         ``otherwise`` runs once). ``timer=True`` judges deadlines and stale values on a
-        daemon thread; without it, call :meth:`tick` (as tests with a VirtualClock do).
+        daemon thread; on a :class:`VirtualClock`, every ``advance``/``set`` of the clock
+        judges what fell due (this Manager ticks); otherwise call :meth:`tick`.
+
+        Call it before the first :meth:`event`, :meth:`update` or :meth:`request`: one of
+        those on a Manager not started starts it (:meth:`_start_implicitly`), with a warning.
         """
+        self._started = True
         core = self.core
         self.possible_conflicts = warn_conflicts(core.ruleset, core.priorities)
         if check and core.dispatch:
             core.implementations.check()
             self._check = True
+        self._begin()
+        if timer:
+            self._timer.start(self.tick)  # held while it runs: close() stops it
+        return self
+
+    def _begin(self) -> None:
+        """What every start does after the completeness check: the ``options`` record, the
+        priority-lead warning, the handlers built, what fell due judged, the virtual clock watched."""
+        core = self.core
         if core.steps.recording:  # what the run's verdicts depend on: `cosleec conforms` reads it back
             with core.steps.step() as step:
                 step.emit(Kind.OPTIONS, core.options_record())
@@ -239,9 +262,33 @@ class Manager:
         if core.dispatch:
             core.implementations.prepare()  # start-up work, not the first trigger's latency
         self.tick()
-        if timer:
-            self._timer.start(self.tick)  # held while it runs: close() stops it
-        return self
+        self._watch.begin(self.clock)  # moving a virtual clock judges what fell due
+
+    def _start_implicitly(self, what: str) -> None:
+        """The policy for ``event``/``update``/``request`` before :meth:`start`: start now.
+
+        The Manager starts itself as ``start()`` would (the conflict warnings, the
+        ``options`` record, what fell due judged, the virtual clock watched), and says so in
+        a warning that names :meth:`start` -- with, when the implementations are incomplete,
+        what the completeness check found: a warning here, not BindingError, so that code
+        written before this policy keeps running, but never silently. Call ``start()``
+        (or ``start(check=False)`` when nothing is implemented on purpose) to have no warning.
+        """
+        with self._starting:
+            if self._started:
+                return
+            self._started = True
+            core = self.core
+            self.possible_conflicts = warn_conflicts(core.ruleset, core.priorities)
+            missing = core.implementations.missing() if core.dispatch else []
+            found = f"; the completeness check found an {BindingError(missing).message}" if missing else ""
+            log.warning(
+                "Manager.%s() before start(): the Manager started itself%s\n  hint: call start() before the "
+                "first event, update or request (start(check=False) when no implementation is bound on purpose)",
+                what,
+                found,
+            )
+            self._begin()
 
     def close(self) -> None:
         """Stop the timer thread (waiting up to 5 s), then close the journal and the audit log.
@@ -249,6 +296,7 @@ class Manager:
         Call it once, when done: a Manager used after closing fails on its next record.
         """
         self._timer.stop()
+        self._watch.stop()
         steps = self.core.steps
         with steps.lock:
             if steps.closed:
@@ -273,6 +321,8 @@ class Manager:
         """
         updates = {**(values or {}), **kw}
         core = self.core
+        if not self._started:
+            self._start_implicitly("update")
         self._catch_up()
         with core.steps.step() as step:
             try:
@@ -280,7 +330,8 @@ class Manager:
             except ContextError as e:
                 core.stats.rejected += 1
                 shown = {clip(str(k), 80): show(v) for k, v in itertools.islice(updates.items(), 20)}
-                step.emit(Kind.REJECTED, {"reason": clip(str(e), 300), "update": shown})
+                data = {"reason": clip(e.message, 300), "update": shown}
+                step.emit(Kind.REJECTED, {**data, "hint": clip(e.hint, 300)} if e.hint else data)
                 rejected: ContextError | None = e
                 followups: list[Job] = []
             else:
@@ -334,8 +385,11 @@ class Manager:
         Returns the decisions of the rules it triggered (an undetermined decision too). An
         event no declaration names follows ``unknown_events``. ``values`` are measures
         observed with the event, applied as one update just before it with no other step
-        between (all or nothing: rejected values, ContextError, and no event).
+        between (all or nothing: rejected values, ContextError, and no event). Before
+        :meth:`start`, the Manager starts itself first, with a warning (:meth:`_start_implicitly`).
         """
+        if not self._started:
+            self._start_implicitly("event")
         if values and name in self.core.ruleset.events:  # (an unknown event takes no value: all or nothing)
             with self.core.steps.lock:  # re-entrant: the two steps below take it too
                 self.update(values)
@@ -344,6 +398,8 @@ class Manager:
 
     def _occur(self, name: str) -> list[Decision]:
         core = self.core
+        if not self._started:
+            self._start_implicitly("event")
         self._catch_up()
         with core.steps.step() as step:
             if undeclared(self.core, name, "event", step, self.unknown_events) is not None:
@@ -362,20 +418,19 @@ class Manager:
         self._runner.dispatch(followups)
         return decisions
 
-    def request(self, name: str) -> bool:
-        """May ``name`` happen now? False (and the attempt recorded) while a prohibition holds,
-        when the Manager cannot keep its state, and for an undeclared event under
-        ``unknown_events="refuse"``. :meth:`permission` answers the same, and says why."""
-        return self.permission(name).permitted
+    def request(self, name: str, *, source: str = "") -> Permission:
+        """The robot is about to do ``name``: may it, now? Call it for every real attempt.
 
-    def permission(self, name: str, *, source: str = "") -> Permission:
-        """May ``name`` happen now, and if not, why not: ask before acting, and tell a person.
-
-        The answer of :meth:`request`, with the same effects: a refusal is counted and
-        recorded (a ``refused`` record naming the prohibitions, the reason and ``source``,
-        who asked). Not permitted while a prohibition forbids it now (its window, ends
-        included); when the Manager can no longer keep its state or is closed (nothing is
-        recorded); for an undeclared event under ``unknown_events="refuse"`` (``rejected``).
+        Returns the :class:`Permission` (true as a condition exactly when permitted, so
+        ``if manager.request(e):`` acts only when allowed; ``.reason`` says why not, for a
+        person). A refusal is counted (``stats["refused"]``) and recorded (a ``refused``
+        record naming the prohibitions, the reason and ``source``, who asked); a permitted
+        attempt records nothing. Not permitted while a prohibition forbids it now (its
+        window, ends included); when the Manager can no longer keep its state or is closed
+        (nothing is recorded); for an undeclared event under ``unknown_events="refuse"``
+        (``rejected``). A question that is not an attempt (a screen, a status) is
+        :meth:`permission`, which records nothing. Before :meth:`start`, the Manager
+        starts itself first, with a warning.
         """
         if not isinstance(source, str):
             raise TypeError(f"source names who asks, as a string, not {type(source).__name__}")
@@ -383,6 +438,8 @@ class Manager:
         if steps.broken is not None or steps.closed:
             return self._answers.stopped(name, steps.broken)
         try:
+            if not self._started:
+                self._start_implicitly("request")
             self._catch_up()
             with steps.step() as step:
                 unknown = undeclared(self.core, name, "request", step, self.unknown_events)
@@ -399,10 +456,48 @@ class Manager:
             raise
         return answer
 
+    def permission(self, name: str, **given: object) -> Permission:
+        """Would ``name`` be permitted now, and if not, why not: a question, not an attempt.
+
+        For what only looks (an operator's screen, a status, a planner weighing options):
+        the answer :meth:`request` would give now, with the rules that forbid and a reason a
+        person can read, but nothing is recorded or counted. Deadlines that fell due are
+        judged first (that is time passing, recorded as always). An undeclared event raises
+        ContextError under ``unknown_events="raise"``, else is not permitted. ``source=``
+        is refused with a TypeError: naming who asks is for a real attempt, :meth:`request`.
+        """
+        if given:
+            raise TypeError(
+                f"permission() takes no {', '.join(map(repr, given))}: it is a question and records "
+                "nothing; for a real attempt, call request(name, source=...), which records a refusal"
+            )
+        steps = self.core.steps
+        if steps.broken is not None or steps.closed:
+            return self._answers.stopped(name, steps.broken)
+        if self._started and self.core.tracker.backlog(self.clock.now()):
+            try:
+                self.tick()  # what fell due by now is judged: an otherwise may forbid more
+            except JournalError:
+                return self._answers.stopped(name, steps.broken)
+        with steps.lock:
+            return self._answers.peek(name, self.clock.now(), self.unknown_events)
+
     # ------------------------------------------------------------------ time
     def tick(self) -> list[Decision]:
         """Process deadlines and stale values up to now (the timer thread calls this too), in
-        batches that release the lock between them. Returns the ``otherwise`` decisions started."""
+        batches that release the lock between them.
+
+        Returns the ``otherwise`` decisions started since the last call: by this one, and by
+        the moves of a virtual clock since (which tick this Manager themselves), so that
+        ``clock.advance(61); started = m.tick()`` still sees what the move started (at most
+        :data:`~cosleec.runtime.watch.UNCLAIMED` of them are kept for it, the latest).
+        """
+        started = self._judge()
+        return self._watch.claim() + started
+
+    def _judge(self) -> list[Decision]:
+        """What :meth:`tick` does: the deadlines and stale values up to now, in batches; the
+        ``otherwise`` decisions started."""
         followups: list[Job] = []
         more = True
         while more:
@@ -457,6 +552,7 @@ class Manager:
         core = self.core
         with core.steps.step() as step:
             prio, impl = reloading.check(core, rules, given, binding, handlers, checked=self._check)
+            reloading.same_semantics(core, rules, self._semantics)
             followups = self._advance(step)  # (nothing, unless the clock moved since the tick)
             result, followups = reloading.swap(
                 core, self._enforcer, self._gate, (rules, prio, impl), followups, step

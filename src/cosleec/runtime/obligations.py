@@ -18,8 +18,8 @@ passing of time to it. The rules it applies:
   the last of the windows closes.
 - A window that ends before it starts (a negative deadline from measures) is closed at
   once (:meth:`Tracker.expire`).
-- An obligation can also end ``refused`` (a prohibition forbids its whole window: a
-  conflict, see the Manager) or ``cancelled`` (a higher rule's priority); both are set
+- An obligation can also end ``blocked`` (a prohibition forbids its whole window: a
+  conflict, see the Manager; a violation, counted in ``stats["violations"]``) or ``cancelled`` (a higher rule's priority); both are set
   by the Manager through :meth:`Tracker.finish`. It ends ``withdrawn`` when a reload
   removes the rule (or the response item) it came from (:meth:`Tracker.withdraw`): it
   can no longer be violated and its ``otherwise`` never starts.
@@ -39,7 +39,8 @@ from cosleec.lang import Untimed
 from cosleec.runtime.model import Obligation
 
 PENDING, FULFILLED, VIOLATED, RESPECTED = "pending", "fulfilled", "violated", "respected"
-REFUSED, CANCELLED, WITHDRAWN = "refused", "cancelled", "withdrawn"
+BLOCKED, CANCELLED, WITHDRAWN = "blocked", "cancelled", "withdrawn"
+REFUSED = BLOCKED  # the old name of BLOCKED; "refused" is an attempt a prohibition did not permit
 MISSES_KEPT = 64  # per event: missed obligations a late occurrence is still reported for
 
 
@@ -133,7 +134,7 @@ class Tracked:
                 for br in d.get("branches", ())
             ),
             met=tuple([int(i) for i in m] for m in d.get("met", ())),
-            status=str(d["status"]),
+            status=BLOCKED if d["status"] == "refused" else str(d["status"]),  # its name before issue 33
             outcome_at=None if at is None else float(at),
             by=d.get("by"),
             late=[float(x) for x in d.get("late", ())],
@@ -269,7 +270,7 @@ class Tracker:
         return out
 
     def finish(self, t: Tracked, status: str, now: float, by: str) -> None:
-        """End ``t`` as ``refused`` or ``cancelled`` at ``now``, settled by rule ``by``."""
+        """End ``t`` as ``blocked`` or ``cancelled`` at ``now``, settled by rule ``by``."""
         t.status, t.outcome_at, t.by = status, now, by
         self._close(t)
 

@@ -32,12 +32,13 @@ from cosleec.lang import pairs as priority_pairs
 from cosleec.runtime.audit import AuditLog
 from cosleec.runtime.clock import Clock
 from cosleec.runtime.errors import ConfigurationError
+from cosleec.runtime.explanations import Explanations
 from cosleec.runtime.journal import Journal
 from cosleec.runtime.model import MAX_WINDOW_S
 from cosleec.runtime.priorities import Priorities
 from cosleec.runtime.runner import FRAMES_PER_LEVEL, deepest
 
-__all__ = ["GivenPriority", "Options", "UnknownEvents", "given_priorities"]
+__all__ = ["GivenPriority", "Options", "UnknownEvents", "explanations_of", "given_priorities"]
 
 GivenPriority = str | tuple[str, str]
 """A priority as a caller gives it: ``"H > L"`` (or a chain ``"A > B > C"``) or ``(H, L)``."""
@@ -54,8 +55,10 @@ class UnknownEvents(StrEnum):
 class Options:
     """A Manager's options, checked and typed; what each one means.
 
-    ``semantics`` -- how the ``unless`` clauses of a rule combine (``"last-wins"``, the
-    default, or ``"nested"``, :class:`~cosleec.lang.HedgeSemantics`); ``clock`` -- a
+    ``semantics`` -- how the ``unless`` clauses of a rule combine (``"last-wins"`` or
+    ``"nested"``, :class:`~cosleec.lang.HedgeSemantics`; None, the default: the rule file's
+    ``semantics_start`` block, else last-wins, as SLEEC; one that contradicts the file's
+    block is refused, :func:`~cosleec.lang.clause_semantics_for`); ``clock`` -- a
     :class:`~cosleec.runtime.clock.Clock` (None: monotonic; a VirtualClock for tests);
     ``unknown`` -- how a clause condition over a measure with no value is read
     (``"undetermined"``, the fail-closed default, see :mod:`cosleec.runtime.manager`;
@@ -75,14 +78,18 @@ class Options:
     many decisions ``Manager.decisions`` keeps; ``max_depth`` -- how deeply implementations
     may trigger rules whose implementations trigger rules (a capability that triggers its
     own rule is stopped there, with a ``task-failed`` record); ``dispatch=False`` decides
-    without running implementations (the ROS Manager node, ``cosleec decide``).
+    without running implementations (the ROS Manager node, ``cosleec decide``);
+    ``explanations`` -- what the robot says to people, rule by rule: the path of an
+    explanations file (:mod:`cosleec.runtime.explanations`), an
+    :class:`~cosleec.runtime.explanations.Explanations`, or a mapping of the file's shape;
+    checked against the rules when the Manager is built (``Decision.for_people``).
 
     Strings are taken for the choices and any iterable for ``priorities``: building checks
-    and converts them. ``clock``, ``audit``, ``journal``, ``max_age`` and ``dispatch`` are
-    kept as given; what they hold is checked where they are opened or applied.
+    and converts them. ``clock``, ``audit``, ``journal``, ``max_age``, ``dispatch`` and
+    ``explanations`` are kept as given; what they hold is checked where they are opened or applied.
     """
 
-    semantics: HedgeSemantics = HedgeSemantics.LAST_WINS
+    semantics: HedgeSemantics | None = None
     clock: Clock | None = None
     unknown: Unknowns = Unknowns.UNDETERMINED
     unknown_events: UnknownEvents = UnknownEvents.RAISE
@@ -97,12 +104,14 @@ class Options:
     priorities: tuple[GivenPriority, ...] = ()
     priority_semantics: PrioritySemantics = PrioritySemantics.CANCEL
     priority_lead: float = 0.0
+    explanations: str | Path | Explanations | Mapping[str, Any] | None = None
 
     def __post_init__(self) -> None:
         """Check and convert every option, in the Manager's order: ConfigurationError for the
         first wrong one."""
         put = object.__setattr__  # frozen: the one place the fields are set after __init__
-        put(self, "semantics", one_of(HedgeSemantics, self.semantics, "semantics"))
+        if self.semantics is not None:
+            put(self, "semantics", one_of(HedgeSemantics, self.semantics, "semantics"))
         put(self, "unknown", one_of(Unknowns, self.unknown, "unknown"))
         put(self, "unknown_events", one_of(UnknownEvents, self.unknown_events, "unknown_events"))
         put(self, "untimed", _untimed(self.untimed))
@@ -134,18 +143,36 @@ class Options:
         """The priorities the Manager builds from: the rule file's pairs, then the caller's."""
         return [*priority_pairs(spec), *self.priorities]
 
-    def reading(self, declared: Iterable[tuple[str, str]] = ()) -> Reading:
+    def reading(
+        self, declared: Iterable[tuple[str, str]] = (), semantics: HedgeSemantics | None = None
+    ) -> Reading:
         """How these options read rules that declare ``declared`` -- the rule file's pairs and
-        the caller's, as ``Priorities.build`` checked them (``Priorities.declared``): what the
-        Manager's ``options`` record states (:meth:`Reading.to_json`)."""
+        the caller's, as ``Priorities.build`` checked them (``Priorities.declared``) -- and
+        ``semantics``, the clause semantics those rules are read with when the option leaves
+        it to the file: what the Manager's ``options`` record states (:meth:`Reading.to_json`)."""
         return Reading(
-            semantics=self.semantics,
+            semantics=self.semantics or semantics or HedgeSemantics.LAST_WINS,
             unknown=self.unknown,
             untimed=self.untimed,
             priorities=tuple(declared),
             priority_semantics=self.priority_semantics,
             priority_lead=self.priority_lead,
         )
+
+
+def explanations_of(given: str | Path | Explanations | Mapping[str, Any] | None) -> Explanations | None:
+    """The ``explanations`` option read (a file loaded, a mapping taken), not yet checked
+    against the rules; ConfigurationError for anything else."""
+    if given is None or isinstance(given, Explanations):
+        return given
+    if isinstance(given, str | Path):
+        return Explanations.load(given)
+    if isinstance(given, Mapping):
+        return Explanations.of(given)
+    raise ConfigurationError(
+        f"explanations must be the path of an explanations file, an Explanations or a mapping, not {show(given)}",
+        hint='Manager(rules, explanations="rules.explanations.yaml")',
+    )
 
 
 def given_priorities(priorities: Iterable[GivenPriority] | None) -> list[GivenPriority]:

@@ -65,7 +65,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from cosleec.errors import show
-from cosleec.lang import CANCEL, Printer
+from cosleec.lang import CANCEL, HedgeSemantics, Printer, clause_semantics_for
 from cosleec.lang import ast as A
 from cosleec.lang import pairs as priority_pairs
 from cosleec.records import Kind
@@ -164,6 +164,23 @@ def check(
     impl = _bound(core.implementations, rules, tasks, capabilities, checked=checked)
     carried(core.context, rules)
     return prio, impl
+
+
+def same_semantics(core: Core, rules: RuleSet, given: HedgeSemantics | None) -> None:
+    """ReloadError when ``rules`` would be read with other clause semantics than the rules in
+    force (their file declares another, or contradicts ``given``, the caller's option): the
+    layers of a running Manager keep one semantics, so that change needs a restart."""
+    try:
+        wanted = clause_semantics_for(rules.spec, given)
+    except ConfigurationError as e:
+        raise ReloadError(f"{_REFUSED}: {e.message}", hint=e.hint, where=e.where) from None
+    if wanted != core.layers.semantics:
+        raise ReloadError(
+            f"{_REFUSED}: the new rules are read with clause semantics {wanted}, the rules in force "
+            f"with {core.layers.semantics}",
+            hint="a running Manager keeps one clause semantics: restart it to change the semantics "
+            "block, or keep the block as it was",
+        )
 
 
 def _bound(

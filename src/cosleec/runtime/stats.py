@@ -17,8 +17,11 @@ class Stats:
 
     ``updates``: context updates applied; ``rejected``: inputs refused (an update, an
     unknown event, what a front end noted); ``events``: occurrences; ``decisions``:
-    decisions made (``otherwise`` ones included); ``refused``: ``request`` answers (and
-    dispatches) refused by a prohibition; ``violations``: obligations violated or refused;
+    decisions made (``otherwise`` ones included); ``refused``: real attempts a prohibition
+    did not permit -- ``request`` calls and dispatches, one per ``refused`` audit record
+    (:meth:`~cosleec.runtime.Manager.permission`, a question, counts nothing);
+    ``violations``: obligations and prohibitions that ended ``violated`` or ``blocked``
+    (violated by conflict), counted as ``cosleec conforms`` counts its violations;
     ``undetermined``: decisions an unknown value left undetermined; ``task_failures``:
     implementations that failed; ``conflicts``: conflicts met; ``cancelled``: activations
     a priority cancelled.

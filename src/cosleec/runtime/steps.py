@@ -209,7 +209,7 @@ class Steps:
     def refusal(self) -> CosleecError:
         """Why no more steps are taken (a failed journal or audit log, or closed)."""
         if self.broken is not None:
-            return JournalError(str(self.broken), where=self.broken.where, hint=self.broken.hint)
+            return JournalError(self.broken.message, where=self.broken.where, hint=self.broken.hint)
         return ConfigurationError("this Manager is closed", hint="make a new Manager (with its journal)")
 
     def subscribe(self, fn: Observer) -> Callable[[], None]:

@@ -38,8 +38,8 @@ class Reporter(Protocol):
         """The robot did ``name``."""
         ...
 
-    def request(self, name: str) -> bool:
-        """May the robot do ``name`` now?"""
+    def request(self, name: str) -> object:
+        """May the robot do ``name`` now? (True as a condition exactly when it may.)"""
         ...
 
 
@@ -111,4 +111,4 @@ class Task:
         """May the robot do ``name`` now? False while a prohibition forbids it (the refusal is recorded)."""
         if self.manager is None:
             raise BindingError([f"task {type(self).__name__} is not bound: call manager.bind(task) first"])
-        return self.manager.request(name)
+        return bool(self.manager.request(name))

@@ -25,9 +25,11 @@ from cosleec.semantics.trace import (
     read_recording,
     read_trace,
 )
-from cosleec.semantics.verdicts import Conflict, Firing, Judgement, Verdict
+from cosleec.semantics.verdicts import BLOCKED, BREACHES, Conflict, Firing, Judgement, Verdict
 
 __all__ = [
+    "BLOCKED",
+    "BREACHES",
     "CANCEL",
     "CONFLICT_AWARE",
     "Conflict",

@@ -28,6 +28,7 @@ from cosleec.lang import (
     Specification,
     Unknowns,
     Untimed,
+    clause_semantics_for,
     cycle,
     pairs,
     parse_priority,
@@ -71,10 +72,11 @@ class Choice:
 
 def choose_reading(spec: Specification, recording: Recording, given: Given) -> Choice:
     """The reading ``recording`` is judged under against ``spec``: ``given``'s options, else the
-    audit log's, else the defaults.
+    audit log's, else the defaults (for the clause semantics: the file's semantics block).
 
-    UserError for a given priority that names no rule of ``spec``, and for priorities that
-    go round in a circle (a rule above itself).
+    UserError for a given priority that names no rule of ``spec``, for priorities that
+    go round in a circle (a rule above itself), and for given clause semantics that
+    contradict the file's semantics block.
     """
     log = recording.options
     notes: list[str] = []
@@ -84,8 +86,12 @@ def choose_reading(spec: Specification, recording: Recording, given: Given) -> C
         where = f"{recording.source}:{log.line}"
         priorities = judged_priorities(spec, [], logged=log.priorities, where=where, notes=notes)
     fallback = _DEFAULT if log is None else log
+    if given.semantics is not None:  # ConfigurationError when it contradicts the file's block
+        clause_semantics_for(spec, given.semantics, option="--semantics")
+    # not given: what the run used (its options record), else what the file declares
+    written = fallback.semantics if log is not None else clause_semantics_for(spec)
     reading = Reading(
-        semantics=_or(given.semantics, fallback.semantics),
+        semantics=_or(given.semantics, written),
         untimed=_or(given.untimed, fallback.untimed),
         priorities=tuple(priorities),
         priority_semantics=_or(given.priority_semantics, fallback.priority_semantics),

@@ -90,10 +90,10 @@ from cosleec.lang import ast as A
 from cosleec.semantics.inforce import InForce, Item
 from cosleec.semantics.trace import Step, Value
 from cosleec.semantics.verdicts import (
+    BLOCKED,
     CANCELLED,
     FULFILLED,
     PENDING,
-    REFUSED,
     RESPECTED,
     VIOLATED,
     Conflict,
@@ -636,7 +636,7 @@ class _Judge:
                 now, o.v.event, o.v.id, p.v.id, pair, (o.v.clause, p.v.clause), "prohibition-wins", p.v.rule
             )
         )
-        o.v.status, o.v.at, o.v.by = REFUSED, now, p.v.rule
+        o.v.status, o.v.at, o.v.by = BLOCKED, now, p.v.rule
         o.v.note = f"{p.v.rule} forbids {p.v.event} for the whole window"
         if o.otherwise is not None:
             self.start(o.otherwise, now, seq, o.v.instance, o.v.rule, o.v.clause, o.v.depth + 1)

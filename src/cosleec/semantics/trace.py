@@ -311,7 +311,7 @@ def _parse(path: str | Path, n: int, text: str, hint: str) -> object:
 
 def _traced(e: RecordError) -> TraceError:
     """The record reader's refusal of a line, as this module's error (same words, place, hint)."""
-    return TraceError(str(e), where=e.where, hint=e.hint)
+    return TraceError(e.message, where=e.where, hint=e.hint)
 
 
 class _DuplicateKey(Exception):  # not a ValueError: load_json lets it through

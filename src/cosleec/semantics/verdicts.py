@@ -4,12 +4,19 @@ These records are the vocabulary ``cosleec conforms`` prints and the differentia
 compares with the runtime's own records. Statuses:
 
 - an obligation (``E within T``) ends ``fulfilled`` (at the occurrence), ``violated`` (at
-  its deadline), ``refused`` (its whole window is forbidden by another rule's prohibition
+  its deadline), ``blocked`` (its whole window is forbidden by another rule's prohibition
   and no priority settles the conflict: violated by conflict, at the moment the conflict
   arises, and its ``otherwise`` starts then) or ``cancelled`` (by a higher rule's
   priority), or stays ``pending`` (it can still be met);
 - a prohibition (``not E within T``) ends ``respected`` (when its window closes),
   ``violated`` (at the forbidden occurrence) or ``cancelled``, or stays ``pending``.
+
+One meaning per word, the same in ``Manager.stats``, the audit log and ``cosleec
+conforms``: a *violation* is a verdict that makes the run not conform -- ``violated`` or
+``blocked`` (:data:`BREACHES`; ``stats["violations"]`` counts both); *refused* is only ever
+an attempt (``Manager.request``, a dispatch) a prohibition did not permit -- a ``refused``
+record, ``stats["refused"]`` -- never a verdict. Before issue 33 ``blocked`` was called
+``refused``: :func:`status` reads the old name (an old audit log, a saved ``--json``).
 """
 
 from __future__ import annotations
@@ -21,10 +28,19 @@ PENDING = "pending"
 FULFILLED = "fulfilled"
 RESPECTED = "respected"
 VIOLATED = "violated"
-REFUSED = "refused"
+BLOCKED = "blocked"
 CANCELLED = "cancelled"
+REFUSED = BLOCKED
+"""The old name of :data:`BLOCKED` (its value is ``"blocked"`` now): kept for importers."""
 
-BREACHES = frozenset({VIOLATED, REFUSED})  # the outcomes that make a trace not conform
+BREACHES = frozenset({VIOLATED, BLOCKED})  # the violations: the outcomes that make a trace not conform
+OLD_NAMES = {"refused": BLOCKED}  # statuses renamed: what an old record's status means now
+
+
+def status(word: str) -> str:
+    """A verdict status as it is named now: ``refused`` (an obligation's status before issue
+    33) is ``blocked``; any other word is itself."""
+    return OLD_NAMES.get(word, word)
 
 
 @dataclass(frozen=True, slots=True)
@@ -68,7 +84,7 @@ class Verdict:
     ``key`` names the response item it comes from (``Rule1:0``; ``Rule1.2:0/o:0`` is the
     first item of the ``otherwise`` of clause 2's first item); ``window`` is absolute
     ``(lo, hi)`` in trace seconds, ``hi`` None for no deadline. ``by`` says what settled it:
-    the occurring event, or for ``refused``/``cancelled`` the rule whose prohibition or
+    the occurring event, or for ``blocked``/``cancelled`` the rule whose prohibition or
     priority did. ``depth`` counts ``otherwise`` steps down a chain (0: from the trigger).
     """
 
@@ -90,7 +106,7 @@ class Verdict:
 
     @property
     def breach(self) -> bool:
-        """True when this verdict makes the trace not conform (violated or refused)."""
+        """True when this verdict is a violation: it makes the trace not conform (violated or blocked)."""
         return self.status in BREACHES
 
     def describe(self) -> str:
@@ -124,7 +140,7 @@ class Conflict:
     """The moment the rules owed ``event`` and forbade it in overlapping windows.
 
     ``obligation`` and ``prohibition`` are verdict ids; ``resolution`` says how it was
-    settled: ``prohibition-wins`` (no priority: the obligation is refused), ``deferred``
+    settled: ``prohibition-wins`` (no priority: the obligation is blocked), ``deferred``
     (the obligation's window outlasts the prohibition: the robot waits), ``cancel`` or
     ``conflict-aware`` (a declared priority).
     """
@@ -164,7 +180,7 @@ class Judgement:
 
     @property
     def breaches(self) -> list[Verdict]:
-        """The violated and refused obligations and prohibitions, in time order."""
+        """The violations (violated and blocked obligations and prohibitions), in time order."""
         return sorted((v for v in self.verdicts if v.breach), key=lambda v: (v.at or 0.0, v.id))
 
     @property
@@ -174,13 +190,14 @@ class Judgement:
 
     @property
     def conforms(self) -> bool:
-        """True when nothing is violated or refused up to ``end`` (pending items are fine)."""
+        """True when nothing is violated or blocked up to ``end`` (pending items are fine)."""
         return not any(v.breach for v in self.verdicts)
 
     def to_json(self) -> dict[str, Any]:
         """The whole judgement as one JSON document."""
         return {
             "conforms": self.conforms,
+            "violations": len(self.breaches),  # as Manager.stats["violations"] counts them
             "end": self.end,
             "firings": [f.to_json() for f in self.firings],
             "verdicts": [v.to_json() for v in self.verdicts],

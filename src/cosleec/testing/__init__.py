@@ -14,4 +14,12 @@ from cosleec.testing.cop import isolated_cop
 from cosleec.testing.corpus import CorpusMissingError, corpus_dir, corpus_files
 from cosleec.testing.stats import percentile
 
-__all__ = ["CHROMIUM", "CHROMIUM_ARGS", "CorpusMissingError", "corpus_dir", "corpus_files", "isolated_cop", "percentile"]
+__all__ = [
+    "CHROMIUM",
+    "CHROMIUM_ARGS",
+    "CorpusMissingError",
+    "corpus_dir",
+    "corpus_files",
+    "isolated_cop",
+    "percentile",
+]

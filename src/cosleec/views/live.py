@@ -116,12 +116,13 @@ class Live:
             self.in_force[d["id"]] = _obligation(d)
             return
         self.in_force.pop(d["id"], None)
-        # a violation: missed, forbidden and done, or refused (a prohibition forbade its whole
-        # window: the Manager counts it so); a late report of it comes again: one entry, updated
-        if d["status"] in ("violated", "refused"):
+        # a violation: missed, forbidden and done, or blocked (a prohibition forbade its whole
+        # window: the Manager counts it so; "refused" in a log written before issue 33); a late
+        # report of it comes again: one entry, updated
+        if d["status"] in ("violated", "blocked", "refused"):
             self.violations[d["id"]] = {
                 **_obligation(d),
-                "status": d["status"],
+                "status": "blocked" if d["status"] == "refused" else d["status"],
                 "at": d["at"],
                 "by": d["by"],
                 "late": d["late"],
@@ -199,6 +200,7 @@ def _decision(d: dict[str, Any]) -> dict[str, Any]:
         "layer": d["layer"],
         "obligations": [Obligation.from_json(o).describe() for o in d["obligations"]],
         "explanation": d["explanation"],
+        "for_people": d.get("for_people", ""),  # what the robot says to people (older records: none)
     }
 
 

@@ -275,7 +275,12 @@ class _Builder:
             kind, label = MarkerKind.DECISION, where
             head = f"{event} → {rule} [{where}]"
         why = rec.get("explanation") or rec.get("reason") or ""
-        detail = f"decision #{rec.get('id')}: {head} → {wants}" + (f"\n{clip(str(why), 300)}" if why else "")
+        said = rec.get("for_people") or ""  # what the robot says to people (older records: none)
+        detail = (
+            f"decision #{rec.get('id')}: {head} → {wants}"
+            + (f"\n{clip(str(why), 300)}" if why else "")
+            + (f"\nsays: {clip(str(said), 300)}" if said else "")
+        )
         self.markers.append(Marker(kind=kind, time=t, rule=rule, label=label, detail=detail))
 
     def _obligation(self, t: float, rec: Mapping[str, Any]) -> None:
@@ -425,8 +430,8 @@ class _Builder:
         late = [float(x) for x in rec.get("late") or ()]
         if status == "violated" and late:
             outcome = Outcome.LATE
-        elif status in ("violated", "refused"):
-            outcome = Outcome(status)
+        elif status in ("violated", "blocked", "refused"):  # refused: blocked, in a log before issue 33
+            outcome = Outcome.VIOLATED if status == "violated" else Outcome.BLOCKED
         elif key in self.in_conflict:
             outcome = Outcome.CONFLICT
         else:

@@ -59,7 +59,7 @@ OUTCOME_COLOURS: Mapping[Outcome, str] = {
     Outcome.RESPECTED: "#81c784",
     Outcome.VIOLATED: "#c62828",
     Outcome.LATE: "#ef6c00",
-    Outcome.REFUSED: "#6a1b9a",
+    Outcome.BLOCKED: "#6a1b9a",
     Outcome.CONFLICT: "#d81b60",
     Outcome.CANCELLED: "#795548",
     Outcome.PENDING: "#90a4ae",

@@ -27,8 +27,9 @@ class Outcome(StrEnum):
     RESPECTED = "respected"  # a prohibition whose window passed without the event
     VIOLATED = "violated"
     LATE = "late"  # violated, and the event came after the deadline
-    REFUSED = "refused"  # a prohibition forbade its whole window (a conflict the prohibition won)
-    CONFLICT = "conflict"  # in a conflict that did not end it refused, violated or late
+    BLOCKED = "blocked"  # a prohibition forbade its whole window (a conflict the prohibition won)
+    REFUSED = "blocked"  # the old name of BLOCKED (an alias)
+    CONFLICT = "conflict"  # in a conflict that did not end it blocked, violated or late
     CANCELLED = "cancelled"  # a higher rule's priority
     WITHDRAWN = "withdrawn"  # a reload removed its rule
     OTHER = "other"  # a status this version does not know (the bar's label says which)

@@ -95,13 +95,30 @@ def _figure(lay: Layout, plt: Any) -> Figure:
     axes[0].set_xlim(*lay.x_range)
     top = 1 - head / fig.get_figheight()
     fig.subplots_adjust(left=0.12, right=0.8, top=top, bottom=0.5 / fig.get_figheight())
-    fig.suptitle(lay.title, x=0.12, y=1 - 0.25 / fig.get_figheight(), ha="left", fontsize=11)
+    left = _room_for_names(fig, axes)
+    fig.suptitle(lay.title, x=left, y=1 - 0.25 / fig.get_figheight(), ha="left", fontsize=11)
     for i, note in enumerate(lay.notes):
         fig.text(
-            0.12, 1 - (0.55 + 0.16 * i) / fig.get_figheight(), f"note: {note}", fontsize=8, style="italic"
+            left, 1 - (0.55 + 0.16 * i) / fig.get_figheight(), f"note: {note}", fontsize=8, style="italic"
         )
     _legend(fig, lay)
     return fig
+
+
+def _room_for_names(fig: Figure, axes: list[Axes]) -> float:
+    """Widen the left margin until every name left of the plots (a measure's, a rule's lane)
+    is drawn whole inside the picture -- ``batteryLowDeliveringUrgentMedication``, not
+    ``veringUrgentMedication``; returns the left edge of the plots (a fraction of the width)."""
+    left = float(fig.subplotpars.left)
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    width = fig.get_figwidth() * fig.dpi
+    boxes = [ax.get_tightbbox(renderer) for ax in axes]
+    leftmost = min((b.x0 for b in boxes if b is not None), default=0.0)
+    pad = 0.1 * fig.dpi
+    if leftmost < pad:
+        left = min(0.6, left + (pad - leftmost) / width)  # at most: the plots keep some room
+        fig.subplots_adjust(left=left)
+    return left
 
 
 def _measure(ax: Axes, lay: Layout, series: Series) -> None:

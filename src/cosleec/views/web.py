@@ -448,7 +448,7 @@ def _app(view: WebView) -> ASGIApp:
         try:
             decided = await anyio.to_thread.run_sync(view.manager.event, name)
         except UserError as e:
-            return _error(400, f"{e}" + (f" ({e.hint})" if e.hint else ""))
+            return _error(400, e.message + (f" ({e.hint})" if e.hint else ""))
         return JSONResponse({"ok": True, "decisions": [d.id for d in decided]})
 
     async def control_advance(request: Request) -> Response:

@@ -265,3 +265,61 @@ def test_tasks_as_a_file_and_events_the_robot_produces_itself(
     assert "R2: no task and no capability for response event C" in out
     assert "response event B" not in out  # bound by the module
     assert "unproduced-input" not in out  # B is owed by R1: the robot's own action, not an input
+
+
+NOTE_ONLY = "R1 when A then B within 5 seconds unless x then C unless y then D"  # semantics-differ: a note
+WARNING_ONLY = CONFLICT  # with --check runtime-conflict: one warning
+
+
+@pytest.mark.parametrize(
+    ("rules", "check", "fail_on", "rc"),
+    [
+        (NOTE_ONLY, "all", None, 0),  # a note alone no longer fails CI by default
+        (NOTE_ONLY, "all", "warning", 0),
+        (NOTE_ONLY, "all", "note", 1),
+        (NOTE_ONLY, "all", "error", 0),
+        (WARNING_ONLY, "runtime-conflict", None, 1),
+        (WARNING_ONLY, "runtime-conflict", "note", 1),
+        (WARNING_ONLY, "runtime-conflict", "warning", 1),
+        (WARNING_ONLY, "runtime-conflict", "error", 0),
+        (WARNING_ONLY, "vacuous-conflict", "error", 1),  # the same file's errors
+    ],
+)
+def test_fail_on_exits_1_only_for_a_finding_at_or_above_its_level(
+    rules: str, check: str, fail_on: str | None, rc: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = write(tmp_path, rules)
+    args = [] if check == "all" else ["--check", check]
+    args += [] if fail_on is None else ["--fail-on", fail_on]
+    got, out, _ = _run(capsys, "--json", *args, str(path))
+    severities = {f["severity"] for f in json.loads(out)["files"][0]["findings"]}
+    expected = {"note"} if rules == NOTE_ONLY else {"warning" if check == "runtime-conflict" else "error"}
+    assert severities == expected  # the file has findings of exactly this level: the boundary is tested
+    assert got == rc
+
+
+def test_fail_on_takes_only_the_three_levels(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["analyse", "--fail-on", "warnings", "x.sleec"]) == 2
+    err = capsys.readouterr().err
+    assert "--fail-on: invalid choice: 'warnings'" in err and "did you mean 'warning'?" in err
+
+
+def test_the_files_declared_clause_semantics_is_used_unless_contradicted(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rule = "R1 when A then B within 5 seconds unless x then C unless (not x) then D"
+    declared = write(tmp_path, rule, "semantics_start\n  unless nested\nsemantics_end", name="nested.sleec")
+    plain = write(tmp_path, rule, name="plain.sleec")
+    subjects = []
+    for args in ([str(declared)], ["--semantics", "nested", str(declared)], [str(plain), str(declared)]):
+        rc, out, _ = _run(capsys, "--json", "--check", "unselectable-clause", *args)
+        subjects.append([f["subject"] for r in json.loads(out)["files"] for f in r["findings"]])
+    # nested (the file's) for the declaring file, last-wins (SLEEC's) for the one that declares nothing
+    assert subjects == [["R1.2"], ["R1.2"], ["R1.0", "R1.2"]]
+    rc, out, err = _run(capsys, "--check", "unselectable-clause", "--semantics", "last-wins", str(declared))
+    assert rc == 2 and out == ""
+    assert (
+        f"{declared}:6:3: --semantics last-wins contradicts the rule file, which declares `unless nested`"
+        in err
+    )
+    assert "hint: leave out --semantics (the file's `nested` is used)" in err

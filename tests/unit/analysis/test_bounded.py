@@ -105,7 +105,9 @@ def test_a_deadline_ends_the_whole_run_and_says_what_was_not_decided(tmp_path: P
     t = time.perf_counter()
     report = analyse_file(path, Settings(timeout=60), deadline=Deadline.after(0.5))
     took = time.perf_counter() - t
-    assert took < 4, took  # the run, not one question, is bounded: prompt after the deadline (whole: ~5 s idle)
+    assert took < 4, (
+        took
+    )  # the run, not one question, is bounded: prompt after the deadline (whole: ~5 s idle)
     assert not report.complete
     assert {f.subject for f in report.findings if f.code == "vacuous-conflict"} == {"C1", "C2"}  # kept
     assert report.undecided["vacuous-conflict"] == ["R0"] == report.undecided["dead-rule"]  # under way

@@ -229,7 +229,7 @@ def test_a_prohibition_that_covers_the_remaining_window_is_a_situational_conflic
     trace = tmp_path / "t.jsonl"
     trace.write_text('{"t": 0, "event": "A"}\n{"t": 1, "event": "C"}\n{"t": 30}\n')
     assert main(["conforms", str(write(tmp_path, rules)), str(trace)]) == 1
-    assert "refused" in capsys.readouterr().out
+    assert "blocked" in capsys.readouterr().out
     # a priority settles the situational conflict as well as the runtime one
     r = run(
         tmp_path,

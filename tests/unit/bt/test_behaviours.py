@@ -72,8 +72,18 @@ def test_the_condition_says_permitted_or_refused_with_the_managers_reason(manage
     manager.event("UserFallen")  # R6: not RecordVideo within 10 minutes, unless userConsent
     tree.tick()
     assert cond.status == Status.FAILURE
-    assert cond.feedback_message.startswith("RecordVideo is forbidden by R6 until 600 s")
+    assert cond.feedback_message.startswith("RecordVideo is forbidden by R6 for another 10 min")
     assert "userConsent was false" in cond.feedback_message
+
+
+def test_the_condition_ticked_again_and_again_is_a_question_not_an_attempt(manager: Any, audit: Path) -> None:
+    cond = Permitted("RecordVideo", manager)
+    manager.event("UserFallen")
+    tree = tick(cond)
+    for _ in range(9):  # a tree ticks at 10 Hz: before, each tick counted a refusal
+        tree.tick()
+    assert cond.status == Status.FAILURE and manager.stats["refused"] == 0
+    assert not [r for r in read_audit(audit) if r["kind"] == "refused"]
 
 
 def test_the_decorator_blocks_a_forbidden_child_and_reports_it_after_success(

@@ -54,7 +54,8 @@ def codes(rules: str, **kw: object) -> list[str]:
         ("R when E then F unless a and x > 1 then E unless a", ["unreachable-hedge"]),
         ("R when E then F unless false", ["unreachable-hedge"]),
         ("R when E then F\nR when E then F", ["duplicate-rule"]),
-        ("R when E then F otherwise E", ["untimed-otherwise"]),
+        ("R when E then F otherwise E", ["untimed-otherwise", "untimed-fallback"]),
+        ("R when E then F within 1 seconds otherwise E within 1 seconds", []),
     ],
 )
 def test_rule_checks(rule: str, expected: list[str]) -> None:

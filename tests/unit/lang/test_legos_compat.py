@@ -285,7 +285,9 @@ def test_the_reading_reaches_every_place_a_condition_can_be() -> None:
     printed = format_spec(result.spec, A.Dialect.LEGOS).split("def_end")[1]
     assert " s1" not in printed and " s2" not in printed
     assert printed.count("= m1") == 8 and "= m2" in printed and "> m1" in printed
-    assert sum(d.severity.value == "warning" for d in result.diagnostics) == 10
+    assert (
+        sum(d.severity.value == "warning" for d in result.diagnostics if d.code != "untimed-fallback") == 10
+    )
 
 
 @pytest.mark.parametrize(

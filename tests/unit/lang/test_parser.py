@@ -219,10 +219,11 @@ def test_reserved_keywords_cannot_be_names() -> None:
 
 
 # the language reference §3, plus the words of the fork extensions (§4.6) the grammar parses
-# and of cosleec's priority block (§13.4)
+# and of cosleec's priority and semantics blocks (§13.4, §7.4)
 RESERVED = {
     *("def_start", "def_end", "rule_start", "rule_end", "concern_start", "concern_end"),
     *("purpose_start", "purpose_end", "relation_start", "relation_end", "priority_start", "priority_end"),
+    *("semantics_start", "semantics_end"),
     *("event", "measure", "constant", "boolean", "numeric", "scale", "when", "then", "and", "or", "not"),
     *("within", "otherwise", "unless", "else", "eventually", "exists", "while", "meanwhile"),
     *("true", "false", "seconds", "minutes", "hours", "days", "fluent"),

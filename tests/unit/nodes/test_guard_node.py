@@ -612,20 +612,20 @@ def test_route_spec_must_be_a_table(spec: Any) -> None:
 
 def test_route_unknown_key_with_did_you_mean() -> None:
     e = error("/a", {"to": "/b", "type": "T", "evnt": "E"})
-    assert str(e) == "g.yaml: guards./a: unknown key 'evnt'"
+    assert e.message == "g.yaml: guards./a: unknown key 'evnt'"
     assert e.hint == "did you mean 'event'?"
     assert "hint: did you mean 'event'?" in e.render()
 
 
 def test_route_unknown_key_without_a_close_match_lists_the_keys() -> None:
     e = error("/a", {**GOOD, "colour": "red"})
-    assert str(e) == "g.yaml: guards./a: unknown key 'colour'"
+    assert e.message == "g.yaml: guards./a: unknown key 'colour'"
     assert e.hint == "keys: to, type, event, qos"
 
 
 def test_route_names_the_first_unknown_key_in_sorted_order() -> None:
     e = error("/a", {**GOOD, "zzz": 1, "qoss": 1})
-    assert str(e) == "g.yaml: guards./a: unknown key 'qoss'" and e.hint == "did you mean 'qos'?"
+    assert e.message == "g.yaml: guards./a: unknown key 'qoss'" and e.hint == "did you mean 'qos'?"
 
 
 @pytest.mark.parametrize("key", ["to", "type", "event"])
@@ -648,20 +648,20 @@ def test_route_source_must_be_a_topic() -> None:
 
 def test_route_to_must_differ_from_the_source() -> None:
     e = error("/cmd_vel", dict(GOOD))
-    assert str(e) == (
+    assert e.message == (
         "g.yaml: guards./cmd_vel: `to` must differ from the guarded topic, or the guard would feed itself"
     )
 
 
 def test_route_undeclared_event_with_did_you_mean() -> None:
     e = error("/a", {**GOOD, "event": "MoveNearUsr"}, VACUUM.events)
-    assert str(e) == "g.yaml: guards./a: the rules declare no event 'MoveNearUsr'"
+    assert e.message == "g.yaml: guards./a: the rules declare no event 'MoveNearUsr'"
     assert e.hint == "did you mean 'MoveNearUser'?"
 
 
 def test_route_undeclared_event_without_a_close_match() -> None:
     e = error("/a", {**GOOD, "event": "Xyzzy"}, VACUUM.events)
-    assert str(e) == "g.yaml: guards./a: the rules declare no event 'Xyzzy'"
+    assert e.message == "g.yaml: guards./a: the rules declare no event 'Xyzzy'"
     assert e.hint == "declare it in the rules' def block"
 
 
@@ -740,7 +740,7 @@ def test_load_routes_without_a_guards_section(tmp_path: Path, text: str) -> None
     with pytest.raises(GuardError) as info:
         load_routes(p)
     e = info.value
-    assert str(e) == "no `guards` section: nothing to guard"
+    assert e.message == "no `guards` section: nothing to guard"
     assert e.where == str(p)
     assert e.hint.startswith("add `guards: {/planner/cmd_vel: {to: /cmd_vel,")
     assert e.render().startswith(f"{p}: no `guards` section")
@@ -750,14 +750,14 @@ def test_load_routes_missing_file(tmp_path: Path) -> None:
     p = tmp_path / "nope.yaml"
     with pytest.raises(GuardError) as info:
         load_routes(p)
-    assert str(info.value) == "cannot read the mapping: No such file or directory"
+    assert info.value.message == "cannot read the mapping: No such file or directory"
     assert info.value.where == str(p)
 
 
 def test_load_routes_a_directory(tmp_path: Path) -> None:
     with pytest.raises(GuardError) as info:
         load_routes(tmp_path)
-    assert str(info.value) == "cannot read the mapping: Is a directory"
+    assert info.value.message == "cannot read the mapping: Is a directory"
     assert info.value.where == str(tmp_path)
 
 
@@ -803,7 +803,7 @@ def test_load_routes_names_the_file_and_route_of_a_bad_route(tmp_path: Path) -> 
     p = write(tmp_path, "guards:\n  /planner/cmd_vel: {to: /cmd_vel, type: T, event: MoveNearUsr}\n")
     with pytest.raises(GuardError) as info:
         load_routes(p, VACUUM.events)
-    assert str(info.value) == f"{p}: guards./planner/cmd_vel: the rules declare no event 'MoveNearUsr'"
+    assert info.value.message == f"{p}: guards./planner/cmd_vel: the rules declare no event 'MoveNearUsr'"
     assert info.value.hint == "did you mean 'MoveNearUser'?"
     assert load_routes(p)[0].event == "MoveNearUsr"  # without the rules, not checked
 

@@ -83,11 +83,12 @@ def test_an_event_reads_reliable_depth_10_by_default() -> None:
         ("sensor_msgs/BatteryState", Qos.SENSOR_DATA),
         ("my_sensor_msgs/msg/Range", Qos.RELIABLE),  # only the package sensor_msgs itself
         ("std_msgs/msg/sensor_msgs", Qos.RELIABLE),
-        ("std_msgs/Bool", Qos.RELIABLE),
+        ("std_msgs/Float64", Qos.RELIABLE),
     ],
 )
 def test_an_event_of_a_sensor_msgs_type_reads_best_effort(type_name: str, expected: Qos) -> None:
-    text = f"events:\n  Low: {{topic: /battery, type: {type_name}, field: percentage, below: 0.2}}"
+    field = "" if type_name == "std_msgs/Float64" else "field: percentage, "  # Float64 has only `data`
+    text = f"events:\n  Low: {{topic: /battery, type: {type_name}, {field}below: 0.2}}"
     assert qos(text, "/battery") == expected
     assert default_qos("event", type_name) == expected
 
@@ -286,7 +287,9 @@ def test_an_unknown_key_like_no_known_one_suggests_nothing() -> None:
 
 def test_an_entry_error_names_its_line_and_column() -> None:
     text = "events:\n  A: {topic: /a, type: std_msgs/Bool, equals: true}\n\n  B: {topic: /b, type: std_msgs/Bool}\n"
-    assert error(text) == "m.yaml:4:3: events.B: an event needs a condition (e.g. `equals: true`)"
+    assert (
+        error(text).split("\n")[0] == "m.yaml:4:3: events.B: an event needs a condition (e.g. `equals: true`)"
+    )
 
 
 @pytest.mark.parametrize(
@@ -453,3 +456,54 @@ def test_finite_thresholds_and_rising_bands_are_taken() -> None:
     assert m.entries[0].bands == ((-1.0, "low"), (0.5, "mid"), (1000.0, "high"), (float("inf"), "top"))
     m = Mapping.parse(entry_at("at_least: -40"), "m.yaml")
     assert m.entries[0].comparison == ("at_least", -40)
+
+
+# ---------------------------------------------------------------------- an event on every message
+EVERY = """
+measures:
+  m: {topic: /cmd, type: std_msgs/msg/String}
+events:
+  Heard: {topic: /cmd, type: std_msgs/msg/String, every_message: true}
+  Clean: {topic: /cmd, type: std_msgs/msg/String, equals: clean}
+"""
+
+
+def test_an_every_message_event_fires_on_each_message_of_its_topic_without_a_condition() -> None:
+    (_, heard, clean) = Mapping.parse(EVERY, "m.yaml").entries
+    assert (heard.every_message, heard.comparison, heard.fire, heard.field) == (True, None, "each", ())
+    assert (clean.every_message, clean.fire) == (False, "edge")
+    t = listener(EVERY)
+    for word in ("clean", "clean", "mop"):
+        t.send("/cmd", data=word)
+    assert t.events() == ["Heard", "Clean", "Heard", "Heard"]
+    t.send("/cmd", other=1)  # it reads no field: a message without `data` is still a message
+    assert t.events()[-1] == "Heard"
+    # the values read from its own message travel with it, as with any event
+    assert [m.get("values") for topic, m in t.published if topic == "/cosleec/events"][:2] == [
+        {"m": "clean"}
+    ] * 2
+
+
+@pytest.mark.parametrize(
+    ("entry", "message", "hint"),
+    [
+        # a forgotten condition is still an error; every_message: false is no condition either
+        ("{topic: /c, type: std_msgs/String}", "m.yaml:2:3: events.E: an event needs a condition", "`every_message: true`"),
+        ("{topic: /c, type: std_msgs/String, every_message: false}", "m.yaml:2:3: events.E: an event needs a condition", "`every_message: true`"),
+        ("{topic: /c, type: std_msgs/String, every_message: yes please}", "m.yaml:2:41: events.E: `every_message` is true or false, not 'yes please'", "write `every_message: true`"),
+        ("{topic: /c, type: std_msgs/String, every_message: true, equals: x}", "m.yaml:2:62: events.E: an `every_message` event fires on every message without a condition, so `equals` would be ignored", "`fire: each`"),
+        ("{topic: /c, type: std_msgs/String, every_message: true, fire: edge}", "m.yaml:2:62: events.E: an `every_message` event fires on every message without a condition, so `fire` would be ignored", "leave out `fire`"),
+        ("{topic: /c, type: std_msgs/String, field: x, every_message: true}", "m.yaml:2:41: events.E: an `every_message` event fires on every message without a condition, so `field` would be ignored", "leave out `field`"),
+    ],
+)  # fmt: skip
+def test_every_message_is_said_explicitly_and_alone(entry: str, message: str, hint: str) -> None:
+    with pytest.raises(MappingError) as info:
+        Mapping.parse(f"events:\n  E: {entry}\n", "m.yaml")
+    assert info.value.message.startswith(message), info.value.message
+    assert hint in info.value.hint
+
+
+def test_every_message_on_a_measure_is_an_error() -> None:
+    with pytest.raises(MappingError) as info:
+        Mapping.parse("measures:\n  m: {topic: /c, type: std_msgs/Bool, every_message: true}\n", "m.yaml")
+    assert info.value.message.startswith("m.yaml:2:39: measures.m: `every_message` is for events")

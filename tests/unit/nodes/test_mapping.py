@@ -7,12 +7,17 @@ No node and no rule file: the rules' measures and events are given as they are.
 
 from __future__ import annotations
 
+import math
+
 import pytest
+import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import cosleec.nodes
 import cosleec.nodes.guard_node
 import cosleec.nodes.listener
-from cosleec.nodes.mapping import Entry, Mapping, MappingError, read_yaml
+from cosleec.nodes.mapping import COMPARISONS, Entry, Mapping, MappingError, read_yaml
 from cosleec.runtime import MeasureSpec
 
 MEASURES = {
@@ -143,7 +148,10 @@ def test_a_good_entry_is_read_whole() -> None:
 def test_the_field_read_is_data_the_json_root_or_the_dotted_path_given(
     extra: tuple[str, ...], field: tuple[str, ...]
 ) -> None:
-    (e,) = Mapping.parse(block("measures", "lux", *TOPIC, *extra), "m.yaml", MEASURES, EVENTS).entries
+    # a type whose fields are not known here (std_msgs/Float64 has only `data`: checked below)
+    (e,) = Mapping.parse(
+        block("measures", "lux", "topic: /t", "type: my_msgs/Reading", *extra), "m.yaml", MEASURES, EVENTS
+    ).entries
     assert e.field == field and e.json == ("json: true" in extra)
 
 
@@ -180,3 +188,140 @@ def test_the_mapping_names_are_the_same_objects_from_the_package_and_the_guard()
     # the guard reads its routes with the mapping's read_yaml: the one reader
     assert cosleec.nodes.guard_node.read_yaml is read_yaml
     assert cosleec.nodes.guard_node.MappingError is MappingError
+
+
+# ---------------------------------------------------------------------- comparison values, typed
+STD = {"Bool": ("topic: /t", "type: std_msgs/Bool"), "String": ("topic: /t", "type: std_msgs/msg/String"),
+       "Float64": TOPIC, "Int32": ("topic: /t", "type: std_msgs/Int32")}  # fmt: skip
+
+
+def mistake(text: str, *, rules: bool = True) -> MappingError:
+    """The MappingError ``text`` is, its hint included."""
+    with pytest.raises(MappingError) as info:
+        Mapping.parse(text, "m.yaml", *((MEASURES, EVENTS) if rules else ()))
+    return info.value
+
+
+@pytest.mark.parametrize(
+    ("kind", "name", "lines", "message", "hint"),
+    [
+        # whatever the type: one plain value, never null; orderings compare numbers
+        ("events", "Clean", (*STD["String"], "not_equals: null"), "m.yaml:5:17: events.Clean: `not_equals: null` compares with nothing: a message field is never null, so the comparison would hold for every message", "`every_message: true`"),
+        ("events", "Clean", ("topic: /t", "type: my_msgs/Cmd", "equals: ~"), "m.yaml:5:13: events.Clean: `equals: null` compares with nothing", "every_message"),
+        ("events", "Clean", ("topic: /t", "type: my_msgs/Cmd", "equals: [1, 2]"), "m.yaml:5:13: events.Clean: `equals` compares with one value (a boolean, a number or a text), not [1, 2]", "give one value"),
+        ("events", "Clean", ("topic: /t", "type: my_msgs/Cmd", "above: ten"), "m.yaml:5:12: events.Clean: `above` compares numbers, not 'ten' (text)", "`above: 10`"),
+        ("measures", "dark", (*STD["Float64"], "below: 1e-3"), "m.yaml:5:12: measures.dark: `below` compares numbers, not '1e-3' (text)", "YAML reads 1e-3 as text: write `below: 0.001`"),
+        ("measures", "dark", ("topic: /t", "type: my_msgs/Cmd", "at_most: true"), "m.yaml:5:14: measures.dark: `at_most` compares numbers, not True (boolean)", "give a number"),
+        # a std_msgs type: the value is of its data's kind
+        ("events", "Clean", (*STD["Bool"], "equals: 1"), "m.yaml:5:13: events.Clean: std_msgs/Bool's data is a boolean, so `equals: 1` (number) never matches it", "`equals: true` or `equals: false`"),
+        ("events", "Clean", (*STD["String"], "equals: yes"), "m.yaml:5:13: events.Clean: std_msgs/msg/String's data is a text, so `equals: True` (boolean) (YAML reads yes, no, on, off, true and false as booleans) never matches it", "quote the word"),
+        ("events", "Clean", (*STD["String"], "not_equals: 10"), "m.yaml:5:17: events.Clean: std_msgs/msg/String's data is a text, so `not_equals: 10` (number) never matches it", "quote it: `not_equals: '10'`"),
+        ("events", "Clean", (*STD["Float64"], "equals: open"), "m.yaml:5:13: events.Clean: std_msgs/Float64's data is a number, so `equals: 'open'` (text) never matches it", "give a number"),
+        ("events", "Clean", (*STD["Int32"], "equals: false"), "m.yaml:5:13: events.Clean: std_msgs/Int32's data is a number, so `equals: False` (boolean)", "give a number"),
+        ("events", "Clean", (*STD["Bool"], "above: 0.5"), "m.yaml:5:12: events.Clean: `above` compares numbers, but std_msgs/Bool's data is a boolean", "`equals: true`"),
+        ("events", "Clean", (*STD["String"], "below: 3"), "m.yaml:5:12: events.Clean: `below` compares numbers, but std_msgs/msg/String's data is a text", "`json: true`"),
+        # a std_msgs type has one field, data
+        ("measures", "lux", (*STD["Float64"], "field: percentage"), "m.yaml:5:5: measures.lux: std_msgs/Float64 has one field, `data`, not 'percentage'", "leave out `field`"),
+        ("measures", "lux", (*STD["Float64"], "json: true"), "m.yaml:5:5: measures.lux: `json: true` reads JSON text, but std_msgs/Float64's data is a number", "leave out `json`"),
+        ("measures", "mood", (*STD["String"], "bands: [[1, low], [high]]"), "m.yaml:5:5: measures.mood: `bands` sort numbers, but std_msgs/msg/String's data is a text", "read a number type"),
+        ("measures", "mood", (*STD["Float64"], "bands: [[1, 2], [high]]"), "m.yaml:5:17: measures.mood: band 1's literal must be a word of the scale, not 2", "[0.3, low]"),
+        ("measures", "mood", (*STD["Float64"], "bands: [[1, low], [yes]]"), "m.yaml:5:24: measures.mood: band 2's literal must be a word of the scale, not True", "[0.3, low]"),
+        # the measure's kind: a comparison makes a boolean; a value taken as it is must be the measure's kind
+        ("measures", "mood", (*STD["String"], "equals: high"), "m.yaml:2:3: measures.mood: a comparison gives a boolean, but mood is scale", "`bands`"),
+        ("measures", "dark", STD["Float64"], "m.yaml:2:3: measures.dark: std_msgs/Float64's data is a number, but dark is boolean: taken as it is, every message would be rejected", "`below: 0.2`"),
+        ("measures", "lux", STD["Bool"], "m.yaml:2:3: measures.lux: std_msgs/Bool's data is a boolean, but lux is numeric", "read a number"),
+        ("measures", "lux", STD["String"], "m.yaml:2:3: measures.lux: std_msgs/msg/String's data is a text, but lux is numeric", "`json: true`"),
+        ("measures", "mood", STD["Float64"], "m.yaml:2:3: measures.mood: std_msgs/Float64's data is a number, but mood is scale", "give `bands`"),
+        ("measures", "mood", STD["Bool"], "m.yaml:2:3: measures.mood: std_msgs/Bool's data is a boolean, but mood is scale", "as text"),
+    ],
+)  # fmt: skip
+def test_a_comparison_or_value_of_the_wrong_type_is_refused_at_load_naming_the_fix(
+    kind: str, name: str, lines: tuple[str, ...], message: str, hint: str
+) -> None:
+    e = mistake(block(kind, name, *lines))
+    assert e.message.startswith(message), e.message
+    assert hint in e.hint, e.hint
+
+
+@pytest.mark.parametrize(
+    ("kind", "name", "lines"),
+    [
+        ("events", "Clean", (*STD["Bool"], "equals: true")),
+        ("events", "Clean", (*STD["String"], "equals: 'yes'")),
+        ("events", "Clean", (*STD["String"], "not_equals: ''")),
+        ("events", "Clean", (*STD["Int32"], "equals: 3")),
+        ("events", "Clean", (*STD["Float64"], "at_least: 0")),
+        ("events", "Clean", ("topic: /t", "type: std_msgs/String", "json: true", "field: a.b", "equals: true")),
+        ("events", "Clean", ("topic: /t", "type: my_msgs/Cmd", "field: code", "equals: 3")),
+        ("events", "Clean", ("topic: /t", "type: my_msgs/Cmd", "field: ok", "equals: false")),
+        ("measures", "dark", (*STD["Float64"], "below: 10")),
+        ("measures", "dark", STD["Bool"]),
+        ("measures", "lux", STD["Int32"]),
+        ("measures", "mood", STD["String"]),
+        ("measures", "mood", (*STD["Float64"], "bands: [[1, low], [high]]")),
+        ("measures", "lux", ("topic: /t", "type: sensor_msgs/msg/BatteryState", "field: percentage")),
+    ],
+)  # fmt: skip
+def test_a_comparison_or_value_of_the_fields_type_is_taken(
+    kind: str, name: str, lines: tuple[str, ...]
+) -> None:
+    assert len(Mapping.parse(block(kind, name, *lines), "m.yaml", MEASURES, EVENTS).entries) == 1
+
+
+# the oracle: the runtime's own comparison (Entry.value, on an entry built without the load's
+# checks) on the values the field can hold. A condition is worth loading when some message makes
+# it true and some false, the runtime comparing without an error; and `above`, `below`, `at_least`,
+# `at_most` order numbers (documented: no ordering of texts or booleans).
+KINDS = {"std_msgs/Bool": "boolean", "std_msgs/String": "text", "std_msgs/Float64": "number", "std_msgs/Int64": "number"}  # fmt: skip
+ORDERING = ("above", "below", "at_least", "at_most")
+
+
+def _held(kind: str, target: object) -> list[object]:
+    """Values a field of ``kind`` can hold, around ``target`` when it is of that kind."""
+    if kind == "boolean":
+        return [True, False]
+    if kind == "text":
+        return [target, f"{target}x", ""] if isinstance(target, str) else ["", "a"]
+    number = isinstance(target, int | float) and not isinstance(target, bool)
+    if not number:
+        return [0.0, 1.0, -1.5]
+    t = float(target)  # type: ignore[arg-type]
+    return [target, math.nextafter(t, math.inf), math.nextafter(t, -math.inf)]
+
+
+def _live(op: str, target: object, kind: str) -> bool:
+    """Does ``op: target`` on a field of ``kind`` make a condition some message makes true, some false?"""
+    if op in ORDERING and (isinstance(target, bool) or not isinstance(target, int | float)):
+        return False
+    e = Entry(name="E", kind="event", topic="/t", type="t", field=("data",), json=False,
+              comparison=(op, target), bands=None)  # fmt: skip
+    seen = set()
+    for x in _held(kind, target):
+        try:
+            seen.add(e.value({"data": x}))
+        except Exception:
+            return False
+    return seen == {True, False}
+
+
+@given(
+    op=st.sampled_from(sorted(COMPARISONS)),
+    target=st.one_of(
+        st.none(), st.booleans(), st.integers(-10**6, 10**6),
+        st.floats(-1e300, 1e300), st.sampled_from([math.nan, math.inf, -math.inf]),
+        st.text(alphabet="abc ", max_size=4), st.lists(st.integers(), max_size=2),
+    ),
+    type_name=st.sampled_from([*sorted(KINDS), "my_msgs/Reading"]),
+)  # fmt: skip
+@settings(max_examples=300, deadline=None)
+def test_a_condition_loads_exactly_when_some_message_makes_it_true_and_some_false(
+    op: str, target: object, type_name: str
+) -> None:
+    text = yaml.safe_dump({"events": {"E": {"topic": "/t", "type": type_name, op: target}}})
+    try:
+        Mapping.parse(text, "m.yaml")
+        loaded = True
+    except MappingError:
+        loaded = False
+    kinds = [KINDS[type_name]] if type_name in KINDS else sorted(set(KINDS.values()))  # unknown: any kind
+    assert loaded == any(_live(op, target, kind) for kind in kinds), (text, loaded)

@@ -121,7 +121,7 @@ def test_a_module_of_a_package_that_is_not_there_is_not_found(cwd: Path) -> None
 
 def test_a_file_that_is_not_there_is_not_found(cwd: Path) -> None:
     e = refused("robot/tasks.py")
-    assert str(e) == f"no task module file 'robot/tasks.py' (looked for {cwd / 'robot' / 'tasks.py'})"
+    assert e.message == f"no task module file 'robot/tasks.py' (looked for {cwd / 'robot' / 'tasks.py'})"
 
 
 @pytest.mark.parametrize("name", ["my-tasks", ".tasks", "", "tasks..x"])
@@ -141,7 +141,7 @@ def test_an_import_inside_the_module_that_fails_is_not_not_found(cwd: Path) -> N
     name = unique()
     f = write(cwd, name, "import os\nimport no_such_dependency_xyz\n" + INSTALL)
     e = refused(name)
-    assert str(e) == (
+    assert e.message == (
         f"task module {name!r} was found, but one of its own imports failed: "
         "ModuleNotFoundError: No module named 'no_such_dependency_xyz'"
     )
@@ -195,7 +195,7 @@ def test_a_module_without_a_callable_install_shows_the_signature(cwd: Path, body
     name = unique()
     f = write(cwd, name, body)
     e = refused(name)
-    assert str(e) == f"task module {name!r} has no install(node) function"
+    assert e.message == f"task module {name!r} has no install(node) function"
     assert "def install(node: TaskNode) -> None:" in e.hint and extra in e.hint and e.where == str(f)
 
 

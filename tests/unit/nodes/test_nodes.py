@@ -117,7 +117,7 @@ def test_manager_node_decides_rejects_and_answers_requests(bus: LocalBus) -> Non
             "event": "RecordVideo",
             "allowed": False,
             "rules": ["R6"],
-            "reason": "RecordVideo is forbidden by R6 until 600 s "
+            "reason": "RecordVideo is forbidden by R6 for another 10 min "
             "(R6: not RecordVideo within 600 s [default], because userConsent was false)",
         }
     ]

@@ -96,7 +96,7 @@ def test_coerce_accepts(value: Any, default: Any, expected: Any) -> None:
 def test_coerce_refuses(value: Any, default: Any, says: str) -> None:
     with pytest.raises(ParameterError) as info:
         coerce("semantics", value, default)
-    assert str(info.value) == f"parameter 'semantics' {says}, not {value!r}"
+    assert info.value.message == f"parameter 'semantics' {says}, not {value!r}"
     assert isinstance(info.value, UserError)
 
 
@@ -134,7 +134,7 @@ def test_check_overrides_accepts_known_and_none() -> None:
 def test_check_overrides_unknown_with_did_you_mean() -> None:
     with pytest.raises(ParameterError) as info:
         check_overrides(["rules", "semantcs"], KNOWN)
-    assert str(info.value) == "no parameter 'semantcs' on this node"
+    assert info.value.message == "no parameter 'semantcs' on this node"
     assert info.value.hint == "did you mean 'semantics'?"
     assert isinstance(info.value, UserError)
 
@@ -142,7 +142,7 @@ def test_check_overrides_unknown_with_did_you_mean() -> None:
 def test_check_overrides_unknown_without_a_close_match_lists_the_parameters() -> None:
     with pytest.raises(ParameterError) as info:
         check_overrides(["xyzzy"], KNOWN)
-    assert str(info.value) == "no parameter 'xyzzy' on this node"
+    assert info.value.message == "no parameter 'xyzzy' on this node"
     assert info.value.hint == "parameters: namespace, rules, semantics, sim_time, status_each"
 
 

@@ -66,6 +66,7 @@ def test_decide_json_shape(capsys: pytest.CaptureFixture[str]) -> None:
                 ],
                 "explanation": "R1: Refuse and ExplainWhy [clause 1 (unless userUndressed)], because "
                 "userUndressed was true; userDistressed >= high was false (userDistressed = low)",
+                "for_people": "I will refuse and explain why, because user undressed is yes and user distressed is low.",
             }
         ],
         "conflicts": [],

@@ -66,9 +66,9 @@ def test_the_curtain_conflict_is_recorded_and_the_prohibition_wins() -> None:
     assert c["resolution"] == "prohibition-wins" and c["winner"] == "R2"
     assert "R2 forbids OpenCurtains" in c["explanation"]
     assert opened == []  # the action is not dispatched ...
-    assert m.request("OpenCurtains") is False  # ... and request agrees
+    assert m.request("OpenCurtains").permitted is False  # ... and request agrees
     states = final(records)
-    assert states["R1:0"] == ("refused", 0.0)  # violated by conflict, at once
+    assert states["R1:0"] == ("blocked", 0.0)  # violated by conflict, at once
     assert states["R1:0/o:0"] == ("fulfilled", 0.0)  # its otherwise ran: the robot apologised
     assert m.stats["conflicts"] == 1
     m.close()
@@ -91,7 +91,7 @@ def test_an_action_forbidden_for_part_of_its_window_waits_until_it_is_allowed() 
     assert kinds(records, "held")[0]["by"] == ["R2"]
     clock.set(30.0)
     m.tick()
-    assert opened == [] and m.request("OpenCurtains") is False  # [t, t+30] is closed at both ends
+    assert opened == [] and m.request("OpenCurtains").permitted is False  # [t, t+30] is closed at both ends
     clock.set(30.5)
     m.tick()
     assert opened == [30.5]  # released as soon as the prohibition is over
@@ -105,7 +105,7 @@ def test_cancellation_based_priority_cancels_the_lower_rule_at_once() -> None:
     m, _clock, records, opened = build(priorities=["R1 > R2"])
     m.update(night=True)
     m.event("CurtainOpenRequest")
-    assert opened == [0.0] and m.request("OpenCurtains") is True
+    assert opened == [0.0] and m.request("OpenCurtains").permitted is True
     (c,) = kinds(records, "cancelled")
     assert c["rule"] == "R2" and c["by"] == "R1" and c["priority"] == "cancel"
     assert final(records)["R2:0"] == ("cancelled", 0.0)
@@ -121,7 +121,7 @@ def test_conflict_aware_priority_keeps_the_lower_rule_until_the_higher_one_needs
     m.event("CurtainOpenRequest")
     (c,) = kinds(records, "conflict")
     assert c["resolution"] == "conflict-aware" and c["winner"] == "R1"
-    assert opened == [] and m.request("OpenCurtains") is False
+    assert opened == [] and m.request("OpenCurtains").permitted is False
     clock.set(59.0)
     m.tick()
     assert opened == []
@@ -219,10 +219,10 @@ def test_a_held_action_survives_a_restart_and_runs_once_allowed(tmp_path: Any) -
     clock2 = VirtualClock(5.0)
     m2, _, records2, opened2 = build("30 seconds", journal=journal, clock=clock2)
     assert kinds(records2, "task-interrupted") == []  # held, not lost: it waits again
-    assert m2.request("OpenCurtains") is False and opened2 == []
+    assert m2.request("OpenCurtains").permitted is False and opened2 == []
     clock2.set(31.0)
     m2.tick()
-    assert opened2 == [31.0] and m2.request("OpenCurtains") is True
+    assert opened2 == [31.0] and m2.request("OpenCurtains").permitted is True
     assert final(records2)["R1:0"] == ("fulfilled", 31.0)
     m2.close()
 
@@ -233,7 +233,7 @@ def test_an_undetermined_higher_rule_cancels_nothing() -> None:
     m, _clock, records, opened = build(priorities=["R2 > R1"])
     m.event("CurtainOpenRequest")  # night unknown
     assert kinds(records, "cancelled") == []
-    assert final(records)["R1:0"][0] == "refused" and opened == []
+    assert final(records)["R1:0"][0] == "blocked" and opened == []
     m.close()
 
 
@@ -334,7 +334,7 @@ def test_conflict_aware_cuts_are_not_recomputed_while_nothing_in_force_changes(
     real = manager_module.forced
     monkeypatch.setattr(manager_module, "forced", lambda *a: calls.append(1) or real(*a))
     for _ in range(20):
-        assert m.request("Q") is True  # a step that changes nothing in force
+        assert m.request("Q").permitted is True  # a step that changes nothing in force
     assert len(calls) <= 1  # not a scan of everything in force per step
-    assert m.request("E") is False and len(m._gate.held) == 50  # still held, and still right
+    assert m.request("E").permitted is False and len(m._gate.held) == 50  # still held, and still right
     m.close()

@@ -64,7 +64,7 @@ def test_an_allowed_action_runs_while_its_sibling_is_held() -> None:
     m, clock, records, ran = split_manager()
     m.event("Y")  # A is forbidden for 30 s
     m.event("X")  # A within 60 s (held), B within 5 s (allowed: runs now)
-    assert ran == [("B", 0.0)] and m.request("B") is True and m.request("A") is False
+    assert ran == [("B", 0.0)] and m.request("B").permitted is True and m.request("A").permitted is False
     (held,) = kinds(records, "held")
     assert held["events"] == ["A"] and held["by"] == ["R2"]
     (part,) = kinds(records, "dispatch")
@@ -120,7 +120,7 @@ def snap_manager(within: str = "10 seconds") -> tuple[Manager, VirtualClock, lis
 
     @m.capability("Snap")
     def snap(ob: Any, d: Any) -> None:
-        asked.append(m.request("Snap"))
+        asked.append(m.request("Snap").permitted)
         snapped.append(clock.now())
         m.event("Snap")
 
@@ -137,7 +137,7 @@ def snap_manager(within: str = "10 seconds") -> tuple[Manager, VirtualClock, lis
 def test_a_prohibition_that_takes_force_before_the_start_stops_the_action() -> None:
     m, clock, records, snapped = snap_manager("60 seconds")
     m.event("Motion")
-    assert snapped == [] and m.request("Snap") is False  # dispatch and request agree
+    assert snapped == [] and m.request("Snap").permitted is False  # dispatch and request agree
     (refused,) = [r for r in kinds(records, "refused") if r.get("source", "").startswith("dispatch")]
     assert refused["event"] == "Snap" and refused["by"] == ["R2"]
     assert kinds(records, "held")[0]["events"] == ["Snap"]
@@ -153,9 +153,9 @@ def test_a_prohibition_that_takes_force_before_the_start_stops_the_action() -> N
 def test_an_action_whose_window_a_later_prohibition_covers_is_withheld_not_run() -> None:
     m, clock, records, snapped = snap_manager("10 seconds")
     m.event("Motion")  # the Visitor's prohibition covers all of [0, 10]: a conflict it wins
-    assert snapped == [] and m.request("Snap") is False
+    assert snapped == [] and m.request("Snap").permitted is False
     assert kinds(records, "conflict")[0]["winner"] == "R2"
-    assert final(records)["R1:0"][0] == "refused"
+    assert final(records)["R1:0"][0] == "blocked"
     assert kinds(records, "withheld")[0]["rule"] == "R1"
     clock.set(10.5)
     m.tick()
@@ -202,7 +202,7 @@ def test_a_manager_node_publishes_again_only_the_part_it_may_never_have_publishe
     m2, _ = node_manager(1.0)
     again = [d for d in m2.undelivered if d["rule"] == "R1"]  # (R2's decision was never published either)
     assert [[o["event"] for o in d["obligations"]] for d in again] == [["B"]]
-    assert m2.request("A") is False
+    assert m2.request("A").permitted is False
     m2.delivered(decision)  # published this time
     m2.tick()
     m2.close()

@@ -50,7 +50,7 @@ def test_a_request_for_an_undeclared_event_raises_with_the_closest_names() -> No
 def test_unknown_events_refuse_answers_false_and_records_why(tmp_path: Path) -> None:
     log = tmp_path / "audit.jsonl"
     m, _ = manager("R1 when E then F", unknown_events="refuse", audit=log)
-    assert m.request("Typo") is False
+    assert m.request("Typo").permitted is False
     assert m.event("Typo") == []
     m.close()
     rejected = [r for r in read_audit(log) if r["kind"] == "rejected"]
@@ -177,7 +177,7 @@ def test_an_undetermined_decision_keeps_every_prohibition_a_reading_of_it_impose
     m, _ = manager("R1 when E then not Rec within 10 minutes unless a then F")
     m.event("E")
     assert m.decisions[-1].undetermined
-    assert m.request("Rec") is False  # before: True (no obligation at all)
+    assert m.request("Rec").permitted is False  # before: True (no obligation at all)
 
 
 INNER = "R1 when E then F unless b then { not Rec within 10 minutes unless a then G }"
@@ -189,7 +189,7 @@ def test_an_undetermined_inner_unless_is_not_read_as_false() -> None:
     m.update(b=True)
     (d,) = m.event("E")
     assert d.undetermined and d.missing == ("a",)
-    assert m.request("Rec") is False  # before: the unless counted as false... and here, true
+    assert m.request("Rec").permitted is False  # before: the unless counted as false... and here, true
     assert d.obligations and all(o.negated for o in d.obligations)
 
 
@@ -198,11 +198,11 @@ def test_a_determined_inner_unless_takes_its_clause() -> None:
     m.update(b=True, a=True)
     (d,) = m.event("E")
     assert d.clause == 1 and [o.event for o in d.obligations] == ["G"]
-    assert m.request("Rec") is True
+    assert m.request("Rec").permitted is True
     m.update(a=False)
     (d,) = m.event("E")
     assert [(o.event, o.negated) for o in d.obligations] == [("Rec", True)]
-    assert m.request("Rec") is False
+    assert m.request("Rec").permitted is False
 
 
 def test_an_undetermined_inner_unless_of_an_otherwise_runs_nothing() -> None:
@@ -216,7 +216,7 @@ def test_an_undetermined_inner_unless_of_an_otherwise_runs_nothing() -> None:
     m.event("E")
     clock.advance(2)
     assert m.tick() == []  # no fallback dispatched
-    assert ran == [] and m.request("Rec") is False
+    assert ran == [] and m.request("Rec").permitted is False
     assert m.decisions[-1].event == "otherwise" and m.decisions[-1].undetermined
 
 
@@ -224,7 +224,7 @@ def test_a_prohibition_whose_deadline_is_unknown_stays_in_force(tmp_path: Path) 
     m, clock = manager("R1 when E then not Rec within (n) seconds", defs="measure n : numeric")
     m.event("E")
     clock.advance(10**6)
-    assert m.request("Rec") is False
+    assert m.request("Rec").permitted is False
 
 
 # ---------------------------------------------------------------------------- bad values
@@ -237,7 +237,8 @@ def test_a_number_beyond_float_range_is_rejected_and_nothing_changes(tmp_path: P
         m.update(n=10**5000)
     assert m.values()["n"] is None
     m.close()
-    (rec,) = read_audit(log)
+    started, rec = read_audit(log)  # the update started the Manager: its options record first
+    assert started["kind"] == "options"
     assert rec["kind"] == "rejected" and len(json.dumps(rec)) < 1000
 
 
@@ -303,7 +304,6 @@ def test_tick_releases_the_lock_between_batches() -> None:
     m, clock = manager("R1 when E then F within 1 seconds")
     for _ in range(3000):
         m.event("E")
-    clock.advance(2)
     blocked: list[tuple[bool, int]] = []
 
     def observer(ev: RuntimeEvent) -> None:  # runs between steps, outside the lock
@@ -315,6 +315,7 @@ def test_tick_releases_the_lock_between_batches() -> None:
             blocked.append((t.is_alive(), judged))
 
     m.subscribe(observer)
+    clock.advance(2)  # the virtual clock ticks the Manager: in batches
     assert m.tick() == []
     # after the first batch of 1000, with work left, another thread could take the lock
     assert blocked == [(False, 1000)]
@@ -559,11 +560,11 @@ def test_an_undetermined_decision_keeps_the_prohibitions_its_otherwise_would_sta
     (d,) = m.event("E")
     assert d.undetermined and [o.describe() for o in d.obligations] == ["not Rec within [5 s, 65 s]"]
     assert "meanwhile not Rec within [5 s, 65 s]" in d.explanation
-    assert m.request("Rec") is True  # before the fallback could start
+    assert m.request("Rec").permitted is True  # before the fallback could start
     clock.advance(6)
-    assert m.request("Rec") is False  # before: True (the otherwise's prohibition was not kept)
+    assert m.request("Rec").permitted is False  # before: True (the otherwise's prohibition was not kept)
     clock.advance(60)
-    assert m.request("Rec") is True
+    assert m.request("Rec").permitted is True
 
 
 def test_an_undetermined_decision_keeps_prohibitions_down_an_otherwise_chain() -> None:
@@ -575,7 +576,7 @@ def test_an_undetermined_decision_keeps_prohibitions_down_an_otherwise_chain() -
     (d,) = m.event("E")
     assert [o.describe() for o in d.obligations] == ["not Rec within [15 s, 75 s]"]
     clock.advance(16)
-    assert m.request("Rec") is False
+    assert m.request("Rec").permitted is False
 
 
 # ---------------------------------------------------------------------------- review findings
@@ -596,7 +597,7 @@ def test_an_update_that_notices_a_deadline_runs_its_otherwise() -> None:
 def test_a_prohibition_in_an_unknown_unless_clause_is_enforced() -> None:
     m, _ = manager("R1 when E then F unless a then not Rec within 10 minutes")
     (d,) = m.event("E")
-    assert d.undetermined and m.request("Rec") is False
+    assert d.undetermined and m.request("Rec").permitted is False
 
 
 @pytest.mark.parametrize("cond", ["not (n > 3)", "(({n} + 1) > 3)", "(({n} * 2) = 4)", "not (3 < n)"])
@@ -605,7 +606,7 @@ def test_comparisons_and_arithmetic_over_an_unknown_are_unknown(cond: str) -> No
         f"R1 when E then F unless {cond} then not Rec within 10 minutes", defs="measure n : numeric"
     )
     (d,) = m.event("E")
-    assert d.conditions[1][2] is None and d.undetermined and m.request("Rec") is False
+    assert d.conditions[1][2] is None and d.undetermined and m.request("Rec").permitted is False
 
 
 def test_the_unknown_policy_also_reads_trigger_conditions() -> None:
@@ -673,7 +674,7 @@ def test_bad_arguments_are_user_errors_and_a_closed_manager_refuses() -> None:
         manager("R1 when E then F", history=-1)
     m.close()
     m.close()  # twice is harmless
-    assert m.request("F") is False
+    assert m.request("F").permitted is False
     with pytest.raises(ConfigurationError, match="closed"):
         m.update(a=True)
     assert m.values()["a"] is None  # nothing changed

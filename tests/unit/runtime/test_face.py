@@ -12,7 +12,8 @@ SRC = Path(cosleec.runtime.__file__).resolve().parent.parent
 
 PUBLIC = {
     "MAX_WINDOW_S", "SCAFFOLD_STYLES", "AuditLog", "BindingError", "Capability", "Clock",
-    "ConfigurationError", "ContextError", "DeadlineError", "Decision", "HedgeSemantics", "Journal",
+    "ConfigurationError", "ContextError", "DeadlineError", "Decision", "DecisionOrigin",
+    "Explanations", "ExplanationsError", "HedgeSemantics", "Journal",
     "JournalError", "LayerState", "LayerSwitch", "Manager", "MonotonicClock", "Obligation", "Options",
     "Permission", "PossibleConflict", "ReloadError", "Reloaded", "Reporter", "RuleSet", "RuntimeEvent",
     "Stats", "Task", "Tracked", "UnknownEvents", "Unknowns", "Value", "VirtualClock", "hedge",

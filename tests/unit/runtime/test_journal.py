@@ -67,7 +67,7 @@ def again(tmp_path: Path, t: float, helped: list[int] | None = None, **kw: Any) 
 def test_a_prohibition_survives_a_kill(tmp_path: Path) -> None:
     die_after(tmp_path, 'm.update(consent=False); m.event("Watch"); assert not m.request("Rec")')
     m = again(tmp_path, 160).start()
-    assert m.request("Rec") is False  # before: allowed after the restart
+    assert m.request("Rec").permitted is False  # before: allowed after the restart
     assert m.values()["consent"] is False and m.active_layers() == []
     (d,) = m.event("Watch")
     assert d.id == 2  # decision ids go on (before: 1 again)
@@ -151,7 +151,7 @@ def test_a_changed_rule_set_keeps_what_it_still_names_and_records_what_it_drops(
         RULES.replace(" R2 when Watch then not Rec within 10 minutes unless consent\n", "")
     )
     m = again(tmp_path, 101).start()
-    assert m.request("Rec") is True  # the rule that forbade it is gone, and that is recorded
+    assert m.request("Rec").permitted is True  # the rule that forbade it is gone, and that is recorded
     assert [t.rule for t in m.outstanding()] == ["R1"]
     m.close()
     records = read_audit(tmp_path / "audit.jsonl")
@@ -232,7 +232,7 @@ def test_after_a_reboot_obligations_are_due_sooner_and_prohibitions_stay(tmp_pat
     )
     m.start()
     assert m.stats["violations"] == 1  # before: uptime 200 > 100 looked like the same boot, no shift
-    assert m.request("Rec") is False  # the prohibition as if no time had passed: still in force
+    assert m.request("Rec").permitted is False  # the prohibition as if no time had passed: still in force
     m.close()
 
 
@@ -243,7 +243,7 @@ def test_an_audit_log_that_fails_stops_the_manager(tmp_path: Path) -> None:
     m.audit._fh.close()  # as a full disk would: the next write fails
     with pytest.raises(JournalError, match="cannot write the audit log"):
         m.event("Watch")
-    assert m.request("Rec") is False  # fail closed from now on
+    assert m.request("Rec").permitted is False  # fail closed from now on
     with pytest.raises(JournalError):
         m.update(consent=True)
 
@@ -293,7 +293,7 @@ def test_a_prohibition_survives_an_item_inserted_before_it(tmp_path: Path) -> No
         )
     )
     m = again(tmp_path, 160).start()
-    assert m.request("Rec") is False  # before: dropped, its key R2:0 now names `Act`
+    assert m.request("Rec").permitted is False  # before: dropped, its key R2:0 now names `Act`
     m.close()
 
 
@@ -433,7 +433,7 @@ def test_the_records_of_one_step_share_run_mono_and_wall(tmp_path: Path) -> None
     for r in read_audit(tmp_path / "audit.jsonl"):
         steps.setdefault((r["run"], r["mono"], r["wall"]), []).append(r["kind"])
     assert list(steps.values())[-1] == ["event", "decision", "obligation"]
-    assert len(steps) == 4  # restored; context and layers; Watch; Trigger
+    assert len(steps) == 5  # restored; options (the update started it); context and layers; Watch; Trigger
 
 
 def again_text(tmp_path: Path) -> Manager:
@@ -446,7 +446,7 @@ def test_reset_journal_starts_afresh_once_and_records_what_was_lost(tmp_path: Pa
     (tmp_path / "state.db-wal").unlink()
     before = read_audit(tmp_path / "audit.jsonl")
     m = again(tmp_path, 160, reset_journal=True).start()
-    assert m.request("Rec") is True  # forgotten, on purpose -- and said so:
+    assert m.request("Rec").permitted is True  # forgotten, on purpose -- and said so:
     assert m.lineage == m.run_id != before[0]["run"]
     m.close()
     records = read_audit(tmp_path / "audit.jsonl")
@@ -491,7 +491,9 @@ def test_reset_journal_needs_a_journal_the_manager_refused(tmp_path: Path) -> No
     die_after(tmp_path, FORBID)
     with pytest.raises(ConfigurationError, match="nothing to reset"):
         again(tmp_path, 160, reset_journal=True)
-    assert again(tmp_path, 160).start().request("Rec") is False  # the refusal to reset changed nothing
+    assert (
+        again(tmp_path, 160).start().request("Rec").permitted is False
+    )  # the refusal to reset changed nothing
     with pytest.raises(ConfigurationError, match="only with a journal"):
         Manager.from_text(RULES, reset_journal=True)
 
@@ -506,12 +508,12 @@ def test_a_clean_close_or_a_checkpoint_by_another_program_is_not_a_lost_wal(tmp_
     m.close()
     assert not (tmp_path / "state.db-wal").exists()  # SQLite removes it on a clean close
     m = again(tmp_path, 101).start()
-    assert m.request("Rec") is False
+    assert m.request("Rec").permitted is False
     m.close()
     die_after(tmp_path, 'm.event("Trigger")')
     sqlite3.connect(tmp_path / "state.db").close()  # copies the WAL into the database, deletes it
     m = again(tmp_path, 102).start()  # the audit log shows nothing was lost
-    assert m.request("Rec") is False
+    assert m.request("Rec").permitted is False
     m.close()
 
 
@@ -607,7 +609,7 @@ try:
         m.event("Act")
 except JournalError as e:
     out["error"] = e.render()
-out["refuses"] = m.request("Rec") is False
+out["refuses"] = m.request("Rec").permitted is False
 try:
     m.close()
     out["close"] = "ok"
@@ -616,7 +618,7 @@ except BaseException as e:
 os.unlink(full + "/filler")  # space is freed: a new Manager goes on from the journal
 try:
     m = manager(101)
-    out["restarted"] = m.request("Rec") is False
+    out["restarted"] = m.request("Rec").permitted is False
     m.close()
 except BaseException as e:
     out["restarted"] = f"{type(e).__name__}: {e}"

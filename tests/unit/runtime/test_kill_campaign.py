@@ -250,7 +250,7 @@ def test_a_prohibitions_refusals_survive_a_restart(tmp_path: Path) -> None:
     m = manager(tmp_path, 100)
     m.update(consent=False)
     m.event("Watch")
-    assert m.request("Rec") is False
+    assert m.request("Rec").permitted is False
     m.close()
     m = manager(tmp_path, 101)
     m.clock.set(800)  # type: ignore[attr-defined]

@@ -310,7 +310,7 @@ def test_deadline_is_judged_by_reported_events_and_otherwise_fires_only_on_a_mis
 def test_prohibitions_refuse_requests_and_violations_start_otherwise() -> None:
     m, clock = manager(OBL)
     m.event("T")
-    assert m.request("X") is False and m.stats["refused"] == 1
+    assert m.request("X").permitted is False and m.stats["refused"] == 1
     clock.advance(3)
     m.event("X")  # happened anyway
     x = next(t for t in m.tracker.closed if t.event == "X")
@@ -319,7 +319,7 @@ def test_prohibitions_refuse_requests_and_violations_start_otherwise() -> None:
     assert d.time == 3 and [o.event for o in d.obligations] == ["D"]
     clock.advance(30)
     m.tick()
-    assert m.request("X") is True
+    assert m.request("X").permitted is True
 
 
 def test_interval_else_and_eventually() -> None:

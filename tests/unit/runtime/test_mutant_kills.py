@@ -89,9 +89,9 @@ def test_a_restart_within_the_same_boot_shifts_no_saved_time(
     (restored,) = [r for r in read_audit(tmp_path / "audit.jsonl") if r["kind"] == "restored"][-1:]
     assert restored["shift"] == 0.0
     clock.t = 1600.0
-    assert m.request("Rec") is False  # its last instant
+    assert m.request("Rec").permitted is False  # its last instant
     clock.t = 1650.0
-    assert m.request("Rec") is True  # ended at 1600, as decided
+    assert m.request("Rec").permitted is True  # ended at 1600, as decided
     m.close()
 
 
@@ -104,7 +104,7 @@ def test_a_restart_on_another_boot_holds_a_prohibition_for_its_whole_window(
     (restored,) = [r for r in read_audit(tmp_path / "audit.jsonl") if r["kind"] == "restored"][-1:]
     assert restored["shift"] > 50.0  # obligations: as if all 100 s passed (the wall clock says ~0 s)
     clock.t = 1650.0
-    assert m.request("Rec") is False  # held until 1700: 600 s from the restart's reading of it
+    assert m.request("Rec").permitted is False  # held until 1700: 600 s from the restart's reading of it
     m.close()
 
 

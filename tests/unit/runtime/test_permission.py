@@ -1,4 +1,6 @@
-"""Manager.permission: request's answer, with the rules that forbid and a reason a person can read.
+"""Manager.request and Manager.permission: the answer, with the rules that forbid and a reason a
+person can read. ``request`` is a real attempt (a refusal is counted and recorded);
+``permission`` is a question (nothing is recorded or counted).
 
 Each test pins one part of the answer; the comments say which one-character change to the
 runtime it would catch.
@@ -26,7 +28,7 @@ def test_a_permitted_event_says_so_counts_nothing_and_records_nothing(tmp_path: 
     m, _ = manager(WATCH, audit=log)
     p = m.permission("Rec")
     assert p == Permission("Rec", True, (), "Rec is permitted: no prohibition in force forbids it now")
-    assert bool(p) is True and m.request("Rec") is True
+    assert bool(p) is True and m.request("Rec") == p
     m.close()
     assert m.stats["refused"] == 0 and refused(log) == []
 
@@ -42,9 +44,13 @@ def test_a_forbidden_event_names_the_rule_its_window_end_and_the_decision_that_f
     p = m.permission("Rec")
     assert not p and p.permitted is False and p.rules == ("R2",)
     assert p.reason == (
-        "Rec is forbidden by R2 until 160 s (R2: not Rec within 10 s [default], because a was false)"
+        "Rec is forbidden by R2 for another 10 s (R2: not Rec within 10 s [default], because a was false)"
     )
-    assert m.request("Rec") is False  # the same answer; counted twice
+    assert (
+        p.for_people == "I can't rec for another 10 seconds: I will not rec for 10 seconds, because a is no."
+    )
+    assert m.request("Rec") == p  # the same answer; the question was not counted, the attempts are
+    assert not m.request("Rec")
     m.close()
     assert m.stats["refused"] == 2
     first, second = refused(log)
@@ -59,7 +65,8 @@ def test_without_the_decision_in_history_the_reason_describes_the_prohibition() 
     clock.advance(2)
     m.event("F")  # the only decision kept now
     assert (
-        m.permission("Rec").reason == "Rec is forbidden by R2 until 10 s (R2: not Rec within 10 s from 0 s)"
+        m.permission("Rec").reason
+        == "Rec is forbidden by R2 for another 8 s (R2: not Rec within 10 s, in force for 2 s)"
     )
 
 
@@ -71,8 +78,9 @@ def test_two_rules_forbidding_are_both_named_each_with_its_window() -> None:
     m.event("F")
     p = m.permission("Rec")
     assert p.rules == ("R2", "R3")
-    assert "by R2 until 10 s (R2: not Rec within 10 s" in p.reason
-    assert " and by R3 until 65 s (R3: not Rec within 60 s" in p.reason
+    assert "by R2 for another 5 s (R2: not Rec within 10 s" in p.reason
+    assert " and by R3 for another 1 min (R3: not Rec within 60 s" in p.reason
+    assert p.for_people.startswith("I can't rec for another 1 minute: I will not rec for 10 seconds")
 
 
 def test_two_prohibitions_of_one_rule_name_it_once_and_are_both_counted(tmp_path: Path) -> None:
@@ -82,12 +90,12 @@ def test_two_prohibitions_of_one_rule_name_it_once_and_are_both_counted(tmp_path
     m.event("E")
     clock.advance(4)
     m.event("E")
-    p = m.permission("Rec")
+    p = m.request("Rec")
     assert p.rules == ("R2",)
     # one phrase per rule, with the window that ends last: the reason does not grow per trigger
     assert (
         p.reason
-        == "Rec is forbidden by R2 until 14 s (R2: not Rec within 10 s [default], because a was false)"
+        == "Rec is forbidden by R2 for another 10 s (R2: not Rec within 10 s [default], because a was false)"
     )
     assert sorted(t.refused for t in m.tracker.active) == [1, 1]
     m.close()
@@ -130,8 +138,8 @@ def test_the_source_is_kept_in_the_refused_record(tmp_path: Path) -> None:
     m, _ = manager(WATCH, audit=log)
     m.update(a=False)
     m.event("E")
-    assert not m.permission("Rec", source="/camera/record (guarded)")
-    assert not m.permission("Rec", source="x" * 1000)
+    assert not m.request("Rec", source="/camera/record (guarded)")
+    assert not m.request("Rec", source="x" * 1000)
     m.close()
     first, second = refused(log)
     assert first["source"] == "/camera/record (guarded)"
@@ -141,16 +149,19 @@ def test_the_source_is_kept_in_the_refused_record(tmp_path: Path) -> None:
 def test_a_source_that_is_not_a_string_is_a_mistake() -> None:
     m, _ = manager(WATCH)
     with pytest.raises(TypeError, match="source"):
-        m.permission("Rec", source=3)  # type: ignore[arg-type]
+        m.request("Rec", source=3)  # type: ignore[arg-type]
     with pytest.raises(TypeError):
-        m.permission("Rec", "a topic")  # type: ignore[misc]  # keyword only: never read as the event
+        m.request("Rec", "a topic")  # type: ignore[misc]  # keyword only: never read as the event
+    with pytest.raises(TypeError, match=r"records nothing; for a real attempt, call request\(name, source"):
+        m.permission("Rec", source="a topic")  # a question names no one: who attempts calls request
 
 
 def test_an_unknown_event_under_refuse_is_not_permitted_and_says_what_was_meant(tmp_path: Path) -> None:
     log = tmp_path / "audit.jsonl"
     m, _ = manager(WATCH, unknown_events="refuse", audit=log)
-    p = m.permission("Reec")
+    p = m.request("Reec")
     assert p == Permission("Reec", False, (), "Reec is not an event the rules declare (did you mean Rec?)")
+    assert m.permission("Reec") == p  # the question: the same answer, not recorded
     m.close()
     (r,) = [r for r in read_audit(log) if r["kind"] == "rejected"]
     assert r["what"] == "request" and m.stats["rejected"] == 1 and m.stats["refused"] == 0
@@ -160,16 +171,17 @@ def test_an_unknown_event_under_raise_raises_as_request_does() -> None:
     m, _ = manager(WATCH)
     with pytest.raises(ContextError, match="unknown event 'Reec'") as e:
         m.permission("Reec")
-    assert "Rec" in e.value.hint and m.stats["rejected"] == 1
+    assert "Rec" in e.value.hint and m.stats["rejected"] == 0  # a question: not counted
     with pytest.raises(ContextError):
         m.request("Reec")
+    assert m.stats["rejected"] == 1
 
 
 def test_a_closed_manager_permits_nothing_and_says_so() -> None:
     m, _ = manager(WATCH)
     m.close()
     assert m.permission("Rec") == Permission("Rec", False, (), "Rec is not permitted: the Manager is closed")
-    assert m.request("Rec") is False
+    assert not m.request("Rec") and m.request("Rec").reason == m.permission("Rec").reason
 
 
 def test_a_manager_whose_audit_log_failed_permits_nothing_and_says_why(tmp_path: Path) -> None:
@@ -178,9 +190,26 @@ def test_a_manager_whose_audit_log_failed_permits_nothing_and_says_why(tmp_path:
     m.event("E")
     assert m.audit is not None
     m.audit._fh.close()  # as a full disk would: the refusal's record cannot be written
-    p = m.permission("Rec")  # before: JournalError out of request, from its own commit
+    p = m.request("Rec")  # before: JournalError out of request, from its own commit
     assert not p and p.rules == ()
     assert p.reason.startswith("Rec is not permitted: the Manager can no longer keep its state (")
     assert "cannot write the audit log" in p.reason
     assert not m.permission("F")  # from now on, even what no prohibition forbids
-    assert m.request("F") is False
+    assert not m.request("F") and m.request("F").reason == p.reason.replace("Rec", "F", 1)
+
+
+def test_asking_permission_records_and_counts_nothing_one_attempt_counts_once(tmp_path: Path) -> None:
+    # the issue's miscount: three questions before one real attempt counted refused == 3
+    log = tmp_path / "audit.jsonl"
+    m, _ = manager(WATCH, audit=log)
+    m.start(check=False)
+    m.update(a=False)
+    m.event("E")
+    before = len(read_audit(log))
+    for _ in range(3):
+        assert not m.permission("Rec")
+    assert len(read_audit(log)) == before and m.stats["refused"] == 0  # a question: nothing
+    assert [t.refused for t in m.tracker.active] == [0]
+    assert not m.request("Rec", source="arm")  # the attempt
+    m.close()
+    assert m.stats["refused"] == 1 and [r["source"] for r in refused(log)] == ["arm"]

@@ -523,7 +523,7 @@ def test_a_restart_with_the_new_rules_after_a_kill_keeps_what_the_reload_kept(tm
     _killed_after_a_reload(tmp_path)
     (tmp_path / "rules.sleec").write_text(NEW)
     m = again(tmp_path, 101).start()
-    assert m.request("Rec") is True  # the withdrawn prohibition is not resurrected
+    assert m.request("Rec").permitted is True  # the withdrawn prohibition is not resurrected
     assert sorted((t.rule, t.event) for t in m.outstanding()) == [("R1", "Act"), ("R3", "Help")]
     m.close()
     records = read_audit(tmp_path / "audit.jsonl")
@@ -540,7 +540,7 @@ def test_a_restart_with_the_new_rules_after_a_kill_keeps_what_the_reload_kept(tm
 def test_a_restart_with_the_old_rules_after_a_reload_is_a_restart_with_changed_rules(tmp_path: Path) -> None:
     _killed_after_a_reload(tmp_path)  # rules.sleec still holds the old rules
     m = again(tmp_path, 101).start()
-    assert m.request("Rec") is True  # R2 is back, but what it once imposed was withdrawn
+    assert m.request("Rec").permitted is True  # R2 is back, but what it once imposed was withdrawn
     assert [(t.rule, t.event) for t in m.outstanding()] == [("R1", "Act")]
     m.close()
     records = read_audit(tmp_path / "audit.jsonl")

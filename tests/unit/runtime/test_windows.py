@@ -108,7 +108,7 @@ def test_a_prohibition_refuses_requests_up_to_its_deadline_included() -> None:
     answers = []
     for t in (0, 1, 2.99, 3, 3.01, 4):
         clock.set(t)
-        answers.append(m.request("A"))
+        answers.append(m.request("A").permitted)
     assert answers == [False, False, False, False, True, True]
 
 
@@ -119,14 +119,14 @@ def test_a_prohibition_that_has_ended_forbids_nothing_more() -> None:
     m.event("T0")
     clock.set(1)
     m.event("A")  # happened anyway: violated
-    assert m.request("A") is True
+    assert m.request("A").permitted is True
     rules = "R1 when T1 then B within 5 seconds\nR2 when T0 then not A within 10 seconds"
     m, clock, _ = manager(rules, priorities=["R1 > R2"])
     m.event("T0")
-    assert m.request("A") is False
+    assert m.request("A").permitted is False
     clock.set(1)
     m.event("T1")  # R2 is cancelled (cancellation-based priority)
-    assert m.request("A") is True
+    assert m.request("A").permitted is True
 
 
 INTERVAL_NOT = "R1 when T0 then not A within [2 seconds, 5 seconds]"
@@ -140,7 +140,7 @@ def test_a_prohibition_interval_refuses_requests_only_inside_it() -> None:
     answers = []
     for t in (10, 11, 11.99, 12, 13, 15, 15.01):
         clock.set(t)
-        answers.append(m.request("A"))
+        answers.append(m.request("A").permitted)
     assert answers == [True, True, True, False, False, False, True]
 
 
@@ -168,9 +168,9 @@ def test_untimed_not_forbids_the_trigger_instant_only() -> None:
     assert both(rule, [ev(4, "T0"), ev(4.5, "A"), tick(9)]).of("R1:0") == [(4, "respected", 4)]
     m, clock, _ = manager(rule)
     m.event("T0")
-    assert m.request("A") is False
+    assert m.request("A").permitted is False
     clock.set(0.5)
-    assert m.request("A") is True
+    assert m.request("A").permitted is True
 
 
 # ---------------------------------------------------------------- prohibitions and `otherwise`
@@ -264,7 +264,7 @@ def test_an_unknown_deadline_keeps_a_prohibition_in_force_and_makes_an_obligatio
     m, clock, _ = manager(rules, values={"b": False})  # n unknown
     m.event("T0")
     clock.set(1000)
-    assert m.request("A") is False
+    assert m.request("A").permitted is False
     m.tick()
     b = [t for t in m.tracker.closed if t.rule == "R2"]
     assert [(t.status, t.outcome_at) for t in b] == [("violated", 0)]
@@ -320,7 +320,7 @@ def test_an_otherwise_started_at_a_deadline_is_in_force_before_a_later_deadline_
     seen = both(rules, [ev(0, "T0"), tick(5)])
     assert seen.items == [
         ("R1:0", 0, "violated", 2),
-        ("R2:0", 0, "refused", 2),
+        ("R2:0", 0, "blocked", 2),
         ("R1:0/o:0", 2, "pending", None),
     ]
     assert seen.conflicts == [(2, ("R2", "R1"), "prohibition-wins")]
@@ -380,10 +380,10 @@ def test_a_prohibition_covering_what_is_left_of_an_obligation_refuses_it() -> No
     Mutant: conflict-ignores-elapsed-window."""
     rules = "R1 when T0 then A within 5 seconds\nR2 when T1 then not A within 10 seconds"
     seen = both(rules, [ev(0, "T0"), ev(2, "T1"), tick(20)])
-    assert seen.items == [("R1:0", 0, "refused", 2), ("R2:0", 2, "respected", 12)]
+    assert seen.items == [("R1:0", 0, "blocked", 2), ("R2:0", 2, "respected", 12)]
     assert seen.conflicts == [(2, ("R1", "R2"), "prohibition-wins")]
     seen = both(rules, [ev(0, "T1"), ev(2, "T0"), tick(20)])  # until 10: R1's window [2, 7] is covered
-    assert seen.items == [("R2:0", 0, "respected", 10), ("R1:0", 2, "refused", 2)]
+    assert seen.items == [("R2:0", 0, "respected", 10), ("R1:0", 2, "blocked", 2)]
 
 
 def test_windows_that_coincide_exactly_conflict() -> None:
@@ -391,12 +391,12 @@ def test_windows_that_coincide_exactly_conflict() -> None:
     conflict-start-strict."""
     rules = "R1 when T0 then A within 5 seconds\nR2 when T0 then not A within 5 seconds"
     seen = both(rules, [ev(0, "T0"), tick(9)])
-    assert seen.items == [("R1:0", 0, "refused", 0), ("R2:0", 0, "respected", 5)]
+    assert seen.items == [("R1:0", 0, "blocked", 0), ("R2:0", 0, "respected", 5)]
     rules = (
         "R1 when T0 then A within [2 seconds, 5 seconds]\nR2 when T0 then not A within [2 seconds, 5 seconds]"
     )
     seen = both(rules, [ev(0, "T0"), tick(9)])
-    assert seen.items == [("R1:0", 0, "refused", 0), ("R2:0", 0, "respected", 5)]
+    assert seen.items == [("R1:0", 0, "blocked", 0), ("R2:0", 0, "respected", 5)]
     rules = "R1 when T0 then A within 6 seconds\nR2 when T0 then not A within 5 seconds"
     seen = both(rules, [ev(0, "T0"), ev(6, "A")])  # one instant is allowed: no conflict
     assert seen.items == [("R1:0", 0, "fulfilled", 6), ("R2:0", 0, "respected", 5)] and not seen.conflicts
@@ -416,7 +416,7 @@ def test_a_refused_obligation_starts_its_otherwise_at_the_conflict() -> None:
     rules = "R1 when T0 then A within 5 seconds otherwise B within 2 seconds\nR2 when T1 then not A within 10 seconds"
     seen = both(rules, [ev(0, "T0"), ev(1, "T1"), ev(3, "B")])
     assert seen.items == [
-        ("R1:0", 0, "refused", 1),
+        ("R1:0", 0, "blocked", 1),
         ("R2:0", 1, "pending", None),
         ("R1:0/o:0", 1, "fulfilled", 3),
     ]
@@ -542,6 +542,6 @@ def test_a_priority_lead_cancels_the_lower_rule_that_much_earlier() -> None:
     )
     m.event("T0")
     clock.set(3.5)
-    assert m.request("A") is False
+    assert m.request("A").permitted is False
     clock.set(4)
-    assert m.request("A") is True
+    assert m.request("A").permitted is True

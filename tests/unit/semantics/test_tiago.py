@@ -73,7 +73,7 @@ def runtime(steps: list[Step], semantics: str) -> dict[str, Any]:
         if not s.values and not s.event:
             m.tick()
     m.close()
-    bad = [d["rule"] for d in status.values() if d["status"] in ("violated", "refused")]
+    bad = [d["rule"] for d in status.values() if d["status"] in ("violated", "blocked")]
     return {"conforms": not bad, "violated": sorted(bad)}
 
 
@@ -143,6 +143,6 @@ def test_without_a_priority_the_rules_conflict_and_the_prohibition_wins() -> Non
     j = judge(parse(TIAGO), tk(*FALL, "tock", "tock", *SMOKE))
     assert [(v.rule, v.status, v.at) for v in j.verdicts] == [
         ("Rule3", "pending", None),
-        ("Rule21", "refused", 120),
+        ("Rule21", "blocked", 120),
     ]
     assert [(c.rules, c.resolution) for c in j.conflicts] == [(("Rule21", "Rule3"), "prohibition-wins")]

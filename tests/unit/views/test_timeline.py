@@ -240,7 +240,7 @@ def test_every_outcome_is_a_bar_from_trigger_to_deadline(tl: Timeline) -> None:
         2: ("R1", "B #2", 2.0, 4.0, Outcome.VIOLATED, 4.0, None, False),
         3: ("R1", "C #3", 4.0, 9.0, Outcome.FULFILLED, 7.0, None, False),
         4: ("R2", "D #4", 6.0, 8.0, Outcome.LATE, 8.0, 9.5, False),
-        5: ("R3", "F #5", 7.0, 17.0, Outcome.REFUSED, 7.0, None, False),  # refused says more than conflict
+        5: ("R3", "F #5", 7.0, 17.0, Outcome.BLOCKED, 7.0, None, False),  # blocked says more than conflict
         6: ("R4", "not F #6", 7.0, 20.0, Outcome.CONFLICT, None, None, False),
         7: ("R4", "G #7", 7.0, 30.0, Outcome.CONFLICT, None, None, False),
         8: ("R4", "H #8", 7.0, 30.0, Outcome.PENDING, None, None, False),
@@ -452,6 +452,13 @@ def test_the_demos_audit_trail(demo_log: tuple[Path, Path]) -> None:
     assert tl.bar((0, 11)).outcome == Outcome.RESPECTED and tl.bar((0, 11)).negated
     assert Band(rule="R6", layer="R6.1", start=150.0, end=880.0) in tl.bands
     assert any(m.kind == MarkerKind.REFUSED and m.rule == "R6" and m.time == 150.0 for m in tl.markers)
+    # each decision says what the robot says to people; an otherwise says what it missed
+    said = {m.detail.partition("\nsays: ")[2] for m in tl.markers if m.kind == MarkerKind.OTHERWISE}
+    assert said == {
+        "I did not retry agreed in time, so I will support called within 1 minute.",
+        "I did not medication taken in time, so I will inform carer within 2 minutes.",
+    }
+    assert all("\nsays: " in m.detail for m in tl.markers if m.kind == MarkerKind.DECISION)
     assert not tl.ignored
 
 
@@ -559,7 +566,9 @@ def test_the_html_is_self_contained_and_renders_in_chromium(
     html = timeline_html(demo_tl)
     assert not re.findall(r"<script[^>]*\bsrc\s*=", html, re.I)  # no script fetched: Plotly is inline
     assert not re.findall(r"<link[^>]*\bhref\s*=\s*.https?:", html, re.I)
-    assert len(html) > 1_000_000 and "plotly.js" in html and 'id="cosleec-timeline"' in html
+    assert "plotly.js" in html and 'id="cosleec-timeline"' in html
+    # small (issue 33: 4.8 MB for one short shift): plotly.js's basic bundle, not the whole library
+    assert 1_000_000 < len(html.encode()) < 1_400_000 and "plotly.js (basic - minified)" in html
     page = tmp_path / "demo.html"
     page.write_text(html)
     got = rendered(browser, page)
@@ -719,3 +728,34 @@ def test_demo_plot_refuses_an_unknown_format_before_the_run(
     rc, out, err = cli(capsys, "demo", "--plot", str(tmp_path / "day.gif"))
     assert rc == 1 and not out  # said before the demo prints anything
     assert "cannot tell what to draw" in err and ".png, .svg, .html" in err
+
+
+def test_a_long_measure_name_is_drawn_whole_inside_the_picture() -> None:
+    # issue 33: `batteryLowDeliveringUrgentMedication` came out as `veringUrgentMedication`
+    need("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    from matplotlib import pyplot as plt
+
+    from cosleec.views.timeline_mpl import _figure
+
+    long = "batteryLowDeliveringUrgentMedication"
+    records = [
+        {"kind": "context", "time": 0.0, "values": {long: True, "m": "veryHighIndeed"}, "version": 1},
+        {"kind": "context", "time": 5.0, "values": {long: False}, "version": 2},
+    ]
+    tl = Timeline.from_records(records, "long.jsonl")
+    fig = _figure(layout(tl), plt)
+    try:
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+        drawn = {ax.yaxis.label.get_text(): ax.yaxis.label.get_window_extent(renderer) for ax in fig.axes}
+        assert {long, "m"} <= drawn.keys()  # the whole name is the label's text...
+        for name in (long, "m"):  # ...and the whole label is inside the picture
+            box = drawn[name]
+            assert fig.bbox.x0 <= box.x0 and box.x1 <= fig.bbox.x1, (name, box)
+        for ax in fig.axes:  # the lanes' names and the values' ticks too
+            assert ax.get_tightbbox(renderer).x0 >= fig.bbox.x0
+    finally:
+        plt.close(fig)

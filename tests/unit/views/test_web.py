@@ -159,6 +159,9 @@ def test_the_page_shows_the_context_and_a_decision_made_after_it_opened(page: An
         expect(first.locator(".badge")).to_have_text("R2.1")
         expect(first).to_contain_text("on F")
         expect(first.locator(".why")).to_have_text("because m was true")
+        expect(first.locator(".says")).to_have_text(
+            "says: \u201cNothing is required of me, because m is yes.\u201d"
+        )
         expect(row.locator("td.value")).to_have_text("true")
         expect(page.locator("#counters")).to_contain_text("1decisions")
 
@@ -248,6 +251,8 @@ def test_the_state_has_the_context_with_ages_each_rules_layer_decisions_obligati
     assert (
         newest["explanation"] == "R6: not RecordVideo within 600 s [default], because userConsent was false"
     )
+    # and what the robot says to people, in plain words (no explanations file here)
+    assert newest["for_people"] == "I will not record video for 10 minutes, because user consent is no."
     r1d = s["decisions"][2]
     assert r1d["layer"] == "R1.2" and r1d["obligations"] == ["WarnUser", "OpenCurtains within 10 s"]
     assert "because userDistressed >= high was true" in r1d["explanation"]

@@ -541,14 +541,14 @@ def test_a_fulfilled_obligation_goes_and_a_refused_one_is_a_listed_violation() -
         m.update(userConsent=False, userUndressed=False, userConscious=True)
         m.event("UserFallen")  # R6 forbids RecordVideo for 10 minutes
         m.update(userConsent=True)
-        m.event("CameraRequest")  # R10 obliges RecordVideo within 5 s: refused, a violation
+        m.event("CameraRequest")  # R10 obliges RecordVideo within 5 s: blocked, a violation
         s = state(m)
     assert s["stats"]["violations"] == 1 and len(s["conflicts"]) == 1
     [v] = s["violations"]  # counted, so listed
-    assert (v["rule"], v["what"], v["status"], v["by"]) == ("R10", "RecordVideo within 5 s", "refused", "R6")
+    assert (v["rule"], v["what"], v["status"], v["by"]) == ("R10", "RecordVideo within 5 s", "blocked", "R6")
 
 
-def test_the_page_says_a_refused_obligation_was_refused(browser: Any) -> None:
+def test_the_page_says_a_blocked_obligation_was_blocked(browser: Any) -> None:
     from playwright.sync_api import expect
 
     context = browser.new_context()
@@ -562,8 +562,8 @@ def test_the_page_says_a_refused_obligation_was_refused(browser: Any) -> None:
             page.goto(url(m))
             v = page.locator("#violations li")
             expect(v).to_have_count(1)
-            expect(v.locator(".badge")).to_have_text("refused")
-            expect(v).to_contain_text("R10, decision #3: refused, R6 forbids it")
+            expect(v.locator(".badge")).to_have_text("blocked")
+            expect(v).to_contain_text("R10, decision #3: blocked, R6 forbids it")
     finally:
         context.close()
 

@@ -150,6 +150,7 @@ function decisions(list) {
       why.textContent = d.explanation;
     }
     li.append(why);
+    if (d.for_people) li.append(el("div", "says", "says: \u201c" + d.for_people + "\u201d"));  // what a person hears
     box.append(li);
   }
 }
@@ -161,9 +162,9 @@ function violations(list) {
   for (const v of list) {
     const li = el("li", "violation");
     const head = el("div", "head");
-    const refused = v.status === "refused";
-    head.append(el("span", "badge violated", refused ? "refused" : v.negated ? "happened" : "missed"), el("strong", null, v.what), el("span", "time", at(v.at)));
-    const missed = refused ? "refused, " + v.by + " forbids it" : v.negated ? "forbidden, and it happened" : "the deadline passed without it";
+    const blocked = v.status === "blocked" || v.status === "refused";  // refused: its name before issue 33
+    head.append(el("span", "badge violated", blocked ? "blocked" : v.negated ? "happened" : "missed"), el("strong", null, v.what), el("span", "time", at(v.at)));
+    const missed = blocked ? "blocked, " + v.by + " forbids it" : v.negated ? "forbidden, and it happened" : "the deadline passed without it";
     li.append(head, el("div", "who", v.rule + ", decision #" + v.decision + ": " + missed));
     if (v.late && v.late.length) li.append(el("div", "late", "it came late, at " + at(v.late[v.late.length - 1])));
     box.append(li);

@@ -132,7 +132,10 @@ def test_a_missed_deadline_decides_its_otherwise() -> None:
         {},
     )
     assert described(d) == ["Help"]
-    assert d.explanation == "R1: F within 5 s was violated at 5; otherwise Help"
+    assert d.explanation == "R1: F within 5 s was violated; otherwise Help"
+    # it says it is an otherwise, and which obligation it answers (not a default decision)
+    assert (d.origin, d.fallback, d.missed) == ("otherwise", True, t.obligation)
+    assert d.for_people == "I did not f in time, so I will help."
 
 
 def test_an_otherwise_whose_inner_choice_is_unknown_only_forbids() -> None:
@@ -145,7 +148,10 @@ def test_an_otherwise_whose_inner_choice_is_unknown_only_forbids() -> None:
     assert (d.clause, d.missing) == (None, ("a",))
     assert described(d) == ["not Rec within 2 s"]
     assert d.explanation == (
-        "R1: F within 5 s was violated at 5.5; otherwise undetermined (no value for a); meanwhile not Rec within 2 s"
+        "R1: F within 5 s was violated; otherwise undetermined (no value for a); meanwhile not Rec within 2 s"
+    )
+    assert d.origin == "otherwise" and d.for_people == (
+        "I did not f in time, and I can't decide what to do next: I don't know a."
     )
     # only a trigger's undetermined decision is counted (as before the split): pinned here
     assert p.core.stats.undetermined == 0

@@ -42,16 +42,17 @@ def test_a_prohibition_covering_an_obligations_window_refuses_it_and_starts_its_
     p.clock.set(1.0)
     jobs = p.fire("E") + p.fire("G") if prohibition_first else p.fire("G") + p.fire("E")
     (o,) = items(jobs, "R2")
-    assert (o.status, o.outcome_at, o.by) == ("refused", 1.0, "R1")
+    assert (o.status, o.outcome_at, o.by) == ("blocked", 1.0, "R1")
     (fallback,) = [j for j in jobs if j.decision.event == "otherwise"]
     assert (fallback.decision.time, fallback.decision.violated) == (1.0, o.id)
+    assert (fallback.decision.origin, fallback.decision.missed) == ("otherwise", o.obligation)
     assert [t.event for t in fallback.items] == ["Help"]
     (conflict,) = p.of(Kind.CONFLICT)
     assert conflict["between"] == ["R2", "R1"] and conflict["resolution"] == "prohibition-wins"
     assert conflict["winner"] == "R1" and conflict["at"] == 1.0
     assert conflict["explanation"] == (
-        "R2 requires Rec within 5 s and R1 forbids Rec until 11 s: "
-        "the prohibition forbids the whole window and wins: the obligation is refused"
+        "R2 requires Rec within 5 s and R1 forbids Rec for another 10 s: "
+        "the prohibition forbids the whole window and wins: the obligation is blocked"
     )
     assert (p.core.stats.conflicts, p.core.stats.violations) == (1, 1)
 
@@ -72,7 +73,7 @@ def test_a_conflict_needs_the_prohibition_to_cover_the_end_of_the_window(
     p.fire("E")
     p.clock.set(later)
     (o,) = items(p.fire("G"), "R2")
-    assert (o.status == "refused") is refused
+    assert (o.status == "blocked") is refused
     assert len(p.of(Kind.CONFLICT)) == int(refused)
 
 
@@ -84,7 +85,7 @@ def test_a_conflict_needs_the_prohibition_to_cover_the_start_of_the_window(opens
     )
     p.fire("E")
     (o,) = items(p.fire("G"), "R2")
-    assert (o.status == "refused") is refused
+    assert (o.status == "blocked") is refused
 
 
 def test_a_prohibition_that_opens_later_is_no_conflict_for_an_obligation_started_inside_it() -> None:
@@ -92,7 +93,7 @@ def test_a_prohibition_that_opens_later_is_no_conflict_for_an_obligation_started
     p.fire("E")
     assert items(p.fire("G"), "R2")[0].status == "pending"  # Rec is allowed until 2
     p.clock.set(2.0)
-    assert items(p.fire("G"), "R2")[0].status == "refused"  # from 2 it is forbidden to its end
+    assert items(p.fire("G"), "R2")[0].status == "blocked"  # from 2 it is forbidden to its end
 
 
 def test_an_obligation_with_an_else_is_never_refused() -> None:
@@ -143,7 +144,7 @@ def test_each_otherwise_is_in_force_before_a_later_deadline_is_judged() -> None:
     p.fire("E")
     at(p, 6.0)  # both deadlines passed: F's at 3 first, whose otherwise forbids G from 3
     g = next(t for t in p.core.tracker.closed if t.event == "G" and not t.prohibition)
-    assert (g.status, g.outcome_at, g.by) == ("refused", 3.0, "R1")
+    assert (g.status, g.outcome_at, g.by) == ("blocked", 3.0, "R1")
 
 
 def test_an_occurrence_counts_only_for_obligations_started_before_it() -> None:
@@ -236,7 +237,7 @@ def test_an_undetermined_prohibition_wins_a_conflict_whatever_the_priority() -> 
     )
     p.fire("E")  # undetermined: no activation a priority acts on, but its prohibition holds
     (o,) = items(p.fire("G"), "R2")
-    assert (o.status, o.by) == ("refused", "R1")
+    assert (o.status, o.by) == ("blocked", "R1")
     assert p.of(Kind.CONFLICT)[0]["resolution"] == "prohibition-wins"
 
 

@@ -47,7 +47,10 @@ def test_a_rule_forbidding_with_several_activations_is_named_once_until_the_last
     p.fire("E")
     answer = forbidding(p)
     assert not answer and answer.rules == ("R1",)
-    assert answer.reason == "Rec is forbidden by R1 until 12 s (R1: not Rec within 10 s)"
+    # how long it still holds, never a reading of the clock (the last activation ends at 12)
+    assert answer.reason == "Rec is forbidden by R1 for another 10 s (R1: not Rec within 10 s)"
+    # for people: the longest wait, and each decision's sentence once
+    assert answer.for_people == "I can't rec for another 10 seconds: I will not rec for 10 seconds."
 
 
 def test_the_rules_are_named_in_turn_and_one_with_no_end_says_so() -> None:
@@ -60,10 +63,11 @@ def test_the_rules_are_named_in_turn_and_one_with_no_end_says_so() -> None:
     answer = forbidding(p)
     assert answer.rules == ("R1", "R3", "R2")
     assert answer.reason == (
-        "Rec is forbidden by R1 until 10 s (R1: not Rec within 10 s) and "
+        "Rec is forbidden by R1 for another 8 s (R1: not Rec within 10 s) and "
         "by R3 with no end (R3: not Rec eventually) and "
-        "by R2 until 7 s (R2: not Rec within 5 s)"
+        "by R2 for another 5 s (R2: not Rec within 5 s)"
     )
+    assert answer.for_people.startswith("I can't rec now: I will not rec for 10 seconds. I will never rec.")
 
 
 @pytest.mark.parametrize("endless", [0, 1])
@@ -82,7 +86,11 @@ def test_of_two_activations_with_no_end_the_first_speaks() -> None:
     p.clock.set(2.0)
     p.fire("F")
     p.core.decisions.clear()
-    assert forbidding(p).reason == "Rec is forbidden by R3 with no end (R3: not Rec eventually from 0 s)"
+    assert (
+        forbidding(p).reason
+        == "Rec is forbidden by R3 with no end (R3: not Rec eventually, in force for 2 s)"
+    )
+    assert forbidding(p).for_people == "I can't rec now."
 
 
 def test_when_the_decision_is_no_longer_kept_the_prohibition_says_when_it_began() -> None:
@@ -90,7 +98,11 @@ def test_when_the_decision_is_no_longer_kept_the_prohibition_says_when_it_began(
     p.clock.set(2.0)
     p.fire("E")
     p.core.decisions.clear()
-    assert forbidding(p).reason == "Rec is forbidden by R1 until 12 s (R1: not Rec within 10 s from 2 s)"
+    p.clock.set(5.0)
+    assert forbidding(p).reason == (
+        "Rec is forbidden by R1 for another 7 s (R1: not Rec within 10 s, in force for 3 s)"
+    )
+    assert forbidding(p).for_people == "I can't rec for another 7 seconds."
 
 
 def test_why_finds_the_decision_by_its_id_among_those_kept() -> None:

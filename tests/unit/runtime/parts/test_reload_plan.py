@@ -123,7 +123,7 @@ def test_a_value_that_changes_type_or_loses_its_literal_is_refused() -> None:
     p.update(a=True, s="high")
     with pytest.raises(ReloadError) as e:
         carried(p.core.context, other("measure a : numeric measure s : scale(low, mid)"))
-    assert str(e.value) == (
+    assert e.value.message == (
         f"{REFUSED}measure a holds True as a boolean, and the new rules make it numeric; "
         "measure s holds 'high', a literal its new scale (low, mid) does not have"
     )
