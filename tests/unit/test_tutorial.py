@@ -164,6 +164,7 @@ MISTAKES = {
     "for-duration": (1, "durations are written `within 10 minutes`"),
     "double-equals": (1, "`=` compares"),
     "colon-after-name": (1, "a rule's name is followed by `when`"),
+    "measure-as-trigger": (1, "is a condition, which comes after the event"),
     "otherwise-without-deadline": (0, "`otherwise` needs a deadline"),
     "untimed-fallback": (0, "can never be violated"),
 }

@@ -47,6 +47,14 @@ def natural_mistake(
     right and the DSL-only mistakes do not apply.
     """
     prev = before[-1] if before else None
+    if (
+        _COMPARISONS.get(tok.value)
+        and prev is not None
+        and prev.type == "NAME"
+        and len(before) >= 2
+        and before[-2].value.lower() == "when"
+    ):  # `when battery < 20 then`: a measure as the trigger
+        return _measure_as_trigger(tok, prev, after)
     found = _operator(tok, prev, before, after)
     if found is not None or paper or prev is None:
         return found
@@ -149,6 +157,25 @@ def _after_name(tok: Token, prev: Token, before: Sequence[Token], after: Token |
         f"a response is `E`, `E within 5 minutes` or `E eventually`: remove `{prev.value}`, or "
         "start the next rule on a line of its own",
         _span(prev),
+    )
+
+
+_COMPARISONS = dict.fromkeys(("<", "<=", ">", ">=", "=", "<>", "==", "!="), True)
+
+
+def _measure_as_trigger(tok: Token, prev: Token, after: Token | None) -> Mistake:
+    """``when battery < 20 then``: a comparison where the trigger event goes."""
+    written, value = tok.value, after.value if after is not None else "..."
+    if after is not None and after.value == "=" and tok.value in ("=", "!"):  # `==`, `!=`: two tokens
+        written, value = tok.value + "=", "..."
+    op = {"=": "=", "==": "=", "!=": "<>"}.get(written, written)
+    return Mistake(
+        "trigger-condition",
+        f"a rule is triggered by an event, named right after `when`; `{prev.value} {written} "
+        f"{value}` is a condition, which comes after the event",
+        f"write `when SomeEvent and {prev.value} {op} {value} then ...`, with the event that is "
+        f"perceived (a reading of `{prev.value}`, say)",
+        _span(prev, tok),
     )
 
 

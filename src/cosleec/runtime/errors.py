@@ -29,7 +29,10 @@ class BindingError(UserError):
 
     SHOWN = 20
 
-    def __init__(self, missing: list[str]) -> None:
+    #: the hint of an incomplete implementation (what start() finds)
+    INCOMPLETE = "implement each listed clause in its task (@hedge(i)) or register a capability for the event"
+
+    def __init__(self, missing: list[str], hint: str = INCOMPLETE) -> None:
         self.missing = missing
         shown = missing[: self.SHOWN]
         more = len(missing) - len(shown)
@@ -37,7 +40,7 @@ class BindingError(UserError):
             "incomplete implementation:\n  - "
             + "\n  - ".join(shown)
             + (f"\n  ... and {more:,} more (BindingError.missing lists them all)" if more else ""),
-            hint="implement each listed clause in its task (@hedge(i)) or register a capability for the event",
+            hint=hint,
         )
 
 

@@ -95,11 +95,20 @@ class Implementations:
             raise BindingError([f"task {type(task).__name__} names no rule (set `rule = ...`)"])
         rule = self.ruleset.by_name.get(task.rule)
         if rule is None:
-            raise BindingError([f"task {type(task).__name__}: no rule named {task.rule!r}"])
+            names = sorted(self.ruleset.by_name)
+            near = difflib.get_close_matches(str(task.rule), names, n=1)
+            listed = ", ".join(names[:10]) + (f" and {len(names) - 10} more" if len(names) > 10 else "")
+            raise BindingError(
+                [f"task {type(task).__name__}: no rule named {task.rule!r}"],
+                hint=(f"did you mean {near[0]!r}? " if near else "") + f"the rules are {listed}",
+            )
         extra = [i for i in task.clauses() if not 1 <= i <= len(rule.clauses)]
         if extra:
+            n = len(rule.clauses)
+            has = f"clauses 1 to {n}" if n > 1 else "one unless clause, 1" if n else "no unless clause"
             raise BindingError(
-                [f"task {type(task).__name__}: rule {rule.name} has no clause {i}" for i in extra]
+                [f"task {type(task).__name__}: rule {rule.name} has no clause {i}" for i in extra],
+                hint=f"rule {rule.name} has {has}: number each @hedge(i) as its unless clauses, from 1",
             )
         self.tasks[task.rule] = task
         self._handlers.pop(task.rule, None)

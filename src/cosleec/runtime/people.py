@@ -28,7 +28,7 @@ from cosleec.runtime.model import Obligation
 from cosleec.runtime.plain import listed, mentioned, spoken, value_words, words
 from cosleec.runtime.values import Value
 
-__all__ = ["Decided", "action", "case", "fill", "generated", "sentence"]
+__all__ = ["Decided", "action", "case", "fill", "generated", "sentence", "why_forbidden"]
 
 
 class Decided(Protocol):
@@ -84,6 +84,20 @@ def sentence(d: Decided) -> str:
     """The sentence for people of ``d``: the author's for its case, filled, else :func:`generated`."""
     given = d.explanations.sentence(d.rule, case(d)) if d.explanations is not None else None
     return generated(d) if given is None else fill(given, d.values)
+
+
+def why_forbidden(d: Decided) -> tuple[str, bool]:
+    """What a refusal tells a person of ``d``, the decision whose prohibition forbids: the
+    author's sentence for its case, filled (and True); else the values that decided its
+    clause, in words, to follow "because" (and False; empty when nothing decided it).
+
+    Not the generated sentence of ``d`` itself: "I will not record video for 10 minutes"
+    after "I can't record video for another 9 minutes" reads as a contradiction.
+    """
+    given = d.explanations.sentence(d.rule, case(d)) if d.explanations is not None else None
+    if given is not None:
+        return fill(given, d.values), True
+    return _because(d), False
 
 
 def case(d: Decided) -> str:

@@ -17,11 +17,12 @@ from typing import Any
 
 from cosleec.errors import clip, show
 from cosleec.records import Kind
+from cosleec.runtime import people
 from cosleec.runtime.core import Core
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.errors import ContextError
 from cosleec.runtime.obligations import Tracked
-from cosleec.runtime.plain import duration, spoken, words
+from cosleec.runtime.plain import duration, listed, spoken, words
 from cosleec.runtime.steps import Step
 
 
@@ -124,7 +125,9 @@ class Answers:
             if held is None or (held.hi is not None and (t.hi is None or t.hi > held.hi)):
                 last[t.rule] = t
         at = self.core.steps.clock.now() if now is None else now
-        parts, said = [], []
+        parts: list[str] = []
+        said: dict[str, None] = {}  # the authors' sentences, each once, in order
+        because: dict[str, None] = {}  # else what decided each forbidding clause, in words
         for t in last.values():
             until = "with no end" if t.hi is None else f"for another {duration(t.hi - at)}"
             d = self.decision(t)
@@ -134,15 +137,19 @@ class Answers:
                 else f"{t.rule}: {t.obligation.describe()}, in force for {duration(at - t.start)}"
             )
             parts.append(f"by {t.rule} {until} ({clip(why, 300)})")
-            if d is not None and d.for_people not in said:
-                said.append(d.for_people)
+            if d is not None:
+                text, authored = people.why_forbidden(d)
+                if text:
+                    (said if authored else because)[text] = None
         ends = [t.hi for t in last.values()]
         longest = None if None in ends else max(h for h in ends if h is not None)
         head = f"I can't {words(name)} " + (
             "now" if longest is None else f"for another {spoken(longest - at)}"
         )
-        people = f"{head}: {' '.join(said)}" if said else f"{head}."
-        return Permission(name, False, tuple(last), f"{what} is forbidden {' and '.join(parts)}", people)
+        if because:
+            head = f"{head}, because {listed(list(because))}"
+        told = f"{head}: {' '.join(said)}" if said else f"{head}."
+        return Permission(name, False, tuple(last), f"{what} is forbidden {' and '.join(parts)}", told)
 
     def why(self, t: Tracked) -> str | None:
         """The explanation of the decision that put ``t`` in force, while :attr:`decisions` keeps it."""

@@ -136,3 +136,22 @@ def test_an_untimed_obligation_in_an_otherwise_is_warned_about() -> None:
         ("untimed-fallback", 48),
         ("untimed-fallback", 86),
     ]
+
+
+@pytest.mark.parametrize(
+    ("written", "shown", "fix"),
+    [
+        ("battery < 20", "`battery < 20`", "when SomeEvent and battery < 20 then"),
+        ("battery >= 20", "`battery >= 20`", "when SomeEvent and battery >= 20 then"),
+        ("battery == 20", "`battery == ...`", "when SomeEvent and battery = ... then"),
+    ],
+)
+def test_a_condition_where_the_trigger_goes_is_said_so(written: str, shown: str, fix: str) -> None:
+    text = (
+        "def_start\n  event Dock\n  measure battery: numeric\ndef_end\n"
+        f"rule_start\n  R1 when {written} then Dock\nrule_end\n"
+    )
+    (d,) = analyse(text, "r.sleec").errors
+    assert (d.code, d.span.line, d.span.col) == ("trigger-condition", 6, 11)
+    assert shown in d.message and "comes after the event" in d.message
+    assert d.hint is not None and fix in d.hint

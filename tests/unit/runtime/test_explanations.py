@@ -102,10 +102,7 @@ def test_without_a_file_the_sentence_is_in_plain_words_not_the_rules_notation(ru
     assert r2.for_people == "I will not record video for 10 minutes, because patient consented is no."
     clock.advance(61)
     p = m.request("RecordVideo")
-    assert p.for_people == (
-        "I can't record video for another 9 minutes: "
-        "I will not record video for 10 minutes, because patient consented is no."
-    )
+    assert p.for_people == ("I can't record video for another 9 minutes, because patient consented is no.")
     assert p.reason.startswith("RecordVideo is forbidden by R2 for another 8 min 59 s (")
     m.event("FallDetected")
     clock.advance(121)
