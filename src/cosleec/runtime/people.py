@@ -116,43 +116,63 @@ def fill(text: str, values: Mapping[str, Value | None]) -> str:
     return PLACEHOLDER.sub(lambda m: value_words(values.get(m[1])), text)
 
 
-#: sentences already made, by everything a generated sentence reads: decisions recur (the same
-#: rule, clause and values), and an audit log or a ROS topic asks each one for its sentence
-_MADE: dict[tuple[object, ...], str] = {}
-_MADE_MAX = 4096
+Fact = tuple[str | None, str]
+"""One fact a sentence gives after "because": a measure's name (its value is said as the
+decision read it), or None and the fact in words (a condition that reads no measure)."""
+
+#: the shape of each sentence made -- its words, and which measures' values it says -- by
+#: everything but the values: decisions recur (the same rule, clause and conditions), and an
+#: audit log, an observer or a ROS topic asks each one for its sentence
+_SHAPES: dict[tuple[object, ...], tuple[str, tuple[Fact, ...]]] = {}
+_SHAPES_MAX = 4096
 
 
 def generated(d: Decided) -> str:
-    """A sentence in plain words for ``d``, when its author gave none (made once per case)."""
+    """A sentence in plain words for ``d``, when its author gave none (shaped once per case)."""
     key = (
         d.rule, d.clause, d.fallback, d.obligations, d.conditions, d.missing,
-        d.semantics, d.unknown, d.missed, tuple(d.values.items()),
+        d.semantics, d.unknown, d.missed, tuple(d.values),
     )  # fmt: skip
-    try:
-        return _MADE[key]
-    except KeyError:
-        pass
-    except TypeError:  # a value that cannot be a key (none of the runtime's): made afresh
-        return _generate(d)
-    if len(_MADE) >= _MADE_MAX:
-        _MADE.clear()
-    made = _MADE[key] = _generate(d)
-    return made
+    shape = _SHAPES.get(key)
+    if shape is None:
+        if len(_SHAPES) >= _SHAPES_MAX:
+            _SHAPES.clear()
+        shape = _SHAPES[key] = _shape(d)
+    return _said(shape, d.values)
 
 
 def _generate(d: Decided) -> str:
+    """:func:`generated` made afresh (what a kept shape must give)."""
+    return _said(_shape(d), d.values)
+
+
+def _said(shape: tuple[str, tuple[Fact, ...]], values: Mapping[str, Value | None]) -> str:
+    head, facts = shape
+    return f"{head}, because {_told(facts, values)}." if facts else head
+
+
+def _told(facts: tuple[Fact, ...], values: Mapping[str, Value | None]) -> str:
+    """``facts`` in words, each once, in order: ``a is yes and b is no``."""
+    said = dict.fromkeys(
+        text if n is None else f"{words(n)} is {value_words(values[n])}" for n, text in facts
+    )
+    return listed(list(said))
+
+
+def _shape(d: Decided) -> tuple[str, tuple[Fact, ...]]:
+    """The words of ``d``'s sentence and the facts that follow "because" (none: the whole sentence)."""
     doing = listed([action(o) for o in d.obligations])
     if d.fallback:
         missed = _missed(d.missed)
         if d.clause is None:
-            return f"{missed}, and I can't decide what to do next: I don't know {_unknown(d)}."
-        return f"{missed}, so " + (f"I will {doing}." if doing else "nothing more is required of me.")
+            return f"{missed}, and I can't decide what to do next: I don't know {_unknown(d)}.", ()
+        return f"{missed}, so " + (f"I will {doing}." if doing else "nothing more is required of me."), ()
     if d.clause is None:
         until = f" Until I do, I will {doing}." if doing else ""
-        return f"I can't decide yet: I don't know {_unknown(d)}.{until}"
+        return f"I can't decide yet: I don't know {_unknown(d)}.{until}", ()
     head = f"I will {doing}" if doing else "Nothing is required of me"
-    why = _because(d)
-    return f"{head}, because {why}." if why else f"{head}."
+    facts = _facts(d)
+    return (head, facts) if facts else (f"{head}.", ())
 
 
 @functools.lru_cache(maxsize=4096)  # a rule's obligations recur: one sentence part each
@@ -192,21 +212,34 @@ def _unknown(d: Decided) -> str:
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
-def _because(d: Decided) -> str:
-    """The values that decided ``d``'s clause, in words: ``requester is patient is no``; empty
-    when the rule has no ``unless``."""
+@functools.lru_cache(maxsize=1024)  # a rule's conditions and the measures it reads recur
+def _reads(texts: tuple[str, ...], names: tuple[str, ...]) -> tuple[tuple[str, ...], ...]:
+    """For each condition of ``texts``, the measures of ``names`` it reads, in their order."""
+    blank = dict.fromkeys(names)
+    return tuple(tuple(n for n, _ in mentioned(t, blank)) for t in texts)
+
+
+def _facts(d: Decided) -> tuple[Fact, ...]:
+    """The facts that decided ``d``'s clause (``requester is patient is no``), each a
+    measure to say with its value, or a condition that reads none in words; none when the
+    rule has no ``unless``."""
     hedges = [(c, t, v) for c, t, v in d.conditions if c > 0]
     if not hedges or d.clause is None:
-        return ""
+        return ()
     chosen = set(decisive([v for _, _, v in hedges], d.clause, d.semantics, d.unknown))
-    facts: dict[str, None] = {}  # in order, each once
-    for c, t, v in hedges:
+    reads = _reads(tuple(t for _, t, _ in hedges), tuple(d.values))
+    facts: list[Fact] = []
+    for (c, t, v), named in zip(hedges, reads, strict=True):
         if c not in chosen:
             continue
-        named = mentioned(t, d.values)
         if named:
-            facts.update(dict.fromkeys(f"{words(n)} is {value_words(x)}" for n, x in named))
+            facts += [(n, "") for n in named]
         else:  # a condition that reads no measure: said as written, names as words
             said = _NAME.sub(lambda m: words(m[0]), t)
-            facts[f"{said} is {value_words(v)}"] = None
-    return listed(list(facts))
+            facts.append((None, f"{said} is {value_words(v)}"))
+    return tuple(facts)
+
+
+def _because(d: Decided) -> str:
+    """The values that decided ``d``'s clause, in words, to follow "because" (empty: none)."""
+    return _told(_facts(d), d.values)

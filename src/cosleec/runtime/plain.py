@@ -57,12 +57,24 @@ _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 def mentioned(text: str, values: Mapping[str, Value | None]) -> list[tuple[str, Value | None]]:
     """The measures of ``values`` that condition ``text`` names, with their values, in the
     order of ``values``: what an explanation says a condition read."""
-    names = set(_NAME.findall(text))  # one pass over the text, not one per value
+    names = _names(text)  # one pass over each text, once
     return [
         (n, x)
         for n, x in values.items()
-        if (n in names if _NAME.fullmatch(n) else re.search(rf"\b{re.escape(n)}\b", text))
+        if n in names or (not _plain(n) and re.search(rf"\b{re.escape(n)}\b", text))
     ]
+
+
+@functools.lru_cache(maxsize=4096)
+def _names(text: str) -> frozenset[str]:
+    """The names condition ``text`` holds (a rule's conditions recur: read once each)."""
+    return frozenset(_NAME.findall(text))
+
+
+@functools.lru_cache(maxsize=4096)
+def _plain(name: str) -> bool:
+    """Whether ``name`` is one word of a condition's text (else it is searched for whole)."""
+    return _NAME.fullmatch(name) is not None
 
 
 def listed(parts: list[str]) -> str:
