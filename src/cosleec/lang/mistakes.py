@@ -56,6 +56,8 @@ def natural_mistake(
     ):  # `when battery < 20 then`: a measure as the trigger
         return _measure_as_trigger(tok, prev, after)
     found = _operator(tok, prev, before, after)
+    if paper and found is None and prev is not None and prev.value == "for" and "when" in expected:
+        return _after_name(tok, prev, before, after) if tok.type in _NUMBER else None  # `for 10 minutes`
     if found is not None or paper or prev is None:
         return found
     if (

@@ -125,28 +125,51 @@ class Explanations:
         )
 
     def check(self, rules: RuleSet) -> Explanations:
-        """ExplanationsError, at the sentence's ``file:line:col``, for the first sentence the
-        rules do not fit: an unknown rule, a clause the rule does not have, ``otherwise`` for
-        a rule without one, an unknown measure in ``{...}``. Returns ``self``."""
-        for s in self.sentences:
-            rule = rules.by_name.get(s.rule)
-            if rule is None:
-                near = closest(s.rule, rules.by_name)
-                raise ExplanationsError(
-                    f"{s.rule_at}: {show(s.rule)} is not a rule of the rules",
-                    hint=f"did you mean {near}?" if near else f"the rules are {_names(rules.by_name)}",
-                )
-            _check_case(s, rule)
-            for name in PLACEHOLDER.findall(s.text):
-                if name not in rules.measures:
-                    near = closest(name, rules.measures)
-                    raise ExplanationsError(
-                        f"{s.where}: {{{name}}} is not a measure the rules declare",
-                        hint=f"did you mean {{{near}}}?"
-                        if near
-                        else "write {NAME} with NAME a measure of the def block, or {{ for a brace",
-                    )
+        """Returns ``self`` when every sentence fits the rules; else ExplanationsError naming
+        each sentence that does not, at its ``file:line:col``, with its fix (all of them in
+        one error: a translator fixes the file in one pass): an unknown rule, a clause the
+        rule does not have, ``otherwise`` for a rule without one, an unknown measure in
+        ``{...}``."""
+        found = [e for s in self.sentences for e in _misfits(s, rules)]
+        if len(found) == 1:
+            raise found[0]
+        if found:
+            listed = "\n".join(f"  {e.message}\n    hint: {e.hint}" for e in found)
+            raise ExplanationsError(
+                f"{len(found)} sentences of {self.source} do not fit the rules:\n{listed}",
+                hint="fix each one at its file:line:col",
+            )
         return self
+
+
+def _misfits(s: Sentence, rules: RuleSet) -> list[ExplanationsError]:
+    """What is wrong with sentence ``s`` against ``rules`` (nothing: an empty list)."""
+    rule = rules.by_name.get(s.rule)
+    if rule is None:
+        near = closest(s.rule, rules.by_name)
+        return [
+            ExplanationsError(
+                f"{s.rule_at}: {show(s.rule)} is not a rule of the rules",
+                hint=f"did you mean {near}?" if near else f"the rules are {_names(rules.by_name)}",
+            )
+        ]
+    out: list[ExplanationsError] = []
+    try:
+        _check_case(s, rule)
+    except ExplanationsError as e:
+        out.append(e)
+    for name in PLACEHOLDER.findall(s.text):
+        if name not in rules.measures:
+            near = closest(name, rules.measures)
+            out.append(
+                ExplanationsError(
+                    f"{s.where}: {{{name}}} is not a measure the rules declare",
+                    hint=f"did you mean {{{near}}}?"
+                    if near
+                    else "write {NAME} with NAME a measure of the def block, or {{ for a brace",
+                )
+            )
+    return out
 
 
 def _check_case(s: Sentence, rule: CompiledRule) -> None:

@@ -155,3 +155,15 @@ def test_a_condition_where_the_trigger_goes_is_said_so(written: str, shown: str,
     assert (d.code, d.span.line, d.span.col) == ("trigger-condition", 6, 11)
     assert shown in d.message and "comes after the event" in d.message
     assert d.hint is not None and fix in d.hint
+
+
+def test_a_duration_after_for_is_named_in_the_paper_notation_too() -> None:
+    (d,) = analyse("R2: WHEN EnterRoom THEN not RecordVideo for 10 minutes\n", "p.txt").errors
+    assert (d.code, d.span.line, d.span.col) == ("for-duration", 1, 41)
+    assert "durations are written `within 10 minutes`" in d.message
+    assert (
+        d.hint
+        == "write `not RecordVideo within 10 minutes` (it must not happen within that time of the trigger)"
+    )
+    # a rule named `for` in the paper notation is no mistake of this kind
+    assert [e.code for e in analyse("R1: WHEN A THEN B\nfor: WHEN C THEN D\n", "p.txt").errors] == []

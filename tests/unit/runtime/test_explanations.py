@@ -268,3 +268,22 @@ def test_an_explain_why_capability_gets_the_sentence_for_people(rules: RuleSet) 
     m.update(requesterIsPatient=False, requesterAge=9)
     m.event("MedicationInfoRequest")
     assert heard == ["I can't share this: only the patient may hear it (you are 9, urgency unknown)."]
+
+
+def test_every_sentence_the_rules_do_not_fit_is_named_in_one_error(rules: RuleSet, tmp_path: Path) -> None:
+    path = tmp_path / "says.yaml"
+    path.write_text(
+        "R1:\n"
+        "  3: I can't.\n"  # line 2: R1 has one clause
+        "  default: Here, {requesterAg}.\n"  # line 3: no such measure
+        "R9: Hello.\n"  # line 4: no such rule
+        "R2: Not now.\n"  # fits
+    )
+    with pytest.raises(ExplanationsError) as e:
+        Manager(rules, clock=VirtualClock(), dispatch=False, explanations=str(path))
+    text = e.value.message
+    assert text.startswith(f"3 sentences of {path} do not fit the rules:")
+    assert f"{path}:2:3: R1 has no clause 3" in text
+    assert f"{path}:3:12: {{requesterAg}} is not a measure" in text and "did you mean {requesterAge}?" in text
+    assert f"{path}:4:1: 'R9' is not a rule" in text
+    assert text.count("\n  /") == 3 and "Not now" not in text  # the sentence that fits is not named
