@@ -141,11 +141,6 @@ def generated(d: Decided) -> str:
     return _said(shape, d.values)
 
 
-def _generate(d: Decided) -> str:
-    """:func:`generated` made afresh (what a kept shape must give)."""
-    return _said(_shape(d), d.values)
-
-
 def _said(shape: tuple[str, tuple[Fact, ...]], values: Mapping[str, Value | None]) -> str:
     head, facts = shape
     return f"{head}, because {_told(facts, values)}." if facts else head
