@@ -161,14 +161,20 @@ class Core:
     def record(self, d: Decision, step: Step, *, queue: bool = False) -> dict[str, Any] | None:
         """Record a decision; ``queue`` puts its implementation in the journal's outbox until it ran.
 
-        Returns the record (None when nobody records), which the step may still annotate.
+        Returns the record (None when nobody records), which the step may still annotate:
+        the whole record when it is made at once, else what the step adds to it, which the
+        record gets when it is made (:meth:`Step.emit_later`: only when someone reads it).
         """
         self.decisions.append(d)
         self.stats.decisions += 1
         rec = None
         if self.steps.recording:
-            rec = d.to_json()
-            step.emit(Kind.DECISION, rec)
+            if queue and self.journal and not self.dispatch:  # kept whole in the outbox: made now
+                rec = d.to_json()
+                step.emit(Kind.DECISION, rec)
+            else:  # made when someone reads it; ``rec`` holds what the step adds (its dispatch)
+                rec = {}
+                step.emit_later(Kind.DECISION, functools.partial(_decision_record, d, rec))
             if queue and self.journal:
                 entry: dict[str, Any] = {"decision": d.id, "rule": d.rule, "event": d.event}
                 if not self.dispatch:  # a Manager node publishes it: kept whole, to publish again
@@ -248,3 +254,10 @@ class Core:
             for n in gone:
                 step.change.context[n] = None
             self.switched(switches, step)
+
+
+def _decision_record(d: Decision, added: dict[str, Any]) -> dict[str, Any]:
+    """The record of decision ``d`` with what its step ``added`` (how it was dispatched)."""
+    out = d.to_json()
+    out.update(added)
+    return out

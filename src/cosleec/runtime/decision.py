@@ -74,6 +74,7 @@ class Decision:
     explanations: Explanations | None = field(default=None, compare=False, repr=False)
     _explanation: list[str] = field(default_factory=list, init=False, compare=False, repr=False)
     _for_people: list[str] = field(default_factory=list, init=False, compare=False, repr=False)
+    _recorded: list[str] = field(default_factory=list, init=False, compare=False, repr=False)
 
     @classmethod
     def made(
@@ -124,6 +125,7 @@ class Decision:
             explanations=explanations,
             _explanation=[],
             _for_people=[],
+            _recorded=[],
         )
         return d
 
@@ -165,7 +167,18 @@ class Decision:
         return self.clause is None
 
     def to_json(self) -> dict[str, Any]:
-        """The wire and audit form; :meth:`from_json` reads it back."""
+        """The wire and audit form; :meth:`from_json` reads it back.
+
+        ``for_people`` is in it only when it is the author's (an explanations file's
+        sentence, or one a record kept): a sentence in plain words is made from the rest of
+        the record when someone reads it (:meth:`from_json`), not on every decision."""
+        out = self._json()
+        said = self._recorded[0] if self._recorded else people.authored(self)
+        if said is not None:
+            out["for_people"] = said
+        return out
+
+    def _json(self) -> dict[str, Any]:
         return {
             "type": "decision",
             "id": self.id,
@@ -181,7 +194,6 @@ class Decision:
             "missing": list(self.missing),
             "reason": self.reason,
             "explanation": self.explanation,
-            "for_people": self.for_people,
             "context_version": self.context_version,
             "violated": self.violated,
             "unknowns": str(self.unknown),
@@ -224,6 +236,7 @@ class Decision:
         said = d.get("for_people")
         if isinstance(said, str):  # what was said then, whatever the explanations are now
             decision._for_people.append(said)
+            decision._recorded.append(said)
         return decision
 
 
@@ -291,3 +304,17 @@ def _because(d: Decision, width: int | None = None) -> str:
         + (f" (unless {cond(hedges[clause - 1][1])})" if clause <= len(hedges) else "")
     )
     return f"{rule}: {what} [{head}], because {because}"
+
+
+def said_in(record: Mapping[str, Any]) -> str:
+    """What a decision record says to people: the sentence it kept (an author's), else the
+    one in plain words made from the record now (records keep only the author's: see
+    :meth:`Decision.to_json`); "" for a record too malformed to read back. For readers of
+    records (the live page, the timeline), which must not fail on an odd line."""
+    kept = record.get("for_people")
+    if isinstance(kept, str):
+        return kept
+    try:
+        return Decision.from_json(record).for_people
+    except (KeyError, ValueError, TypeError, AttributeError):
+        return ""

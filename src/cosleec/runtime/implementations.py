@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from cosleec.bulk import quick_init
-from cosleec.cop import Snapshot, activate, layered
+from cosleec.cop import Layer, Snapshot, activate, layered
 from cosleec.errors import clip
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.errors import BindingError
@@ -278,17 +278,16 @@ class Implementations:
                 )
                 return [Ran("task", None, f"clause {decision.clause} and layer {decision.layer} disagree")]
             composition = rule.compositions[decision.clause]
-        layers = composition.layers
+        return self._guarded("task", rule, decision, self._task, rule, decision, composition.layers)
 
-        def run() -> None:
-            handler = self.handler(rule)
-            if layers:  # added to whatever the caller has active, never replacing it
-                with activate(*layers):
-                    handler(decision)
-            else:
+    def _task(self, rule: CompiledRule, decision: Decision, layers: tuple[Layer, ...]) -> None:
+        """Call the rule's layered method with the decision's ``layers`` active."""
+        handler = self.handler(rule)
+        if layers:  # added to whatever the caller has active, never replacing it
+            with activate(*layers):
                 handler(decision)
-
-        return self._guarded("task", rule, decision, run)
+        else:
+            handler(decision)
 
     def dispatch_fallback(self, rule: CompiledRule, decision: Decision) -> list[Ran]:
         """Run an ``otherwise`` decision: capabilities for its events, else the task's ``fallback``.
@@ -301,15 +300,11 @@ class Implementations:
         if fallback is not None and any(
             not o.negated and o.event not in handled for o in decision.obligations
         ):
-
-            def run() -> None:
-                fallback(decision)
-
-            out += self._guarded("fallback", rule, decision, run)
+            out += self._guarded("fallback", rule, decision, fallback, decision)
         return out
 
     def _guarded(
-        self, what: str, rule: CompiledRule, decision: Decision, run: Callable[[], None]
+        self, what: str, rule: CompiledRule, decision: Decision, run: Callable[..., object], *args: object
     ) -> list[Ran]:
         """Run a task's code; a failure is logged and counted, never raised into the caller.
 
@@ -319,7 +314,7 @@ class Implementations:
         runs: list[Ran] = []
         token = _RUNS.set(runs)
         try:
-            run()
+            run(*args)
             if what == "task" and not runs:
                 runs.append(Ran("task", None))
         except _Failed:

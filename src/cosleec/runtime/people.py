@@ -82,8 +82,15 @@ class Decided(Protocol):
 
 def sentence(d: Decided) -> str:
     """The sentence for people of ``d``: the author's for its case, filled, else :func:`generated`."""
+    given = authored(d)
+    return generated(d) if given is None else given
+
+
+def authored(d: Decided) -> str | None:
+    """The author's sentence for ``d``'s case (its explanations file's), filled; None when
+    the file has none for it, or there is no file (the sentence is then :func:`generated`)."""
     given = d.explanations.sentence(d.rule, case(d)) if d.explanations is not None else None
-    return generated(d) if given is None else fill(given, d.values)
+    return None if given is None else fill(given, d.values)
 
 
 def why_forbidden(d: Decided) -> tuple[str, bool]:

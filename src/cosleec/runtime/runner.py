@@ -13,11 +13,11 @@ stops that (a ``task-failed`` record) before Python's stack runs out.
 
 from __future__ import annotations
 
-import functools
 import logging
 import sys
 import threading
 from collections.abc import Callable, Iterable
+from typing import Any
 
 from cosleec.records import Kind
 from cosleec.runtime.core import Core
@@ -65,10 +65,11 @@ class Runner:
             job, checked = admitted
             impl = job.implementations if job.implementations is not None else self.core.implementations
             if job.composition is not None:
-                call = functools.partial(impl.dispatch, job.rule, job.decision, job.composition)
+                ran = self._call(job.rule, impl.dispatch, job.rule, job.decision, job.composition)
             else:
-                call = functools.partial(impl.dispatch_fallback, job.rule, job.decision)
-            self.run(job.rule, job.decision, call, checked, [t.id for t in given.items if not t.prohibition])
+                ran = self._call(job.rule, impl.dispatch_fallback, job.rule, job.decision)
+            actions = [t.id for t in given.items if not t.prohibition] if self.core.journal else ()
+            self.ran(job.rule, job.decision, ran, checked, actions)
 
     def run(
         self,
@@ -84,7 +85,12 @@ class Runner:
         outcome records carry it, so a reader can tell what was in force when it started.
         ``actions``: the ids of the actions it was handed (they are no longer in flight).
         """
-        ran = self._call(rule, run)
+        self.ran(rule, d, self._call(rule, run), checked, actions)
+
+    def ran(
+        self, rule: CompiledRule, d: Decision, ran: list[Ran], checked: int, actions: Iterable[int]
+    ) -> None:
+        """Record what a decision's implementation did (see :meth:`run`)."""
         core = self.core
         core.stats.task_failures += sum(1 for r in ran if not r.ok)
         if not core.steps.recording:
@@ -104,8 +110,8 @@ class Runner:
             if core.journal and core.dispatch:
                 self.gate.landed(d.id, actions, step)  # (a decision with actions still held keeps its entry)
 
-    def _call(self, rule: CompiledRule, run: Callable[[], list[Ran]]) -> list[Ran]:
-        """Call ``run`` one level deeper, or refuse past ``max_depth``."""
+    def _call(self, rule: CompiledRule, run: Callable[..., list[Ran]], *args: Any) -> list[Ran]:
+        """Call ``run(*args)`` one level deeper, or refuse past ``max_depth``."""
         depth = getattr(self._depth, "n", 0)
         if depth >= self.max_depth:
             ran = [
@@ -120,6 +126,6 @@ class Runner:
             return ran
         self._depth.n = depth + 1
         try:
-            return run()
+            return run(*args)
         finally:
             self._depth.n = depth

@@ -97,6 +97,16 @@ class Step:
         c["record"] = n + 1
         self.events.append(RuntimeEvent.made(kind, self.now if at is None else at, data, n))
 
+    def emit_later(self, kind: Kind, make: Callable[[], dict[str, Any]]) -> None:
+        """Add a record whose data ``make`` makes when someone first reads it (numbered now,
+        like :meth:`emit`): for the hot path's decisions, which nobody may read. ``make``
+        may read only what no longer changes once the step ends (see
+        :meth:`RuntimeEvent.deferred <cosleec.records.RuntimeEvent.deferred>`)."""
+        c = self._counters
+        n = c["record"]
+        c["record"] = n + 1
+        self.events.append(RuntimeEvent.deferred(kind, self.now, make, n))
+
     @property
     def change(self) -> Change:
         """What the journal must keep of this step."""

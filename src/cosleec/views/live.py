@@ -21,6 +21,7 @@ from collections.abc import Callable
 from typing import Any
 
 from cosleec.runtime import Manager, Obligation, RuntimeEvent, Tracked, VirtualClock
+from cosleec.runtime.decision import said_in
 
 #: how many decisions, violations, conflicts and refusals the page lists (the newest)
 HISTORY = 20
@@ -200,7 +201,7 @@ def _decision(d: dict[str, Any]) -> dict[str, Any]:
         "layer": d["layer"],
         "obligations": [Obligation.from_json(o).describe() for o in d["obligations"]],
         "explanation": d["explanation"],
-        "for_people": d.get("for_people", ""),  # what the robot says to people (older records: none)
+        "for_people": said_in(d),  # what the robot says to people
     }
 
 

@@ -44,6 +44,7 @@ from typing import Any
 
 from cosleec.errors import UserError, clip, show
 from cosleec.records import HEADER, Kind
+from cosleec.runtime.decision import said_in
 from cosleec.views.timeline_files import read_records
 from cosleec.views.timeline_marks import (
     UNDETERMINED,
@@ -275,7 +276,7 @@ class _Builder:
             kind, label = MarkerKind.DECISION, where
             head = f"{event} → {rule} [{where}]"
         why = rec.get("explanation") or rec.get("reason") or ""
-        said = rec.get("for_people") or ""  # what the robot says to people (older records: none)
+        said = said_in(rec)  # what the robot says to people
         detail = (
             f"decision #{rec.get('id')}: {head} → {wants}"
             + (f"\n{clip(str(why), 300)}" if why else "")

@@ -22,6 +22,7 @@ from cosleec.runtime import (
     RuleSet,
     VirtualClock,
 )
+from cosleec.runtime.decision import said_in
 from cosleec.runtime.plain import duration, spoken, words
 
 HOSPITAL = """def_start
@@ -89,7 +90,9 @@ def test_the_authors_sentence_is_said_with_the_values_the_decision_read(
     assert fallback.for_people == "I could not reach a nurse in time, so I am raising the alarm."
     m.close()
     said = [json.loads(line) for line in log.read_text().splitlines() if '"kind":"decision"' in line]
-    assert [r["for_people"] for r in said] == [d.for_people for d in m.decisions]
+    # a record keeps the author's sentence; one in plain words is made when it is read
+    assert [said_in(r) for r in said] == [d.for_people for d in m.decisions]
+    assert ["for_people" in r for r in said] == [True, True, True, False, True]
     assert [r["origin"] for r in said] == ["trigger"] * 3 + ["trigger", "otherwise"]
 
 
@@ -113,6 +116,20 @@ def test_without_a_file_the_sentence_is_in_plain_words_not_the_rules_notation(ru
     assert undetermined.for_people == "I can't decide yet: I don't know requester is patient."
     for said in (d.for_people, r2.for_people, p.for_people, fallback.for_people):
         assert not any(c in said for c in "[]=_") and "R1" not in said and " s " not in said
+
+
+def test_a_record_keeps_only_the_authors_sentence_and_readers_make_the_rest(rules: RuleSet) -> None:
+    m, _ = manager(rules)
+    m.update(requesterIsPatient=False, patientConsented=False)
+    (d,) = m.event("MedicationInfoRequest")
+    record = json.loads(json.dumps(d.to_json()))
+    assert "for_people" not in record  # made on every decision, it doubled a decision's cost
+    assert d._for_people == []  # and to_json did not make it either
+    assert said_in(record) == d.for_people == Decision.from_json(record).for_people
+    kept = {**record, "for_people": "Something said then."}  # what was said then stays said
+    assert said_in(kept) == "Something said then." == Decision.from_json(kept).to_json()["for_people"]
+    assert said_in({"kind": "decision", "rule": "R1"}) == ""  # no id: too malformed to read
+    assert said_in({**record, "clause": "two"}) == ""
 
 
 def test_a_decision_round_trips_with_its_origin_and_what_was_said(rules: RuleSet) -> None:

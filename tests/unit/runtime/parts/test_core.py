@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from cosleec.lang import CONFLICT_AWARE, HedgeSemantics, Unknowns
-from cosleec.records import Kind
+from cosleec.records import Kind, RuntimeEvent
 from cosleec.runtime.clock import VirtualClock
 from cosleec.runtime.context import Context
 from cosleec.runtime.core import Core, InForce
@@ -124,7 +124,7 @@ def test_a_decision_is_kept_and_counted_even_when_nobody_records() -> None:
     assert list(p.core.decisions) == [d] and p.core.stats.decisions == 1
 
 
-def test_a_decision_record_is_the_one_delivered_so_the_step_can_still_annotate_it() -> None:
+def test_a_decision_record_gets_what_the_step_adds_and_is_made_only_when_read() -> None:
     p = parts(RULES)
     p.update(a=False)
     with p.core.steps.step() as step:
@@ -134,8 +134,39 @@ def test_a_decision_record_is_the_one_delivered_so_the_step_can_still_annotate_i
         assert rec is not None
         rec["dispatch"] = "held"
         assert not step.changed()  # no journal: no outbox
-    assert p.heard[-1].kind == Kind.DECISION
-    assert p.heard[-1].data is rec and rec["dispatch"] == "held"
+        made = step.events[-1]
+        assert "data" not in vars(made)  # nobody read it yet: not made
+    assert p.heard[-1] is made and made.kind == Kind.DECISION
+    assert made.data == {**d.to_json(), "dispatch": "held"}  # what the step added comes last
+    assert list(made.data)[-1] == "dispatch" and made.data is made.data  # made once
+
+
+def test_a_deferred_record_is_made_once_whichever_threads_read_it() -> None:
+    import threading
+
+    calls: list[int] = []
+    barrier = threading.Barrier(8)
+
+    def make() -> dict[str, object]:
+        calls.append(1)
+        return {"n": len(calls)}
+
+    ev = RuntimeEvent.deferred(Kind.DECISION, 1.0, make, 5)
+    seen: list[object] = []
+
+    def read() -> None:
+        barrier.wait()
+        seen.append(ev.data)
+
+    threads = [threading.Thread(target=read) for _ in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert calls == [1] and all(x is seen[0] for x in seen) and seen[0] == {"n": 1}
+    assert ev == RuntimeEvent.made(Kind.DECISION, 1.0, {"n": 1}, 5)
+    with pytest.raises(AttributeError, match="no attribute 'other'"):
+        ev.other  # noqa: B018
 
 
 @pytest.mark.parametrize("dispatch", [True, False])
