@@ -40,6 +40,7 @@ class Context:
         self.stamps: dict[str, float] = {}
         self.version = 0
         self._aged = sorted(ages.items())
+        self.aging = bool(self._aged)  # can any value go stale? (no: a step need not look)
         # for the hot path: a boolean value of a boolean measure is stored as it is, and only
         # a scale value looks different to users (its literal) than stored (its position)
         self._booleans = frozenset(n for n, m in self.measures.items() if m.kind == "boolean")

@@ -510,7 +510,11 @@ class Manager:
 
     def _advance(self, step: Step, limit: int | None = None) -> list[Job]:
         """(In ``step``.) Stale values, then every deadline due up to the step's time."""
-        self.core.expire(step.now, step)
+        core = self.core
+        if core.context.aging:
+            core.expire(step.now, step)
+        if not core.aware and not core.tracker.backlog(step.now):
+            return []  # nothing is due: the common case
         return self._enforcer.advance(step.now, step, limit)
 
     def _catch_up(self) -> None:
