@@ -131,16 +131,21 @@ class Selection(NamedTuple):
     failure: HedgeEvaluationError | None
 
 
-Chain = tuple[Callable[..., Any], Callable[..., Any] | None, "Chain | None"]
-"""A built chain, ``(call, around, next)``: ``call(*args, **kwargs)`` runs it. When its
-outermost step is a lone ``around`` partial, ``around`` is that partial and ``next`` the
-chain of the steps after it, in the same form -- a linked list the fast path walks without
-calling the steps' closures; otherwise both are ``None``. A plain tuple: the interpreter
-indexes and unpacks those quickest."""
+Chain = tuple[Callable[..., Any], Callable[..., Any] | None, Callable[..., Any] | None]
+"""A built chain, ``(call, around, proceed)``: ``call(*args, **kwargs)`` runs it. When its
+outermost step is a lone ``around`` partial and the dispatcher links chains
+(:attr:`LayeredFunction.link`, the fast path), ``around`` is that partial and ``proceed``
+the function, made once per chain by ``link``, that runs the steps after it as that
+partial's ``proceed`` (bound to one call's arguments by the dispatcher); otherwise both are
+``None``. A plain tuple: the interpreter indexes and unpacks those quickest."""
 
 
 Memo = tuple[
-    GlobalState | None, Frame | None, Callable[..., Any] | None, Callable[..., Any] | None, Chain | None
+    GlobalState | None,
+    Frame | None,
+    Callable[..., Any] | None,
+    Callable[..., Any] | None,
+    Callable[..., Any] | None,
 ]
 """The last configuration seen and its chain, flat: ``(g, d, *chain)`` (one unpack in the fast path)."""
 _NO_MEMO: Memo = (None, None, None, None, None)
@@ -192,6 +197,9 @@ class LayeredFunction:
         # few recurring compositions -- one per rule clause, say -- finds its chain again
         # without recomputing its view when the one-slot memo held another
         self._by_frame: dict[Frame, tuple[GlobalState, Chain, View]] = {}
+        # set by the fast path before any partial is registered: makes, from the rest of a
+        # chain, the ``proceed`` function of the lone ``around`` step before it (see Chain)
+        self.link: Callable[[Chain], Callable[..., Any]] | None = None
         self._lock = threading.Lock()
         _registry.add(self)
 
@@ -353,14 +361,15 @@ class LayeredFunction:
 
     def _build(self, layers: tuple[Layer, ...]) -> Chain:
         make = _async_step if self.is_async else _step
+        link = self.link
         chain: Chain = (self.base, None, None)
         for la in reversed(layers):
             parts = self.partials[la]
             step = make(parts, chain[0], self.receiver)
             around = parts.get("around")
             lone = around is not None and "before" not in parts and "after" not in parts
-            # a lone around keeps the chain after it linked (the fast path runs it step by step)
-            chain = (step, around, chain) if lone else (step, None, None)
+            # a lone around, linked: the fast path calls it with ``link(rest)`` as its proceed
+            chain = (step, around, link(chain)) if lone and link is not None else (step, None, None)
         return chain
 
 

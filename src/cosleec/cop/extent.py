@@ -78,8 +78,11 @@ class _Scope:
 def _transition(frame: Frame, mode: str, layer: Layer, g: GlobalState) -> Frame:
     key = (mode, layer)
     nxt = frame.transitions.get(key)
-    if nxt is not None and not g.activation_hooks and not _conflicts(nxt, layer, g):
-        return nxt  # a cached transition is used only when no hook must see the activation (E37)
+    if nxt is not None and nxt.basis is g.layers and not g.activation_hooks and not _conflicts(nxt, layer, g):
+        # a cached transition is used only when no hook must see the activation (E37), and
+        # under the global layers it was made under: a layer activated globally since then
+        # is more recent than the stamp it holds (SD7 orders by recency)
+        return nxt
     if mode == "activate":
         for hook in g.activation_hooks:
             hook(layer, "scoped")  # a hook vetoes by raising: nothing has changed yet
@@ -100,6 +103,7 @@ def _transition(frame: Frame, mode: str, layer: Layer, g: GlobalState) -> Frame:
         if absolute is not None:
             absolute = tuple(x for x in absolute if x is not layer)
         nxt = Frame(added, frame.masked | {layer}, absolute)
+    nxt.basis = g.layers
     frame.transitions[key] = nxt
     return nxt
 

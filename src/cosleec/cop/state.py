@@ -42,10 +42,11 @@ class Frame:
     """An immutable dynamic composition: layers added in this extent, layers masked.
 
     ``absolute`` (set by ``run_with``) replaces the whole composition. ``comp`` caches the
-    effective composition computed against one global state.
+    effective composition computed against one global state. ``basis``: the global layers
+    when ``extent`` cached this frame as a transition (it is reused only under the same ones).
     """
 
-    __slots__ = ("absolute", "added", "comp", "masked", "transitions")
+    __slots__ = ("absolute", "added", "basis", "comp", "masked", "transitions")
 
     def __init__(
         self,
@@ -58,6 +59,7 @@ class Frame:
         self.absolute = absolute
         self.comp: tuple[GlobalState | None, tuple[Layer, ...]] = (None, ())
         self.transitions: dict[tuple[str, Layer], Frame] = {}
+        self.basis: tuple[tuple[Layer, int], ...] | None = None
 
 
 EMPTY = Frame((), frozenset())
