@@ -171,6 +171,8 @@ class GuardNode(Node):
         for key in ("forwarded", "blocked", "unanswered", "overflow"):
             self.counters[key] = 0
         self.advertise("refusals")
+        # the client first: it finds the Manager's service before the first message asks it
+        self.io.prepare(self.service, "request")
         for r in routes:
             # the output first: its subscribers match it before the first message is forwarded
             self.io.advertise_raw(r.target, r.type, r.qos)

@@ -253,11 +253,7 @@ class Ros1Transport:
         def work() -> None:
             reply = None
             try:
-                proxy = self._clients.get(name)
-                if proxy is None:
-                    proxy = self._clients[name] = self._rospy.ServiceProxy(
-                        self._resolve(name), services.service_type(kind), persistent=False
-                    )
+                proxy = self.prepare(name, kind)
                 reply = services.read_response(kind, proxy(services.make_request(kind, fields)))
             except Exception:  # no service, a failed call, a reply that cannot be read: no answer
                 reply = None
@@ -266,6 +262,16 @@ class Ros1Transport:
             once(reply)  # outside the try: an error in the caller's callback is the caller's
 
         threading.Thread(target=work, name="cosleec-ask", daemon=True).start()
+
+    def prepare(self, name: str, kind: str) -> Any:
+        """The proxy of service ``name`` (of ``kind``), made now if it is not yet (a node calls
+        it when it starts, as on ROS 2; rospy connects a proxy at each call)."""
+        proxy = self._clients.get(name)
+        if proxy is None:
+            proxy = self._clients[name] = self._rospy.ServiceProxy(
+                self._resolve(name), self._wire.services().service_type(kind), persistent=False
+            )
+        return proxy
 
     def parameters(self, defaults: dict[str, Any]) -> dict[str, Any]:
         """The node's private parameters (``_semantics:=nested``, ``rosparam set /node/semantics``).

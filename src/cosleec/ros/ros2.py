@@ -298,11 +298,18 @@ class Ros2Transport:
         None when the service is not there, fails, or does not answer within ``timeout``
         seconds: the caller decides what that means (the guard blocks).
         """
-        services = self._wire.services()
+        _call(self.prepare(name, kind), self._wire.services(), kind, fields, Once(answer), timeout)
+
+    def prepare(self, name: str, kind: str) -> Any:
+        """The client of service ``name`` (of ``kind``), made now if it is not yet: call it when
+        a node starts, so the client has found the service before the first :meth:`ask`
+        (a client made at the first ask finds none yet, and that ask gets no answer)."""
         client = self._clients.get(name)
         if client is None:
-            client = self._clients[name] = self.node.create_client(services.service_type(kind), name)
-        _call(client, services, kind, fields, Once(answer), timeout)
+            client = self._clients[name] = self.node.create_client(
+                self._wire.services().service_type(kind), name
+            )
+        return client
 
     # ------------------------------------------------------------------ parameters
     def parameters(self, defaults: dict[str, Any]) -> dict[str, Any]:

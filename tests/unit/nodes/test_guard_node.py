@@ -66,6 +66,7 @@ class FakeRos:
         self.answer_at_once = answer_at_once
         self.lock = threading.Lock()
         self.outputs: list[tuple[str, str, Any]] = []  # advertise_raw: the guard's outputs
+        self.prepared: list[tuple[str, str]] = []  # the service clients made at start
 
     # the Transport protocol, on the bus
     def publish(self, topic: str, message: dict[str, Any] | str) -> None:
@@ -101,6 +102,10 @@ class FakeRos:
     def publish_raw(self, topic: str, type_name: str, data: Any, qos: Any) -> None:
         with self.lock:
             self.forwarded.append((topic, type_name, data, qos))
+
+    def prepare(self, name: str, kind: str) -> None:
+        with self.lock:
+            self.prepared.append((name, kind))
 
     def ask(
         self,
@@ -177,6 +182,9 @@ def test_it_subscribes_each_route_with_its_type_and_qos_and_advertises_refusals(
 def test_it_asks_the_managers_request_service_about_the_routes_event(bus: LocalBus, manager: str) -> None:
     node, t = guard(bus, [CMD, ARM], manager=manager, timeout=0.25)
     assert node.service == "/cosleec_manager/request"
+    # its client is made when it starts: a client made at the first message finds no service
+    # yet (ROS 2), and that message would be blocked for no reason
+    assert t.prepared == [("/cosleec_manager/request", "request")] and t.asks == []
     t.send("/arm/goal", {"x": 1})
     t.send("/planner/cmd_vel", twist(1))
     assert [(a.name, a.kind, a.fields, a.timeout) for a in t.asks] == [
