@@ -27,7 +27,9 @@ from typing import Any
 
 from lark import Lark
 
-from cosleec.lang.lexer import Production, Token
+from cosleec.lang.lexer import BAD_CHAR, Lexicon, Production, Token
+
+_new = tuple.__new__
 
 END = "$END"
 """The type of the end-of-input token (Lark's name for it)."""
@@ -224,6 +226,10 @@ class CompiledLALR:
         self.terminals = frozenset(
             {END, *(sym for r in tables.rules for sym, term in zip(r.symbols, r.terminal) if term)}
         )
+        kept = {s for r in tables.rules for s, term, k in zip(r.symbols, r.terminal, r.kept) if term and k}
+        #: The terminals no rule passes to its callback (filtered out everywhere): the value
+        #: stack of :meth:`parse_text` holds their text, not a token.
+        self.unkept = self.terminals - kept - {END}
 
     def expected(self, state: int) -> frozenset[str]:
         """The terminals the parser accepts in ``state``."""
@@ -236,6 +242,9 @@ class CompiledLALR:
         built around skipped tokens is not a faithful reading of the file). After an
         error, further errors are recorded only once three tokens have been accepted, so
         one mistake does not produce a cascade.
+
+        The general driver, over any tokens; the front end parses text with
+        :meth:`parse_text`, which does the same while it scans.
         """
         states = self._rows
         units = self.units
@@ -256,18 +265,9 @@ class CompiledLALR:
                     if quiet == 0:
                         problems.append(SyntaxProblem(tok, self.expected(state)))
                     quiet = 3
-                    if recovered is tok:  # resynchronising did not help: drop the token
-                        break
+                    if recovered is tok or not self._resync(sstack, vstack, t):
+                        break  # resynchronising did not help, or cannot: drop the token
                     recovered = tok
-                    # Pop to the nearest state that can take this token (its values go
-                    # with it, so the stacks stay a viable prefix); none: drop the token.
-                    depth = len(sstack) - 1
-                    while depth > 0 and t not in states[sstack[depth - 1]]:
-                        depth -= 1
-                    if depth == 0:
-                        break
-                    del sstack[depth:]
-                    del vstack[depth - 1 :]
                     state = sstack[-1]
                     continue
                 if type(act) is int:  # shift
@@ -283,17 +283,8 @@ class CompiledLALR:
                     # whole chain of them (primary -> term -> ... -> condition) ends in a state
                     # that depends only on (state below, top state, lookahead): memoized.
                     below = sstack[-2]
-                    key = (below, state, t)
-                    top = units.get(key)
-                    if top is None:
-                        top = goto[below]
-                        while True:
-                            nxt = states[top].get(t)
-                            if nxt is None or type(nxt) is int or nxt[2] is not None:
-                                break
-                            top = nxt[1][below]
-                        units[key] = top
-                    sstack[-1] = state = top
+                    top = units.get((below, state, t))
+                    sstack[-1] = state = self._unit_chain(below, state, t) if top is None else top
                     continue
                 if size:
                     s = vstack[-size:]
@@ -308,6 +299,127 @@ class CompiledLALR:
             end = Token(END, "", 0, tok.line, tok.column + len(tok.value))
         else:
             end = Token(END, "", 0, 1, 1)
+        return self._finish(sstack, vstack, end, quiet, problems)
+
+    def parse_text(self, lexicon: Lexicon, text: str, problems: list[SyntaxProblem]) -> Any:
+        """``parse(lexicon.tokens(text), problems)``, scanning as it parses: the same value,
+        the same problems (tokens, positions), in one loop instead of two, and with no token
+        object for a terminal that no rule keeps (``when``, ``:``, ...: the value stack holds
+        its text, which no callback reads; a problem gets the whole token).
+
+        Why: the front end's parse was the scanner's loop and then the driver's, per token;
+        fused, the token list and its appends are gone, and so are over half the token
+        objects (the corpus: 40,162 of 74,685 tokens are never kept). One function, against
+        the 60-line rule, because every call a token pays for shows in parse_corpus.
+        tests/unit/lang/test_fast_parse.py holds it equal to :meth:`parse`.
+        """
+        states, units, unkept = self._rows, self.units, self.unkept
+        state = self.start_state  # always sstack[-1]
+        sstack: list[int] = [state]
+        vstack: list[Any] = []
+        quiet = 0
+        recovered = -1  # the offset of the token an error recovery was last tried for
+        outside, inside = lexicon.memos()
+        memo = outside
+        classify, (start_mark, end_mark) = lexicon.classify, lexicon.block_marks
+        special = {start_mark, end_mark, BAD_CHAR}
+        new, token, length = _new, Token, len  # locals: this loop is hot
+        pos, line, line_start = 0, 1, 0
+        pairs = lexicon.pairs(text)
+        for layout, tok in pairs:
+            t = memo.get(tok)
+            if t is None:
+                if not tok:
+                    break  # the end of the text (its layout does not move the end token)
+                t = memo[tok] = classify(tok, memo is inside)
+            if layout:
+                pos += length(layout)
+                if "\n" in layout:
+                    line += layout.count("\n")
+                    line_start = pos - (length(layout) - layout.rindex("\n") - 1)
+            if t in special:
+                if t == start_mark:
+                    memo = inside
+                elif t == end_mark:
+                    memo = outside
+                elif tok == "/" and text.startswith("/*", pos):
+                    t, tok = BAD_CHAR, "/*"  # an unterminated block comment: the last token
+                    pairs.clear()  # (a list iterator ends at the list's length: this one)
+            value = tok if t in unkept else new(token, (t, tok, pos, line, pos - line_start + 1))
+            while True:
+                try:  # (a subscript is quicker than .get; a miss is a syntax error, rare)
+                    act = states[state][t]
+                except KeyError:
+                    act = None
+                if act is None:
+                    if quiet == 0:
+                        whole = Token(t, tok, pos, line, pos - line_start + 1)
+                        problems.append(SyntaxProblem(whole, self.expected(state)))
+                    quiet = 3
+                    if recovered == pos or not self._resync(sstack, vstack, t):
+                        break  # resynchronising did not help, or cannot: drop the token
+                    recovered = pos
+                    state = sstack[-1]
+                    continue
+                if type(act) is int:  # shift
+                    sstack.append(act)
+                    vstack.append(value)
+                    state = act
+                    if quiet:
+                        quiet -= 1
+                    break
+                size, goto, cb = act
+                if cb is None:  # a unit pass-through chain (see parse)
+                    below = sstack[-2]
+                    top = units.get((below, state, t))
+                    sstack[-1] = state = self._unit_chain(below, state, t) if top is None else top
+                    continue
+                if size:
+                    s = vstack[-size:]
+                    del sstack[-size:]
+                    del vstack[-size:]
+                else:
+                    s = []
+                vstack.append(cb(s))
+                state = goto[sstack[-1]]
+                sstack.append(state)
+            pos += length(tok)
+        end = Token(END, "", 0, line, pos - line_start + 1)  # where the last token ends
+        return self._finish(sstack, vstack, end, quiet, problems)
+
+    def _unit_chain(self, below: int, state: int, t: str) -> int:
+        """The state a chain of unit pass-through reductions ends in, from ``state`` over
+        ``below`` with lookahead ``t``; memoized in :attr:`units`."""
+        states = self._rows
+        top: int = states[state][t][1][below]
+        while True:
+            nxt = states[top].get(t)
+            if nxt is None or type(nxt) is int or nxt[2] is not None:
+                break
+            top = nxt[1][below]
+        self.units[(below, state, t)] = top
+        return top
+
+    def _resync(self, sstack: list[int], vstack: list[Any], t: str) -> bool:
+        """After a syntax error on a token of type ``t``: pop to the nearest state that can
+        take it (its values go with it, so the stacks stay a viable prefix); False, with the
+        stacks untouched, when none can (the token is dropped)."""
+        states = self._rows
+        depth = len(sstack) - 1
+        while depth > 0 and t not in states[sstack[depth - 1]]:
+            depth -= 1
+        if depth == 0:
+            return False
+        del sstack[depth:]
+        del vstack[depth - 1 :]
+        return True
+
+    def _finish(
+        self, sstack: list[int], vstack: list[Any], end: Token, quiet: int, problems: list[SyntaxProblem]
+    ) -> Any:
+        """The end of input (the token ``end``): the last reductions, and the start
+        symbol's value; None, with a problem recorded, when the input stops too early."""
+        states = self._rows
         while True:
             act = states[sstack[-1]].get(END)
             if act is None:

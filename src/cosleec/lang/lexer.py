@@ -119,18 +119,24 @@ class Lexicon:
         self._classes: list[tuple[str, re.Pattern[str]]] = [
             (t.name, re.compile(t.pattern.to_regexp())) for t in order
         ]
-        layout = "|".join(t.pattern.to_regexp() for t in terminals if t.name in ignore)
+        layout = layout_pattern([t.pattern.to_regexp() for t in terminals if t.name in ignore])
         tokens = "|".join(t.pattern.to_regexp() for t in order)
         # One findall over the whole text (it runs in C): each match is the layout before a
         # token, then the token; at the end the token is empty; any other character is a
         # token of its own (a BAD_CHAR), so nothing is skipped silently. Layout is tried
         # before tokens, where Lark tries all in its one order: the same, as long as no
         # ignored terminal starts like a token (`//` and `/*` comments, and no `/` mark).
-        self._scan = re.compile(f"((?:{layout})*)({tokens}|\\Z|[\\s\\S])")
+        self._scan = re.compile(f"({layout})({tokens}|\\Z|[\\s\\S])")
+        #: ``findall`` of the scanning pattern: ``(layout, token)`` pairs, the last token
+        #: empty (what :meth:`tokens` reads; the fast driver reads it directly, lalr.py).
+        self.pairs = self._scan.findall
         comments = "|".join(
             t.pattern.to_regexp() for t in terminals if t.name in ignore and "COMMENT" in t.name
         )
         self._comment = re.compile(comments) if comments else None
+        #: The ignored terminals named ``*COMMENT``, as one regular expression (``(?!)``, which
+        #: matches nothing, when there are none).
+        self.comment_pattern = comments or "(?!)"
         self._memo: tuple[dict[str, str], dict[str, str]] = ({}, {})
 
     def reserved(self, word: str) -> bool:
@@ -159,16 +165,20 @@ class Lexicon:
             pos += len(tok)
         return found
 
-    def without_comments(self, text: str) -> str:
-        """``text`` with each comment replaced by a space."""
-        cut, last = [], 0
-        for offset, comment in self.comments(text):
-            cut += [text[last:offset], " "]
-            last = offset + len(comment)
-        return "".join([*cut, text[last:]])
-
     # ------------------------------------------------------------------ the fast scanner
-    def _classify(self, text: str, inside: bool) -> str:
+    def memos(self) -> tuple[dict[str, str], dict[str, str]]:
+        """Token text -> type, learnt as scans go, outside the contextual block and inside
+        it: most tokens are one dictionary look-up (a miss: :meth:`classify`, then store).
+
+        Shared by every scan: a race only computes an entry twice. Bounded, for long-lived
+        processes: past the limit, they are emptied when a scan asks for them."""
+        outside, inside = self._memo
+        if len(outside) + len(inside) > _MEMO_LIMIT:
+            outside.clear()
+            inside.clear()
+        return outside, inside
+
+    def classify(self, text: str, inside: bool) -> str:
         """The type of one scanned token's text, inside a contextual block or not."""
         for name, pattern in self._classes:  # the terminal that matched: the first in order
             if pattern.fullmatch(text):
@@ -184,15 +194,9 @@ class Lexicon:
         An unterminated ``/*`` comment is one BAD_CHAR token ``/*``, and scanning stops there.
         No token spans lines (the grammars make newlines layout).
         """
-        # token text -> type, learnt as scans go (one table outside the contextual block, one
-        # inside), so that most tokens are one dictionary look-up. Shared by every scan: a
-        # race only computes an entry twice. Bounded, for long-lived processes.
-        outside, inside = self._memo
-        if len(outside) + len(inside) > _MEMO_LIMIT:
-            outside.clear()
-            inside.clear()
+        outside, inside = self.memos()
         memo = outside
-        classify = self._classify
+        classify = self.classify
         start_mark, end_mark = self.block_marks
         special = {start_mark, end_mark, BAD_CHAR}
         out: list[Token] = []
@@ -220,6 +224,37 @@ class Lexicon:
             append(new(token, (t, tok, pos, line, pos - line_start + 1)))
             pos += length(tok)
         return out
+
+
+_CHAR_RUN = re.compile(
+    r"\[((?![\^\-])(?:[^\]\\]|\\.)*(?<![\-\\]))\]\+?"  # a class (not negated, no edge `-`), once or a run
+    r"|([^\\.^$*+?{}\[\]|()]|\\[^A-Za-z0-9]|\\[tnrfvsSdDwW])\+?"  # one plain or escaped character
+)
+
+
+def layout_pattern(regexps: list[str]) -> str:
+    """The regular expression of any run of layout (what the ignored terminals ``regexps``
+    match), in a form Python's ``re`` runs quickly.
+
+    Why: ``(?:ws|comment|bom)*``, the plain form, makes ``re`` enter its general repeat for
+    every item (each blank run, each BOM): a third of the scan's time. Here the terminals that
+    match single characters or runs of them (``/[ \t\n]+/``, ``/\ufeff/``) become one class
+    ``W``, and the layout is ``W*(?:(?:comment|...)W*)*``: the same extent of text, as long
+    as no other ignored terminal starts with a character of ``W`` (a comment starts with
+    ``/``); tests/unit/lang/test_fast_parse.py holds it equal to the plain form.
+    """
+    chars: list[str] = []
+    others: list[str] = []
+    for r in regexps:
+        m = _CHAR_RUN.fullmatch(r)
+        if m is None:
+            others.append(r)
+        else:
+            chars.append(m.group(1) if m.group(1) is not None else m.group(2))
+    if not chars:
+        return f"(?:{'|'.join(others)})*" if others else ""
+    run = f"[{''.join(chars)}]*"
+    return f"{run}(?:(?:{'|'.join(others)}){run})*" if others else run
 
 
 class ContextualKeywords(PostLex):

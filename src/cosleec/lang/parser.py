@@ -79,7 +79,7 @@ class Grammar:
 
     def parse(self, text: str, problems: list[SyntaxProblem]) -> Any:
         """The transformer's value for ``text``, or None with the syntax errors in ``problems``."""
-        return self.driver.parse(self.lexicon.tokens(text), problems)
+        return self.driver.parse_text(self.lexicon, text, problems)
 
 
 SLEEC = Grammar.load("sleec", ToAst(), contextual_block="relation_block")
@@ -94,6 +94,10 @@ PAPER_KEYWORDS = frozenset(PAPER.lexicon.keywords)
 
 _DSL_MARK = re.compile(r"\b(?:def_start|rule_start)\b")
 _PAPER_MARK = re.compile(r"(?i)\bwhen\b")
+_COMMENT_OR_MARK = re.compile(f"(?:{SLEEC.lexicon.comment_pattern})|({_DSL_MARK.pattern})")
+"""A comment (skipped whole), or a DSL mark outside one (group 1): read left to right, the
+comments it finds are the scanner's, since no SLEEC token holds a `/` (a comment's first
+character: every `/` outside a comment is where a token or layout starts)."""
 
 
 def looks_like_paper(text: str) -> bool:
@@ -104,7 +108,9 @@ def looks_like_paper(text: str) -> bool:
     """
     mark = _DSL_MARK.search(text)
     if mark is not None and ("//" in text[: mark.start()] or "/*" in text[: mark.start()]):
-        mark = _DSL_MARK.search(SLEEC.lexicon.without_comments(text))
+        # one pass in C over the text, comments skipped (tests/unit/lang/test_fast_parse.py
+        # holds it to the scanner's comments)
+        mark = next((m for m in _COMMENT_OR_MARK.finditer(text) if m.group(1)), None)
     return mark is None and _PAPER_MARK.search(text) is not None
 
 

@@ -11,6 +11,8 @@ plain Lark and the fast driver (lalr.py), and the cross-check test compares the 
 
 from __future__ import annotations
 
+import ast
+import dataclasses
 from dataclasses import replace
 from itertools import pairwise
 from typing import Any
@@ -122,7 +124,81 @@ INLINE_ENV: dict[str, Any] = {
     "_NUMERIC": _NUMERIC,
     **{name: getattr(A, name) for name in dir(A) if isinstance(getattr(A, name), type)},
 }
-"""The names :data:`INLINE_BODIES` use."""
+"""The names :data:`INLINE_BODIES` use (and, once built in place, :data:`_IN_PLACE` bodies)."""
+
+
+def _plain_node(cls: Any) -> bool:
+    """Is ``cls`` a node class whose ``__init__`` only sets its fields, in order (a frozen,
+    slotted dataclass with the generated ``__init__`` of ``cosleec.bulk.quick_init``: no
+    ``__post_init__``, no ``__new__`` of its own, every field an ``__init__`` argument)?"""
+    return (
+        isinstance(cls, type)
+        and dataclasses.is_dataclass(cls)
+        and "__slots__" in cls.__dict__
+        and cls.__dataclass_params__.frozen  # type: ignore[attr-defined]
+        and not hasattr(cls, "__post_init__")
+        and cls.__new__ is object.__new__
+        and all(f.init and f.default_factory is dataclasses.MISSING for f in dataclasses.fields(cls))
+    )
+
+
+def _construction(call: ast.expr, env: dict[str, Any]) -> list[str] | None:
+    """``Cls(args)`` as statements that build the node in place: the arguments, in the
+    call's order, then the object and its fields set through their slots, in field order,
+    as the generated ``__init__`` sets them; None when ``call`` is not such a call."""
+    if not (isinstance(call, ast.Call) and isinstance(call.func, ast.Name)):
+        return None
+    cls: Any = env.get(call.func.id)
+    if not _plain_node(cls) or any(isinstance(a, ast.Starred) for a in call.args):
+        return None
+    fields = dataclasses.fields(cls)
+    positional = [f.name for f in fields if not f.kw_only]
+    names = [*positional[: len(call.args)], *(k.arg for k in call.keywords)]
+    if len(call.args) > len(positional) or None in names or len(set(names)) != len(names):
+        return None
+    if not set(names) <= {f.name for f in fields}:
+        return None
+    values = [*call.args, *(k.value for k in call.keywords)]
+    lines = [f"_a{i} = {ast.unparse(v)}" for i, v in enumerate(values)]
+    lines.append(f"_o = _object_new({cls.__name__})")
+    for f in fields:
+        if f.name in names:
+            value = f"_a{names.index(f.name)}"
+        elif f.default is not dataclasses.MISSING:
+            value = f"_default_{cls.__name__}_{f.name}"
+        else:
+            return None  # a required argument missing: the call would raise, leave it so
+        lines.append(f"_set_{cls.__name__}_{f.name}(_o, {value})")
+    return [*lines, "return _o"]
+
+
+def _in_place(body: str, env: dict[str, Any]) -> str:
+    """``body`` with each ``return Cls(...)`` of a plain node class (:func:`_plain_node`)
+    built in place (:func:`_construction`).
+
+    Why: calling the class costs a type call and an ``__init__`` frame per node, a third of
+    what making a node costs, and the fast driver makes one per reduction. The nodes are the
+    same (fields, defaults, frozen: the class's ``__setattr__`` still refuses);
+    tests/unit/lang/test_parser_crosscheck.py holds the driver equal to plain Lark, which
+    calls the methods."""
+    out: list[str] = []
+    for stmt in ast.parse(body).body:
+        built = _construction(stmt.value, env) if isinstance(stmt, ast.Return) and stmt.value else None
+        out += built if built is not None else ast.unparse(stmt).splitlines()
+    return "\n".join(out)
+
+
+for _name, _cls in list(INLINE_ENV.items()):
+    if _plain_node(_cls):
+        INLINE_ENV["_object_new"] = object.__new__
+        for _f in dataclasses.fields(_cls):
+            _slot = next(k.__dict__[_f.name] for k in _cls.__mro__ if _f.name in k.__dict__)
+            INLINE_ENV[f"_set_{_name}_{_f.name}"] = _slot.__set__
+            if _f.default is not dataclasses.MISSING:
+                INLINE_ENV[f"_default_{_name}_{_f.name}"] = _f.default
+del _name, _cls, _f, _slot
+_IN_PLACE = {name: _in_place(body, INLINE_ENV) for name, body in INLINE_BODIES.items()}
+""":data:`INLINE_BODIES` with their nodes built in place: what the fast driver compiles."""
 
 
 class ToAst(Transformer[Token, Any]):
@@ -136,7 +212,7 @@ class ToAst(Transformer[Token, Any]):
         """The body the fast driver may compile instead of calling method ``name`` (see
         :data:`INLINE_BODIES`) and the names it uses; None where a subclass overrides the
         method, or there is none."""
-        body = INLINE_BODIES.get(name)
+        body = _IN_PLACE.get(name)
         if body is None or getattr(type(self), name) is not getattr(ToAst, name):
             return None
         return body, INLINE_ENV
