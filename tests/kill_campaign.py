@@ -59,6 +59,7 @@ import os
 import shutil
 import signal
 import sys
+import threading
 from collections import Counter
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
@@ -67,7 +68,7 @@ from typing import Any
 
 from cosleec.errors import UserError
 from cosleec.runtime import AuditLog, Decision, Journal, Manager, Obligation, VirtualClock
-from cosleec.runtime.journal import Change
+from cosleec.runtime.journal import Change, _Background
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -87,6 +88,7 @@ POINTS = (
     "journal-after",  # committed to the journal (its records already in the audit log)
     "audit-partial",  # part of a step's audit records written: the last line torn
     "audit-after",  # the audit records written, the step not yet over
+    "checkpoint",  # the journal's checkpointer (its thread) copying the WAL: killed 0-8 ms into a round
 )
 RECOVERY = ("restored", "task-interrupted", "dropped", "uncommitted")  # records only a restart makes
 
@@ -319,11 +321,30 @@ class Killer:
 
 
 class KillingJournal(Journal):
-    """A journal whose commits pass kill points: before, inside the SQLite transaction, after."""
+    """A journal whose commits pass kill points: before, inside the SQLite transaction, after;
+    and whose checkpointer runs a round after every commit (and starts the WAL afresh past a
+    few pages, or copies the rest with commits held back past a few more), so that a life
+    meets every path of it, and dies in the middle of one (``checkpoint``) -- in the lives
+    killed there, by the timer, and the lives that end the day."""
+
+    checkpoint_commits = 1
+    checkpoint_idle = 0.005
+    checkpoint_restart = 8
+    checkpoint_limit = 24
 
     def __init__(self, path: Path, killer: Killer) -> None:
         super().__init__(path)
         self.killer = killer
+        if killer.plan is not None and killer.plan.point != "checkpoint":
+            # a life planned to die elsewhere copies the WAL only as the default does after
+            # ``checkpoint_commits`` commits, or past twice ``checkpoint_limit`` pages (more
+            # than a life makes) -- as SQLite did, after 1000 pages: a damaged -wal file then
+            # loses the commits of several steps, and must be refused (a WAL copied after
+            # every commit holds one step at most, and losing it is rightly taken for a kill
+            # before its commit)
+            self.checkpoint_idle = 3600.0
+            for name in ("checkpoint_commits", "checkpoint_restart", "checkpoint_limit"):
+                setattr(self, name, getattr(Journal, name))
 
     def commit(self, change: Change, meta: Mapping[str, Any], clock: float) -> None:
         """Commit one step, passing the kill points around and inside it."""
@@ -338,6 +359,15 @@ class KillingJournal(Journal):
             self.killer.die("journal-inside (after the commit)")
         self.killer.point("journal-after")
 
+    def _checkpoint(self, bg: _Background) -> None:
+        """A round of the checkpointer; the chosen one dies ``ops % 8000`` microseconds into it
+        (its fsyncs take milliseconds: most such kills land inside the checkpoint, or its restart)."""
+        if (bg.commits != bg.copied or bg.frames) and self.killer.armed("checkpoint"):  # a round with work
+            assert self.killer.plan is not None
+            delay = (self.killer.plan.ops % 8000) / 1e6
+            threading.Timer(delay, self.killer.die, ("checkpoint",)).start()
+        super()._checkpoint(bg)
+
 
 class KillingAuditLog(AuditLog):
     """An audit log whose writes pass kill points; ``seq`` is the last record written or found
@@ -346,6 +376,16 @@ class KillingAuditLog(AuditLog):
     def __init__(self, path: Path, killer: Killer) -> None:
         super().__init__(path)
         self.killer = killer
+        if killer.plan is not None and killer.plan.point != "checkpoint":
+            # a life planned to die elsewhere copies the WAL only as the default does after
+            # ``checkpoint_commits`` commits, or past twice ``checkpoint_limit`` pages (more
+            # than a life makes) -- as SQLite did, after 1000 pages: a damaged -wal file then
+            # loses the commits of several steps, and must be refused (a WAL copied after
+            # every commit holds one step at most, and losing it is rightly taken for a kill
+            # before its commit)
+            self.checkpoint_idle = 3600.0
+            for name in ("checkpoint_commits", "checkpoint_restart", "checkpoint_limit"):
+                setattr(self, name, getattr(Journal, name))
         self.seq = self.last_seq
 
     def write_lines(self, lines: Iterable[str]) -> int:

@@ -11,7 +11,29 @@ past the committed length are of a step that never happened, and are set aside.
 
 SQLite in WAL mode with ``synchronous=NORMAL``: a commit survives the death of the
 process at any instant; a power cut can lose the last commits (pass ``fsync=True`` for
-``synchronous=FULL``, at a cost per step). One connection, used under the Manager's lock.
+``synchronous=FULL``, at a cost per step; the checkpointer's connections use the same). One
+connection commits, under the Manager's lock. One Manager per journal: SQLite's ``unix-excl``
+VFS locks the file for the process that opened it, and a process opens it once.
+
+**The WAL is copied into the database off the step.** SQLite's own checkpoint runs inside
+the commit that fills the WAL (every ~1000 pages), with its fsyncs, and the first write
+after a checkpoint that copied it whole starts the WAL afresh, with an fsync of its header:
+milliseconds on the steps that meet them. So the committing connection does not checkpoint
+(``wal_autocheckpoint`` twice the limit below: a last resort), and a thread of the Journal,
+on connections of its own, copies
+the WAL (PASSIVE checkpoints, which never hold a commit back) every
+:attr:`Journal.checkpoint_commits` commits and every :attr:`Journal.checkpoint_idle` seconds
+while commits wait to be copied. Around each checkpoint it keeps a read transaction open, so
+that no commit can be the write that starts the WAL afresh; it starts it afresh itself (a
+small write, commits held back for its fsync) once the WAL is copied whole and holds
+:attr:`Journal.checkpoint_restart` pages, or commits paused. A WAL that commits never let it
+copy whole grows to :attr:`Journal.checkpoint_limit` pages (and what the commits add while
+one checkpoint runs): then the rest is copied and the WAL started afresh with commits held
+back, the only time a step waits for the checkpointer. A checkpoint that fails (a full disk,
+a busy lock) is logged and tried again later, never raised into a step, and a kill in the
+middle of one loses nothing (SQLite's guarantee; the kill campaign kills there too).
+:meth:`Journal.close` stops and joins the thread before SQLite's last close copies the WAL
+in. Without the thread (no connection or thread to be had) SQLite checkpoints as before.
 
 **What it restores is all that was committed, or it refuses.** While a Manager runs, the
 commits since it opened the journal are only in ``state.db-wal``: lose that file (deleted,
@@ -46,9 +68,13 @@ from __future__ import annotations
 import contextlib
 import errno
 import json
+import logging
 import os
 import sqlite3
+import threading
 import time
+import urllib.parse
+import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -64,6 +90,10 @@ CREATE TABLE IF NOT EXISTS obligations (id INTEGER PRIMARY KEY, record TEXT NOT 
 CREATE TABLE IF NOT EXISTS outbox (id INTEGER PRIMARY KEY, record TEXT NOT NULL);
 """
 _TABLES = ("meta", "context", "obligations", "outbox")
+
+log = logging.getLogger("cosleec.runtime")
+_OPEN: set[str] = set()  # the journals open in this process (real paths): one Journal each
+_OPEN_LOCK = threading.Lock()
 
 
 class JournalError(UserError):
@@ -122,6 +152,15 @@ class Journal:
     allowed to move between threads for that reason).
     """
 
+    #: the checkpointer (see the module docstring): a round after this many commits, and
+    #: this many seconds after the last round while commits wait to be copied
+    checkpoint_commits = 64
+    checkpoint_idle = 0.25
+    #: pages (WAL frames) past which the WAL, all copied, is started afresh though commits
+    #: go on; and past which, not all copied, the rest is copied with commits held back
+    checkpoint_restart = 1500
+    checkpoint_limit = 1600
+
     def __init__(self, path: str | Path, *, fsync: bool = False) -> None:
         self.path = Path(path)
         self.wal = self.path.with_name(self.path.name + "-wal")
@@ -129,8 +168,49 @@ class Journal:
         self.suspect: str | None = None
         self._fsync = fsync
         self._started = False  # marked running by this object: close() clears the mark
+        self._lock = threading.Lock()  # a commit, or the checkpointer starting the WAL afresh
+        self._bg: _Background | None = None  # the checkpointer, from start() to close()
+        self._bg_stop: weakref.finalize[[], Journal] | None = None  # stops it if this is collected
+        self._unlock = self._take_lock()
+        try:
+            self._open()
+        except BaseException:
+            self._unlock()
+            raise
+
+    def _take_lock(self) -> weakref.finalize[[str], Journal]:
+        """Take the journal for this object in this process (other processes are kept out by
+        SQLite's lock); what gives it back, once (also when this is dropped without close())."""
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise JournalError(
+                f"cannot open the journal: {_reason(e)}",
+                where=str(self.path),
+                hint=_hint(e, self.path, "give a writable path to a journal file"),
+            ) from None
+        key = os.path.realpath(self.path)
+        with _OPEN_LOCK:
+            if key in _OPEN:
+                raise JournalError(
+                    "the journal is in use by another Manager",
+                    where=str(self.path),
+                    hint="stop the other Manager first, or give each Manager its own journal",
+                )
+            _OPEN.add(key)
+        return weakref.finalize(self, _OPEN.discard, key)
+
+    def _connect(self, timeout: float) -> sqlite3.Connection:
+        """A connection to the journal through SQLite's ``unix-excl`` VFS: the first one takes
+        the file for this process (no other process can open it while one is open), and the
+        process's connections share the WAL's index in memory, with no lock (``fcntl``) per
+        transaction and no ``-shm`` file, as in exclusive locking mode."""
+        uri = f"file:{urllib.parse.quote(os.fspath(self.path))}?vfs=unix-excl"
+        return sqlite3.connect(uri, uri=True, check_same_thread=False, isolation_level=None, timeout=timeout)
+
+    def _open(self) -> None:
+        """Look at the journal's files and open the committing connection (see ``__init__``)."""
+        try:
             kept = self._kept()
             if kept.exists() and not self.wal.exists():  # a close killed while it kept the -wal file
                 os.replace(kept, self.wal)
@@ -145,11 +225,11 @@ class Journal:
                     "the database was truncated or deleted, and every commit it held is lost"
                 )
                 return
-            self._db = sqlite3.connect(self.path, check_same_thread=False, isolation_level=None, timeout=1.0)
+            self._db = self._connect(timeout=1.0)
         except (OSError, sqlite3.Error) as e:
             raise JournalError(
                 f"cannot open the journal: {_reason(e)}",
-                where=str(path),
+                where=str(self.path),
                 hint=_hint(e, self.path, "give a writable path to a journal file"),
             ) from None
         self._prepare()
@@ -161,9 +241,8 @@ class Journal:
             )
 
     def _prepare(self) -> None:
-        """Lock the database (a read in exclusive WAL mode locks out every other connection)."""
+        """Lock the database (the first read takes it for this process) and put it in WAL mode."""
         try:
-            self._db.execute("PRAGMA locking_mode=EXCLUSIVE")
             self._db.execute("PRAGMA journal_mode=WAL")
             self._db.execute(f"PRAGMA synchronous={'FULL' if self._fsync else 'NORMAL'}")
         except sqlite3.OperationalError as e:
@@ -210,6 +289,7 @@ class Journal:
         ``-wal`` file holds only this Manager's commits and its loss can be seen."""
         if self.damage is not None:
             raise self.refusal(self.damage)
+        self._quiet()
         try:
             self._db.executescript(_SCHEMA)
             now = str(time.time())
@@ -218,6 +298,8 @@ class Journal:
                 "INSERT OR REPLACE INTO meta VALUES (?, ?)", [("opened", now), ("running", mark)]
             )
             busy, _, _ = self._db.execute("PRAGMA wal_checkpoint(TRUNCATE)").fetchone()
+            if not busy:  # the WAL is empty: its first write, and the fsync of its header, is not a step's
+                _start_afresh(self._db)
         except sqlite3.Error as e:
             raise JournalError(
                 f"cannot use the journal: {_reason(e)}",
@@ -233,6 +315,99 @@ class Journal:
         self._kept().unlink(missing_ok=True)  # a second name a killed close left: no longer needed
         self.suspect = None
         self._started = True
+        self._bg = self._checkpointer()
+
+    def _checkpointer(self) -> _Background | None:
+        """Start the thread that copies the WAL into the database (see the module docstring).
+
+        None when its connections cannot be had: SQLite then checkpoints in the commits, as
+        it would by itself (a tail on the step, but a WAL that never stops growing is worse).
+        """
+        bg = _Background()
+        try:
+            for name in ("db", "ck"):
+                db = self._connect(timeout=0)
+                setattr(bg, name, db)
+                db.execute(f"PRAGMA synchronous={'FULL' if self._fsync else 'NORMAL'}")  # as the commits
+                db.execute("PRAGMA wal_autocheckpoint=0")
+            page = int(bg.db.execute("PRAGMA page_size").fetchone()[0])
+            # the WAL file shrinks back to this when started afresh (after a burst past it)
+            bg.db.execute(f"PRAGMA journal_size_limit={self.checkpoint_restart * (page + 24) + 32}")
+            bg.thread = threading.Thread(
+                target=_checkpointing,
+                args=(weakref.ref(self), bg, self.checkpoint_idle),
+                name=f"cosleec journal checkpointer ({self.path.name})",
+                daemon=True,  # a process that exits without close() is not held up by it
+            )
+            # SQLite's own checkpoint in the commits only past twice the limit: a last resort
+            # for a thread that cannot keep up (a disk that takes seconds to fsync)
+            self._db.execute(f"PRAGMA wal_autocheckpoint={2 * self.checkpoint_limit}")
+            bg.thread.start()
+        except (sqlite3.Error, RuntimeError) as e:  # (RuntimeError: no thread can be started)
+            log.warning("journal %s: no checkpointer (%s): SQLite checkpoints in the commits", self.path, e)
+            with contextlib.suppress(sqlite3.Error):
+                self._db.execute("PRAGMA wal_autocheckpoint=1000")
+            bg.close()
+            return None
+        self._bg_stop = weakref.finalize(self, bg.stop)  # a Journal dropped without close() stops it
+        return bg
+
+    def _quiet(self) -> None:
+        """Stop the checkpointer and wait for it (it closes its connection): before close, a reset
+        or a start uses the database alone. Never raises."""
+        bg, self._bg = self._bg, None
+        if bg is None:
+            return
+        bg.stop()
+        if bg.thread is not None and bg.thread is not threading.current_thread():
+            bg.thread.join()
+        if self._bg_stop is not None:
+            self._bg_stop.detach()
+
+    def _checkpoint(self, bg: _Background) -> None:
+        """One round of the checkpointer, in its thread, on its connections. Raises what SQLite raises.
+
+        Copies what was committed into the database (PASSIVE, on ``bg.ck``: no commit waits
+        for it), under a read transaction of ``bg.db``: a WAL copied whole is started afresh
+        by the first write after it, with an fsync of its header, and the read keeps that
+        write from being a commit's. Then ``bg.db`` starts it afresh itself -- a small write,
+        the commits held back for its fsync -- when it holds ``checkpoint_restart`` pages, or
+        at the next round if no commit came by then; else keeps the read until the next round
+        (the commits in between go on at the end of the WAL). A WAL past ``checkpoint_limit``
+        pages that the commits never let it copy whole: the rest is copied, and the WAL
+        started afresh, with the commits held back.
+        """
+        if bg.commits == bg.copied:  # no commit since the WAL was copied whole
+            if bg.frames and not bg.nudged:  # for a whole wait: start it afresh now
+                self._restart(bg)
+            return
+        with self._lock:  # (no commit between the read's end and its new start, nor before ``seen``)
+            _hold(bg.db)
+            seen = bg.commits
+        busy, bg.frames, copied = _passive(bg.ck)
+        if not busy and copied == bg.frames:
+            bg.copied = seen  # (those in the read: all it could copy)
+            if bg.frames < self.checkpoint_restart or self._restart(bg):
+                return  # the read kept until the next round, or started afresh
+        _release(bg.db)  # commits came after what it copied: they go on at its end, none starts it afresh
+        if bg.frames >= self.checkpoint_limit:
+            with self._lock:  # the commits wait: copy the rest, then start it afresh
+                busy, frames, copied = _passive(bg.ck)
+                if not busy and copied == frames:
+                    _start_afresh(bg.db)
+                    bg.copied, bg.frames = bg.commits, 0
+
+    def _restart(self, bg: _Background) -> bool:
+        """Start the WAL afresh if it is still copied whole (commits held back); whether it was."""
+        with self._lock:
+            # (while bg.db's read lasts, this checkpoint copies nothing: it only says how long it is)
+            busy, frames, copied = _passive(bg.ck)
+            if busy or copied != frames:
+                return False
+            _release(bg.db)
+            _start_afresh(bg.db)
+            bg.frames = 0
+            return True
 
     def load(self) -> Saved | None:
         """What the journal holds; None for a new journal; JournalError when it is damaged."""
@@ -287,14 +462,13 @@ class Journal:
         :meth:`start` it afresh. Returns what it said it held (run, lineage, next record ``seq``,
         time of its last commit), as far as it can still be read: for the ``journal-reset`` record."""
         held = self._peek()
+        self._quiet()
         try:
             if self.damage is not None:  # an empty main file: its orphaned -wal file goes
                 self._db.close()
                 self.wal.unlink(missing_ok=True)
                 self._had_wal = False
-                self._db = sqlite3.connect(
-                    self.path, check_same_thread=False, isolation_level=None, timeout=1.0
-                )
+                self._db = self._connect(timeout=1.0)
                 self.damage = None
                 self._prepare()
             self._db.execute("BEGIN IMMEDIATE")
@@ -334,6 +508,7 @@ class Journal:
         """
         db = self._db
         try:
+            self._lock.acquire()  # (the checkpointer holds it only to start the WAL afresh)
             db.execute("BEGIN IMMEDIATE")
             try:
                 for table, key, rows in (
@@ -354,6 +529,11 @@ class Journal:
                 state = _dumps({**meta, "clock": clock, "wall": time.time()})
                 db.execute("INSERT OR REPLACE INTO meta VALUES ('state', ?)", (state,))
                 db.execute("COMMIT")
+                bg = self._bg
+                if bg is not None:
+                    bg.commits += 1
+                    if not bg.commits % self.checkpoint_commits:
+                        bg.wake.set()
             except BaseException:
                 # SQLite has already rolled back after some errors (a full disk): a second
                 # rollback would fail and hide the first error
@@ -361,6 +541,8 @@ class Journal:
                     with contextlib.suppress(sqlite3.Error):
                         db.execute("ROLLBACK")
                 raise
+            finally:
+                self._lock.release()
         except sqlite3.Error as e:
             raise JournalError(
                 f"cannot write the journal: {_reason(e)}",
@@ -377,6 +559,7 @@ class Journal:
         start, as after a crash, and is not taken for a loss), and when the journal was only
         looked at (refused, or never started): what the next start sees is what this one saw.
         """
+        self._quiet()  # before SQLite's last close copies the WAL in (and, unless kept, deletes it)
         keep = self._had_wal and not self._started
         if self._started:
             try:
@@ -401,6 +584,111 @@ class Journal:
                     kept.unlink()
                 else:
                     os.replace(kept, self.wal)
+        self._unlock()
+
+
+class _Background:
+    """What a Journal shares with its checkpointer's thread -- never the Journal itself, which
+    the thread reaches through a weak reference: a Journal dropped without ``close()`` is
+    collected as before, and its finalizer stops the thread."""
+
+    db: sqlite3.Connection  # holds the WAL (a read transaction), starts it afresh
+    ck: sqlite3.Connection  # checkpoints
+
+    def __init__(self) -> None:
+        self.wake = threading.Event()  # set every ``checkpoint_commits`` commits, and to stop
+        self.stopping = False
+        self.thread: threading.Thread | None = None
+        self.commits = 0  # commits so far (counted under the journal's lock)
+        self.copied = 0  # ``commits`` when the WAL was last copied whole
+        self.frames = 0  # pages in the WAL at the last checkpoint, 0 once started afresh
+        self.failures = 0  # rounds failed in a row
+        self.nudged = False  # this round was woken (by commits), not by the end of its wait
+
+    def stop(self) -> None:
+        """Ask the thread to end (it does at once, or after the checkpoint it is in)."""
+        self.stopping = True
+        self.wake.set()
+
+    def close(self) -> None:
+        """Close the connections (the thread's last act)."""
+        for name in ("db", "ck"):
+            db = getattr(self, name, None)
+            if db is not None:
+                with contextlib.suppress(sqlite3.Error):
+                    db.close()
+
+
+def _checkpointing(ref: weakref.ref[Journal], bg: _Background, wait: float) -> None:
+    """The checkpointer's thread: a round when woken or ``wait`` seconds after the last one,
+    until stopped or its Journal is gone; then it closes its connections."""
+    try:
+        while True:
+            bg.nudged = bg.wake.wait(wait)
+            bg.wake.clear()
+            next_wait = None if bg.stopping else _round(ref, bg)
+            if next_wait is None:
+                return
+            wait = next_wait
+    finally:
+        bg.close()
+
+
+def _round(ref: weakref.ref[Journal], bg: _Background) -> float | None:
+    """One round; how long to wait for the next (longer after failures), None when the Journal is gone.
+
+    A round that fails (a full disk, a lock held by another program) is logged, once until
+    one succeeds, and tried again later: the commits go on, in the WAL.
+    """
+    journal = ref()
+    if journal is None:
+        return None
+    try:
+        journal._checkpoint(bg)
+    except Exception as e:  # never raised into a step: the commits are safe in the WAL
+        with contextlib.suppress(sqlite3.Error):
+            _release(bg.db)
+        bg.failures += 1
+        if bg.failures == 1:
+            log.warning("journal %s: a checkpoint failed, tried again later: %s", journal.path, _reason(e))
+    else:
+        if bg.failures:
+            log.warning("journal %s: checkpoints work again", journal.path)
+        bg.failures = 0
+    return journal.checkpoint_idle * (1 << min(bg.failures, 5))
+
+
+def _hold(db: sqlite3.Connection) -> None:
+    """A read transaction on ``db`` from now: while it lasts, no write can start the WAL afresh."""
+    _release(db)
+    db.execute("BEGIN")
+    db.execute("SELECT count(*) FROM meta").fetchone()
+
+
+def _release(db: sqlite3.Connection) -> None:
+    """End ``db``'s read transaction, if it has one."""
+    if db.in_transaction:
+        db.execute("COMMIT")
+
+
+def _passive(db: sqlite3.Connection) -> tuple[int, int, int]:
+    """A PASSIVE checkpoint: (busy, pages in the WAL, pages of it now in the database)."""
+    busy, frames, copied = db.execute("PRAGMA wal_checkpoint(PASSIVE)").fetchone()
+    return int(busy), int(frames), int(copied)
+
+
+def _start_afresh(db: sqlite3.Connection) -> None:
+    """A write that starts a WAL copied whole afresh (its header written and fsynced: SQLite
+    does it in the first write after such a checkpoint), so that no step's commit does."""
+    db.execute("BEGIN IMMEDIATE")
+    try:
+        db.execute("INSERT OR REPLACE INTO meta VALUES ('checkpoint', ?)", (str(time.time()),))
+        db.execute("COMMIT")
+    except BaseException:
+        if db.in_transaction:
+            with contextlib.suppress(sqlite3.Error):
+                db.execute("ROLLBACK")
+        raise
 
 
 def verify(journal: Journal, saved: Saved | None, audit: AuditLog | None) -> str | None:
