@@ -7,8 +7,8 @@ the Manager (own process) decides under the new layer and sends the obligation; 
 node (own process) dispatches the layered implementation, which reports the response event;
 the benchmark stops the clock when that report arrives: benchmark -> Manager -> task node ->
 benchmark, 3 hops (plus the context message, published just before the trigger). Both are
-round trips measured interleaved in the same run, on the same machine; the ratio of their
-p99 is the figure (target <= 1.5, issue 16). With 3 hops against 2, the structural floor of
+round trips measured interleaved in the same run, on the same machine; the ratios of their
+p50 and p99 are the figures (targets <= 2.0 and <= 1.8, issue 32). With 3 hops against 2, the structural floor of
 that ratio is about 1.5 (``hop_ratio``). The cosleec topics carry their ``cosleec_interfaces``
 types, as deployed (the default wire). The echo, the benchmark and the cosleec nodes spin the
 same rclpy executor (the SingleThreadedExecutor).
@@ -193,7 +193,8 @@ def main() -> int:
         "e2e_p99_us": round(percentile(e2e, 99), 1),
         "ratio_p50": round(statistics.median(e2e) / statistics.median(raw), 2),
         "ratio_p99": round(percentile(e2e, 99) / percentile(raw, 99), 2),
-        "target_ratio_p99": 1.5,
+        "target_ratio_p50": 2.0,
+        "target_ratio_p99": 1.8,
         "raw_message_type": "cosleec_interfaces/msg/Event",
         "raw_hops": RAW_HOPS,
         "e2e_hops": E2E_HOPS,
@@ -213,7 +214,7 @@ def main() -> int:
             f"p50 {result['e2e_p50_us']} us",
             f"p99 {result['e2e_p99_us']} us",
         ),
-        ("ratio (e2e / raw)", f"p50 {result['ratio_p50']}x", f"p99 {result['ratio_p99']}x (target <= 1.5)"),
+        ("ratio (e2e / raw)", f"p50 {result['ratio_p50']}x", f"p99 {result['ratio_p99']}x (targets <= 2.0, <= 1.8)"),
         ("hop ratio (structural floor)", f"{result['hop_ratio']}x", "3 hops against 2"),
     ]
     report("ros2_latency", rows, result, a.json)

@@ -9,6 +9,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from cosleec.records import (
     FIELDS,
@@ -423,3 +425,17 @@ def test_the_writer_writes_a_managers_log_byte_for_byte(tmp_path: Path) -> None:
             [events[head["seq"]]], run=head["run"], rules=head["rules"], wall=head["wall"], mono=head["mono"]
         )
         assert again == line
+
+
+_JSONISH = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats() | st.text(),
+    lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=4),
+    max_leaves=20,
+)
+
+
+@given(st.dictionaries(st.text(max_size=8), _JSONISH | st.sets(st.integers(), max_size=3), max_size=6))
+def test_the_shared_audit_encoder_writes_what_json_dumps_writes(data: dict[str, object]) -> None:
+    from cosleec.records.encode import _encode
+
+    assert _encode(data) == json.dumps(data, default=str, separators=(",", ":"))

@@ -52,7 +52,7 @@ def audit_lines(
         if "time" in data:  # a decision's own time (a fallback's is its deadline) is the record's:
             t = data["time"]  # one "time" key, as a dict of the record has it, never two
             data = {k: v for k, v in data.items() if k != "time"}
-        body = json.dumps(data, default=str, separators=(",", ":"))
+        body = _encode(data)
         lines.append(
             f'{{"seq":{ev.seq},"kind":"{ev.kind}","time":{_number(t)}{head}'
             + (f",{body[1:]}" if len(body) > 2 else "}")
@@ -67,6 +67,11 @@ def as_object(kind: Kind | str, time: float, data: Mapping[str, Any]) -> dict[st
     in the audit log, a ``time`` of the data (a decision's own) is the record's time.
     """
     return {"kind": kind, "time": time, **data}
+
+
+#: ``json.dumps(data, default=str, separators=(",", ":"))`` without making an encoder per
+#: record (the audit log encodes several records a step); stateless, so shared by threads
+_encode = json.JSONEncoder(default=str, separators=(",", ":")).encode
 
 
 def _number(x: object) -> str:
