@@ -25,6 +25,7 @@ from cosleec.runtime.audit import AuditLog, read_audit
 from cosleec.runtime.clock import Clock, MonotonicClock, VirtualClock
 from cosleec.runtime.context import Context as Context
 from cosleec.runtime.decision import Decision, DecisionOrigin
+from cosleec.runtime.decision import said_in as said_in
 from cosleec.runtime.errors import BindingError, ConfigurationError, ContextError, ReloadError
 from cosleec.runtime.explanations import Explanations, ExplanationsError
 from cosleec.runtime.implementations import Capability
@@ -104,4 +105,5 @@ INTERNALS = (
     "Priorities",
     "Ran",
     "possible_conflicts",
+    "said_in",
 )

@@ -20,8 +20,7 @@ from collections import OrderedDict, deque
 from collections.abc import Callable
 from typing import Any
 
-from cosleec.runtime import Manager, Obligation, RuntimeEvent, Tracked, VirtualClock
-from cosleec.runtime.decision import said_in
+from cosleec.runtime import Manager, Obligation, RuntimeEvent, Tracked, VirtualClock, said_in
 
 #: how many decisions, violations, conflicts and refusals the page lists (the newest)
 HISTORY = 20

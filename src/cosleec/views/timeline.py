@@ -44,7 +44,7 @@ from typing import Any
 
 from cosleec.errors import UserError, clip, show
 from cosleec.records import HEADER, Kind
-from cosleec.runtime.decision import said_in
+from cosleec.runtime import said_in
 from cosleec.views.timeline_files import read_records
 from cosleec.views.timeline_marks import (
     UNDETERMINED,
