@@ -64,33 +64,32 @@ class Runner:
                 continue
             job, checked = admitted
             impl = job.implementations if job.implementations is not None else self.core.implementations
-            if job.composition is not None:
-                ran = self._call(job.rule, impl.dispatch, job.rule, job.decision, job.composition)
-            else:
-                ran = self._call(job.rule, impl.dispatch_fallback, job.rule, job.decision)
             actions = [t.id for t in given.items if not t.prohibition] if self.core.journal else ()
-            self.ran(job.rule, job.decision, ran, checked, actions)
+            call: Callable[..., list[Ran]]
+            args: tuple[Any, ...]
+            if job.composition is not None:
+                call, args = impl.dispatch, (job.rule, job.decision, job.composition)
+            else:
+                call, args = impl.dispatch_fallback, (job.rule, job.decision)
+            self.run(job.rule, job.decision, call, checked, actions, args)
 
     def run(
         self,
         rule: CompiledRule,
         d: Decision,
-        run: Callable[[], list[Ran]],
+        run: Callable[..., list[Ran]],
         checked: int = 0,
         actions: Iterable[int] = (),
+        args: tuple[Any, ...] = (),
     ) -> None:
-        """Run a decision's implementation once, then record each outcome in a step of its own.
+        """Run a decision's implementation once, ``run(*args)``, then record each outcome in a
+        step of its own.
 
         ``checked`` is the ``seq`` of the last record before the dispatch was admitted: the
         outcome records carry it, so a reader can tell what was in force when it started.
         ``actions``: the ids of the actions it was handed (they are no longer in flight).
         """
-        self.ran(rule, d, self._call(rule, run), checked, actions)
-
-    def ran(
-        self, rule: CompiledRule, d: Decision, ran: list[Ran], checked: int, actions: Iterable[int]
-    ) -> None:
-        """Record what a decision's implementation did (see :meth:`run`)."""
+        ran = self._call(rule, run, *args)
         core = self.core
         core.stats.task_failures += sum(1 for r in ran if not r.ok)
         if not core.steps.recording:
