@@ -465,13 +465,19 @@ def test_the_guard_blocks_a_twist_while_forbidden_and_forwards_it_after(
         def send(x: float) -> None:
             transport.publish_typed(f"{namespace}/planner/cmd_vel", twist, {"linear": _vector(x)})
 
+        def by_r3(got: list[dict[str, Any]]) -> list[dict[str, Any]]:
+            return [r for r in got if r["rules"] == ["R3"]]
+
         end = time.monotonic() + 30
-        while driver.status["guard"]["counters"].get("blocked", 0) < 3:
-            assert time.monotonic() < end, driver.status.get("guard")
+        while len(by_r3(refusals.got)) < 3:
+            assert time.monotonic() < end, (driver.status.get("guard"), refusals.got[-3:])
             send(0.5)
             time.sleep(0.2)
-        refusals.wait(lambda got: len(got) >= 3, what="the refusals")
-        r = refusals.got[0]
+        # before its first answer (a loaded machine, a service still being matched) the guard
+        # blocks on its own, failing closed; it never forwards, and every other refusal is R3's
+        first = refusals.got.index(by_r3(refusals.got)[0])
+        assert all("did not answer" in r["reason"] and r["rules"] == [] for r in refusals.got[:first])
+        r = refusals.got[first]
         assert r["event"] == "MoveNearUser" and r["rules"] == ["R3"]
         assert r["source"] == f"{namespace}/planner/cmd_vel" and "R3" in r["reason"]
         assert out.got == []  # nothing reached the base while forbidden
