@@ -34,7 +34,7 @@ from cosleec.cop.errors import (
     HedgeEvaluationError,
 )
 from cosleec.cop.events import Transitions
-from cosleec.cop.extent import Snapshot, activate, bind, deactivate, run_with, snapshot
+from cosleec.cop.extent import Snapshot, activate, activating, bind, deactivate, run_with, snapshot
 from cosleec.cop.generators import layered_generator
 from cosleec.cop.introspect import Explanation, current_layers, explain
 from cosleec.cop.layer import POLICIES, HedgeGroup, Layer, LayerGroup, policy_first, policy_last
@@ -71,6 +71,7 @@ __all__ = [
     "Transitions",
     "activate",
     "activate_globally",
+    "activating",
     "active_layers",
     "add_activation_hook",
     "at_safe_point",

@@ -22,6 +22,8 @@ from cosleec.cop.errors import ActivationError
 from cosleec.cop.layer import Layer, displaced, fire_hooks
 from cosleec.cop.state import EMPTY, RT, Frame, GlobalState, active_layers, composition, dynamic, next_stamp
 
+R = TypeVar("R")
+
 
 class _Scope:
     """``with activate(...)`` / ``with deactivate(...)``: one dynamic extent.
@@ -128,6 +130,30 @@ def activate(*layers: Layer) -> _Scope:
     Use it for behaviour that should hold for one piece of work, in this thread or task only.
     """
     return _Scope("activate", layers)
+
+
+def activating(layers: tuple[Layer, ...], fn: Callable[..., R], /, *args: Any) -> R:
+    """``fn(*args)`` with ``layers`` active for its dynamic extent: ``with activate(*layers):
+    return fn(*args)`` in one call, without a scope object.
+
+    For a dispatcher that enters the same few layers around every call it makes (the
+    runtime runs each decision's implementation so). With enter/exit hooks registered it
+    takes the scope's way, which runs them.
+    """
+    if Layer.hooked:
+        with _Scope("activate", layers):
+            return fn(*args)
+    g = RT.state
+    frame = dynamic.get()
+    for layer in layers:
+        if not isinstance(layer, Layer):
+            raise TypeError(f"expected Layer objects, got {layer!r}")
+        frame = _transition(frame, "activate", layer, g)
+    token = dynamic.set(frame)
+    try:
+        return fn(*args)
+    finally:
+        dynamic.reset(token)
 
 
 def deactivate(*layers: Layer) -> _Scope:

@@ -49,6 +49,11 @@ class Decider:
         if explanations is not None:
             self._reads = {r.name: n for r in rules if (n := explanations.reads(r.name))}
 
+    @property
+    def speaks(self) -> bool:
+        """Do decisions keep the values their sentences for people name (beyond what they read)?"""
+        return bool(self._reads)
+
     def decide(self, rule: CompiledRule, event: str, now: float) -> Decision | None:
         """``rule``'s decision at its trigger ``event``: None when its condition is false."""
         v = self.context.values

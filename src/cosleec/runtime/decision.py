@@ -101,31 +101,34 @@ class Decision:
     ) -> Decision:
         """The same as the constructor, for the Manager's hot path: a frozen dataclass sets
         each of its fields through ``object.__setattr__`` (about 5 us a decision here);
-        this fills the instance's dict in one call. The parameters are the fields, with the
-        same defaults (a test keeps them so)."""
+        this fills the instance's dict in one call, from a literal (a quarter cheaper than
+        from keywords). The parameters are the fields, with the same defaults (a test keeps
+        them so)."""
         d = object.__new__(cls)
         d.__dict__.update(
-            id=id,
-            time=time,
-            event=event,
-            rule=rule,
-            clause=clause,
-            layer=layer,
-            semantics=semantics,
-            values=values,
-            conditions=conditions,
-            obligations=obligations,
-            missing=missing,
-            reason=reason,
-            context_version=context_version,
-            violated=violated,
-            unknown=unknown,
-            origin=origin,
-            missed=missed,
-            explanations=explanations,
-            _explanation=[],
-            _for_people=[],
-            _recorded=[],
+            {
+                "id": id,
+                "time": time,
+                "event": event,
+                "rule": rule,
+                "clause": clause,
+                "layer": layer,
+                "semantics": semantics,
+                "values": values,
+                "conditions": conditions,
+                "obligations": obligations,
+                "missing": missing,
+                "reason": reason,
+                "context_version": context_version,
+                "violated": violated,
+                "unknown": unknown,
+                "origin": origin,
+                "missed": missed,
+                "explanations": explanations,
+                "_explanation": [],
+                "_for_people": [],
+                "_recorded": [],
+            }
         )
         return d
 

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from cosleec.bulk import quick_init
-from cosleec.cop import Layer, Snapshot, activate, layered
+from cosleec.cop import Snapshot, activating, layered
 from cosleec.errors import clip
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.errors import BindingError
@@ -278,16 +278,11 @@ class Implementations:
                 )
                 return [Ran("task", None, f"clause {decision.clause} and layer {decision.layer} disagree")]
             composition = rule.compositions[decision.clause]
-        return self._guarded("task", rule, decision, self._task, rule, decision, composition.layers)
-
-    def _task(self, rule: CompiledRule, decision: Decision, layers: tuple[Layer, ...]) -> None:
-        """Call the rule's layered method with the decision's ``layers`` active."""
-        handler = self.handler(rule)
-        if layers:  # added to whatever the caller has active, never replacing it
-            with activate(*layers):
-                handler(decision)
-        else:
-            handler(decision)
+        # the rule's layered method with the decision's layers active: added to whatever the
+        # caller has active, never replacing it
+        return self._guarded(
+            "task", rule, decision, activating, composition.layers, self.handler(rule), decision
+        )
 
     def dispatch_fallback(self, rule: CompiledRule, decision: Decision) -> list[Ran]:
         """Run an ``otherwise`` decision: capabilities for its events, else the task's ``fallback``.

@@ -32,6 +32,7 @@ from cosleec.bulk import paused_gc
 from cosleec.errors import clip, show
 from cosleec.lang import HedgeSemantics, Specification, clause_semantics_for, one_of
 from cosleec.records import Kind, RuntimeEvent
+from cosleec.runtime import express
 from cosleec.runtime import reload as reloading
 from cosleec.runtime.audit import AuditLog
 from cosleec.runtime.clock import MonotonicClock, VirtualClock
@@ -40,6 +41,7 @@ from cosleec.runtime.core import Core, InForce
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.enforcer import Enforcer
 from cosleec.runtime.errors import BindingError, ConfigurationError, ContextError
+from cosleec.runtime.express import Express
 from cosleec.runtime.gate import Gate
 from cosleec.runtime.implementations import Capability, Implementations
 from cosleec.runtime.jobs import Job
@@ -117,6 +119,7 @@ class Manager:
         self.undelivered = self._gate.undelivered  # decisions to publish again after a restart
         self._enforcer = Enforcer(core)
         self._runner = Runner(core, self._gate, o.max_depth)
+        self._express = Express(core, self._gate) if express.enabled() else None
         self._timer = Timer(core, self._enforcer, self._gate, weakly(self.tick))
         self.possible_conflicts: list[PossibleConflict] = []  # item pairs that can conflict (start() warns)
         self._check = False  # start() checked the bindings: a reload checks the new rules' too
@@ -402,17 +405,23 @@ class Manager:
             self._start_implicitly("event")
         self._catch_up()
         with core.steps.step() as step:
-            if undeclared(self.core, name, "event", step, self.unknown_events) is not None:
-                return []
-            now = step.now
-            core.stats.events += 1
-            followups = self._advance(step)
-            seq = core.steps.count("seq")  # after what time's passing started: this occurrence counts for it
-            if core.steps.recording:
-                step.emit(Kind.OCCURRENCE, {"event": name, "causal": seq}, now)
-            followups += self._enforcer.occur(name, now, seq, step)
-            decisions, jobs, more = self._enforcer.trigger(name, now, seq, step)
-            followups = self._gate.ready(jobs + followups + more, now, step)
+            quiet = self._express.occur(name, step) if self._express is not None else None
+            if quiet is not None:  # the common case, straight through (cosleec.runtime.express)
+                decisions, followups = quiet
+            else:
+                if undeclared(self.core, name, "event", step, self.unknown_events) is not None:
+                    return []
+                now = step.now
+                core.stats.events += 1
+                followups = self._advance(step)
+                seq = core.steps.count(
+                    "seq"
+                )  # after what time's passing started: this occurrence counts for it
+                if core.steps.recording:
+                    step.emit(Kind.OCCURRENCE, {"event": name, "causal": seq}, now)
+                followups += self._enforcer.occur(name, now, seq, step)
+                decisions, jobs, more = self._enforcer.trigger(name, now, seq, step)
+                followups = self._gate.ready(jobs + followups + more, now, step)
             due = self._timer.due_at()
         self._timer.notify(due)
         self._runner.dispatch(followups)

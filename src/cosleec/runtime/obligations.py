@@ -251,6 +251,11 @@ class Tracker:
         self._index(t)
         return t
 
+    def waits_for(self, event: str) -> bool:
+        """Would an occurrence of ``event`` change anything here: something in force names it
+        (to require, forbid, or as an `else` branch), or a miss waits for its late event?"""
+        return bool(self._by_event.get(event)) or bool(self._missed.get(event))
+
     def closed_at_start(self, t: Tracked) -> bool:
         """Does ``t``'s window end before it starts (a negative deadline computed from measures)?"""
         return t.hi is not None and t.hi < t.lo and not t.branches

@@ -117,6 +117,7 @@ class Options:
         put(self, "untimed", _untimed(self.untimed))
         _check_history(self.history)
         _check_max_depth(self.max_depth)
+        _check_max_age(self.max_age)
         put(self, "priorities", tuple(given_priorities(self.priorities)))
         # the one check of these two is Priorities.build's (the Manager's and a reload's)
         rule = Priorities.build((), (), self.priority_semantics, self.priority_lead)
@@ -218,6 +219,16 @@ def _check_history(history: object) -> None:
     number of at least 1."""
     if isinstance(history, bool) or not isinstance(history, int) or history < 1:
         raise ConfigurationError(f"history must be a whole number of at least 1, not {show(history)}")
+
+
+def _check_max_age(max_age: object) -> None:
+    """ConfigurationError unless ``max_age`` is None or maps measures to seconds (the Context
+    checks the measures and the seconds, once it has the rules)."""
+    if max_age is not None and not isinstance(max_age, Mapping):
+        raise ConfigurationError(
+            f"max_age maps each measure to the seconds its value stays fresh, not {show(max_age)}",
+            hint="give one number per measure: max_age={'distance': 5.0}",
+        )
 
 
 def _check_max_depth(max_depth: object) -> None:

@@ -64,6 +64,7 @@ MORE_REFUSED: list[tuple[str, Any, str]] = [
     ("history", 1.5, "not 1.5"),
     ("max_depth", deepest() + 1, f"from 1 to {deepest()}, not {deepest() + 1}"),
     ("max_depth", True, "not True"),
+    ("max_age", 10.0, "max_age maps each measure to the seconds its value stays fresh, not 10.0"),
     ("priority_semantics", None, "priority_semantics must be one of cancel, conflict-aware, not None"),
     ("priority_lead", math.inf, "priority_lead must be a number of seconds >= 0, not inf"),
     ("priority_lead", math.nan, "not nan"),

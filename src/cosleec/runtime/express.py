@@ -1,0 +1,156 @@
+"""The express lane: a trigger in the common, quiet case, as straight-line code.
+
+Most triggers meet a quiet runtime: nothing in force names the event, nothing is
+forbidden or held, no deadline is due, every condition the rules read is known and no
+priority is declared. Then the general path's stages -- time passing, the occurrence
+meeting what is in force, the decider, the enforcer's settling, the gate -- each find
+nothing to do, and what is left is what the guarantees require: the occurrence, each
+triggered rule's decision and its obligations put in force, each with its record. This
+lane does exactly that in one pass, without the stages' calls.
+
+It is a second implementation of that case, so it decides nothing the general path
+would not: it first checks, before changing anything, that every stage would find
+nothing to do (:meth:`Express.occur` returns None otherwise, and the general path takes
+the trigger), and a property test holds the two equal, record for record, on generated
+rule sets and traces (``tests/unit/runtime/test_express.py``). It never runs with a
+journal (a decision's outbox entry and its commit are the general path's), so the kill
+campaigns exercise the general path. ``COSLEEC_EXPRESS=0`` turns it off, for the suite
+to run against the general path alone.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+from cosleec.records import Kind
+from cosleec.runtime.core import Core
+from cosleec.runtime.decision import Decision
+from cosleec.runtime.gate import Gate
+from cosleec.runtime.jobs import Job
+from cosleec.runtime.model import CompiledRule, Obligation
+from cosleec.runtime.steps import Step
+
+
+def enabled() -> bool:
+    """Is the express lane on (``COSLEEC_EXPRESS`` unset or not ``0``)? Read when a Manager is built."""
+    return os.environ.get("COSLEEC_EXPRESS", "1").strip() != "0"
+
+
+class Express:
+    """Triggers ``core`` in the quiet case (see the module docstring); ``gate`` says what is held."""
+
+    def __init__(self, core: Core, gate: Gate) -> None:
+        self.core = core
+        self.gate = gate
+        self.taken = 0  # triggers it took (the tests read it: each guard sends some elsewhere)
+
+    def occur(self, name: str, step: Step) -> tuple[list[Decision], list[Job]] | None:
+        """(In ``step``.) Event ``name`` occurred: its decisions and the jobs that run them, when
+        the case is quiet; None, having changed nothing, when the general path must take it."""
+        core = self.core
+        rules = core.ruleset.by_trigger.get(name)
+        tracker = core.tracker
+        if (
+            rules is None
+            or core.steps.journal is not None
+            or tracker.bans
+            or self.gate.held
+            or core.priorities.above
+            or core.context.aging
+            or tracker.backlog(step.now)
+            or tracker.waits_for(name)
+            or core.decider.speaks
+        ):
+            return None
+        chosen = self._choose(rules)
+        if chosen is None:
+            return None
+        self.taken += 1
+        return self._put_in_force(name, chosen, step)
+
+    def _choose(
+        self, rules: tuple[CompiledRule, ...]
+    ) -> list[tuple[CompiledRule, int, tuple[Obligation, ...]]] | None:
+        """The rules that fire, each with its clause and obligations; None when some rule's
+        decision is not quiet (an unknown value, an inner choice, a prohibition, an interval
+        that opens later or a window closed at its start): nothing is changed to find out."""
+        core = self.core
+        v = core.context.values
+        status = core.layers.status
+        issuer = core.issuer
+        chosen = []
+        for rule in rules:
+            try:
+                if not rule.condition(v):
+                    continue
+            except KeyError:  # unknown: the decider reads it with the `unknown` policy
+                return None
+            clause = status[rule.index].clause
+            if clause is None:
+                return None
+            spec = rule.response_of(clause)
+            obligations: tuple[Obligation, ...] = ()
+            if spec is not None:
+                if spec.clauses:
+                    return None
+                obligations = issuer.items(spec, rule.name)
+                for ob in obligations:
+                    if (
+                        ob.negated
+                        or ob.alternatives
+                        or ob.from_s
+                        or (ob.within_s is not None and ob.within_s < 0)
+                    ):
+                        return None
+            chosen.append((rule, clause, obligations))
+        return chosen
+
+    def _put_in_force(
+        self, name: str, chosen: list[tuple[CompiledRule, int, tuple[Obligation, ...]]], step: Step
+    ) -> tuple[list[Decision], list[Job]]:
+        """The occurrence, then each rule's decision and its obligations, with their records, in
+        the order the general path makes them."""
+        core = self.core
+        steps, tracker, context, layers = core.steps, core.tracker, core.context, core.layers
+        now = step.now
+        core.stats.events += 1
+        seq = steps.count("seq")
+        if steps.recording:
+            step.emit(Kind.OCCURRENCE, {"event": name, "causal": seq}, now)
+        v = context.values
+        status = layers.status
+        decisions: list[Decision] = []
+        jobs: list[Job] = []
+        for rule, clause, obligations in chosen:
+            names = rule.value_names
+            values: dict[str, Any] = dict(zip(names, map(v.get, names)))
+            for n, lits in rule.scale_values:  # scale positions back to their literals
+                x = values[n]
+                if x is not None:
+                    values[n] = lits[x]
+            d = Decision.made(
+                id=steps.count("decision"),
+                time=now,
+                event=name,
+                rule=rule.name,
+                clause=clause,
+                layer=rule.layer_of(clause) if clause else None,
+                semantics=layers.semantics,
+                values=values,
+                conditions=(
+                    (0, rule.trigger_text, True),
+                    *zip(rule.clause_ids, rule.clause_texts, status[rule.index].values),
+                ),
+                obligations=obligations,
+                context_version=context.version,
+                unknown=layers.unknown,
+                explanations=core.decider.explanations,
+            )
+            decisions.append(d)
+            rec = core.record(d, step, queue=True)
+            started = [tracker.start(d.id, clause, ob, now, seq, 0, d.id) for ob in obligations]
+            for t in started:
+                core.track(t, step)
+            jobs.append(Job(rule, d, rule.compositions[clause], started, rec, core.implementations))
+        return decisions, jobs

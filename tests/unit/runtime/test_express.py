@@ -1,0 +1,205 @@
+"""The express lane (cosleec.runtime.express) decides exactly what the general path decides.
+
+Each Manager is run twice on the same rules and trace -- once as built, once with
+``COSLEEC_EXPRESS=0`` (the general path alone) -- and everything a user can see must be
+equal: every record with its number and time, the decisions ``event`` returns, the calls
+of the capabilities, the obligations outstanding and the counters. On generated rule sets
+(the differential test's, with rules that some action also triggers, so that an event may
+trigger and fulfil at once), where the general path alone must also meet the reference
+semantics, as the differential test holds the default path to it; and on hand-made cases,
+one per condition that sends a trigger to the general path, each checked to be taken by
+the lane where it is quiet and refused where it is not.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from typing import Any
+from unittest import mock
+
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from cosleec.runtime import Manager, VirtualClock
+from tests.unit.semantics.differential import Case, HandClock, cases, reference, runtime
+
+HEADER = """def_start
+  event T
+  event A
+  event B
+  event C
+  measure b: boolean
+  measure n: numeric
+  constant K = 2
+def_end
+rule_start
+"""
+
+
+def build(text: str, express: bool, **options: Any) -> Manager:
+    """A Manager of ``text``, with the express lane as asked."""
+    with mock.patch.dict(os.environ, {"COSLEEC_EXPRESS": "1" if express else "0"}):
+        return Manager.from_text(text, **options)
+
+
+def taken(m: Manager) -> int:
+    """How many triggers the lane took (0 with it off)."""
+    lane = m._express  # what the lane took is what these tests are about
+    return 0 if lane is None else lane.taken
+
+
+def run(
+    text: str,
+    trace: list[tuple[float, str | dict[str, Any] | None]],
+    *,
+    express: bool,
+    watch: bool,
+    **options: Any,
+) -> tuple[dict[str, Any], int]:
+    """Everything visible of a run of ``trace`` (time, event | values | None for a tick)."""
+    clock = HandClock()
+    m = build(text, express, clock=clock, **options)
+    records: list[tuple[Any, ...]] = []
+    if watch:
+        m.subscribe(lambda ev: records.append((ev.seq, ev.kind, ev.time, ev.data)))
+    calls: list[tuple[str, int, str]] = []
+    body = re.sub(r"(when|not) \w+", "", text.split("rule_start")[1])
+    for action in sorted(set(re.findall(r"\b[ABC]\b", body))):  # the responses' events
+        m.capability(action)(lambda ob, d, a=action: calls.append((a, d.id, d.rule)))
+    m.start()
+    returned = []
+    try:
+        for t, what in trace:
+            clock.set(t)
+            if isinstance(what, dict):
+                m.update(what)
+            elif what is None:
+                m.tick()
+            else:
+                returned.append([d.to_json() for d in m.event(what)])
+        m.tick()
+        seen = {
+            "records": records,
+            "returned": returned,
+            "calls": calls,
+            "outstanding": [t.to_json() for t in m.outstanding(prohibitions=True)],
+            "stats": dict(m.stats),
+        }
+        return seen, taken(m)
+    finally:
+        m.close()
+
+
+def same(text: str, trace: list[tuple[float, Any]], **options: Any) -> int:
+    """Assert that the lane changes nothing visible, watched and not; how many it took."""
+    lanes = 0
+    for watch in (True, False):
+        general, none = run(text, trace, express=False, watch=watch, **options)
+        fast, lanes = run(text, trace, express=True, watch=watch, **options)
+        assert none == 0
+        assert fast == general, (text, trace, watch)
+    return lanes
+
+
+def trace_of(case: Case) -> list[tuple[float, Any]]:
+    return [(float(s.t), s.values or s.event) for s in case.trace]
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(cases(), st.booleans())
+def test_the_lane_changes_nothing_on_generated_rules(case: Case, action_triggers: bool) -> None:
+    with mock.patch.dict(os.environ, {"COSLEEC_EXPRESS": "0"}):  # the differential test, general path
+        assert runtime(case) == reference(case), case
+    text = case.text.replace("when T1", "when A") if action_triggers else case.text
+    same(
+        text,
+        trace_of(case),
+        semantics=case.semantics,
+        priorities=list(case.priorities),
+        priority_semantics=case.priority_semantics,
+        priority_lead=case.lead,
+    )
+
+
+def rules(*lines: str) -> str:
+    return HEADER + "\n".join(lines) + "\nrule_end\n"
+
+
+QUIET = rules("R1 when T then A within 5 seconds unless {b} then B within 2 seconds")
+
+
+def test_a_quiet_trigger_takes_the_lane_and_decides_as_the_general_path() -> None:
+    trace = [(0.0, {"b": False, "n": 1}), (1.0, "T"), (2.0, "A"), (3.0, {"b": True}), (4.0, "T"), (5.0, "B")]
+    assert same(QUIET, trace) == 2
+
+
+# each: rules, a trace whose last trigger is not quiet, and why the lane must leave it
+NOT_QUIET = {
+    "an unknown measure": (QUIET, [(1.0, "T")]),
+    "a prohibition decided": (rules("R1 when T then not B within 5 seconds"), [(1.0, "T")]),
+    "an interval that opens later": (rules("R1 when T then A within [2 seconds, 5 seconds]"), [(1.0, "T")]),
+    "a window closed at its start": (
+        rules("R1 when T then A within (1 - {n}) seconds"),
+        [(0.0, {"b": False, "n": 3}), (1.0, "T")],
+    ),
+    "an inner choice": (
+        rules(
+            "R1 when T then A within 2 seconds unless b then "
+            "{B within 2 seconds unless (n > K) then C within 1 seconds}"
+        ),
+        [(0.0, {"b": True, "n": 1}), (1.0, "T")],
+    ),
+    "an `else` branch": (rules("R1 when T then A within 2 seconds else B within 3 seconds"), [(1.0, "T")]),
+    "the event is awaited": (
+        rules("R1 when T then A within 5 seconds", "R2 when A then B within 5 seconds"),
+        [(0.0, {"b": False, "n": 1}), (1.0, "T"), (2.0, "A")],
+    ),
+    "a late event awaited": (
+        rules("R1 when T then A within 1 seconds", "R2 when A then B within 5 seconds"),
+        [(0.0, {"b": False, "n": 1}), (1.0, "T"), (3.0, None), (4.0, "A")],
+    ),
+    "a prohibition in force": (
+        rules("R1 when C then not B within 9 seconds", "R2 when T then A within 5 seconds"),
+        [(0.0, {"b": False, "n": 1}), (1.0, "C"), (2.0, "T")],
+    ),
+    "a deadline due": (
+        rules("R1 when C then B within 1 seconds", "R2 when T then A within 5 seconds"),
+        [(0.0, {"b": False, "n": 1}), (1.0, "C"), (3.0, "T")],
+    ),
+}
+
+
+def test_each_condition_that_is_not_quiet_sends_the_trigger_to_the_general_path() -> None:
+    for why, (text, trace) in NOT_QUIET.items():
+        quiet_before = same(text, trace[:-1])
+        assert same(text, trace) == quiet_before, why  # the last trigger was not taken
+
+
+def test_a_held_action_sends_triggers_to_the_general_path() -> None:
+    # R1's action waits for its interval: held; a quiet trigger meanwhile goes the general way
+    text = rules("R1 when C then B within [2 seconds, 5 seconds]", "R2 when T then A within 5 seconds")
+    trace = [(0.0, {"b": False, "n": 1}), (1.0, "C"), (1.5, "T"), (4.0, "B"), (5.0, "T")]
+    assert same(text, trace) == 1  # only the T after B ran
+
+
+def test_priorities_a_journal_aging_values_and_spoken_values_send_triggers_to_the_general_path(
+    tmp_path: Any,
+) -> None:
+    text = rules("R1 when T then A within 5 seconds", "R2 when T then B within 5 seconds")
+    trace: list[tuple[float, Any]] = [(0.0, {"b": False, "n": 1}), (1.0, "T")]
+    assert same(text, trace) == 1
+    assert same(text, trace, priorities=[("R1", "R2")]) == 0
+    assert same(text, trace, max_age={"n": 10.0}) == 0
+    lanes = []
+    for express in (False, True):
+        m = build(text, express, clock=VirtualClock(), journal=tmp_path / f"{express}.db", dispatch=False)
+        m.start()
+        m.update({"b": False, "n": 1})
+        m.event("T")
+        lanes.append(taken(m))
+        m.close()
+    assert lanes == [0, 0]
+    spoken = tmp_path / "say.yaml"
+    spoken.write_text("R1: 'the value is {n}'\n", encoding="utf-8")
+    assert same(text, trace, explanations=spoken) == 0
