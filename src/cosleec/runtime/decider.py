@@ -72,6 +72,23 @@ class Decider:
             issued = self.issuer.undetermined(rule, status.values)
         if clause is None:
             self.stats.undetermined += 1
+        if not self._reads:  # values and conditions made when first read
+            return Decision.at_trigger(
+                id=self.next_id(),
+                time=now,
+                event=event,
+                rule=rule,
+                clause=clause,
+                fired=fired,
+                read=tuple(map(v.get, rule.value_names)),
+                status=status.values,
+                semantics=self.layers.semantics,
+                obligations=issued.obligations,
+                missing=missing,
+                context_version=self.context.version,
+                unknown=self.layers.unknown,
+                explanations=self.explanations,
+            )
         conds = ((0, rule.trigger_text, fired), *zip(rule.clause_ids, rule.clause_texts, status.values))
         names = rule.value_names
         values = dict(zip(names, map(v.get, names)))
@@ -79,9 +96,7 @@ class Decider:
             x = values[n]
             if x is not None:
                 values[n] = lits[x]
-        if self._reads:
-            self._spoken(rule.name, values)
-        # the explanation is computed from these parts when first read (Decision.explanation)
+        self._spoken(rule.name, values)  # the values its sentences for people name too
         return Decision.made(
             id=self.next_id(),
             time=now,

@@ -18,12 +18,12 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from cosleec.lang import HedgeSemantics, Unknowns, decisive
 from cosleec.runtime import people
 from cosleec.runtime.explanations import Explanations
-from cosleec.runtime.model import Obligation
+from cosleec.runtime.model import CompiledRule, Obligation
 from cosleec.runtime.plain import mentioned
 from cosleec.runtime.values import Value
 
@@ -131,6 +131,89 @@ class Decision:
             }
         )
         return d
+
+    @classmethod
+    def at_trigger(
+        cls,
+        *,
+        id: int,
+        time: float,
+        event: str,
+        rule: CompiledRule,
+        clause: int | None,
+        fired: bool | None,
+        read: tuple[Any, ...],
+        status: tuple[bool | None, ...],
+        semantics: HedgeSemantics,
+        obligations: tuple[Obligation, ...],
+        missing: tuple[str, ...],
+        context_version: int,
+        unknown: Unknowns,
+        explanations: Explanations | None,
+    ) -> Decision:
+        """A trigger's decision, for the hot path: its ``values`` and ``conditions`` are made
+        when first read, from what it keeps of the moment it was made -- ``read``, the stored
+        values of ``rule.value_names`` (the context changes; this tuple does not), ``fired``,
+        the trigger condition's value, and ``status``, the clause conditions' values (the
+        Layer Manager's, never changed once made). Most decisions are never read: a
+        decision of 20 clauses no longer builds 21 tuples and a dict each time. Equal, field
+        for field, to the one :meth:`made` makes from the same parts (a test holds it so)."""
+        d = object.__new__(cls)
+        d.__dict__.update(
+            {
+                "id": id,
+                "time": time,
+                "event": event,
+                "rule": rule.name,
+                "clause": clause,
+                "layer": rule.layer_names[clause] if clause else None,
+                "semantics": semantics,
+                "obligations": obligations,
+                "missing": missing,
+                "reason": "",
+                "context_version": context_version,
+                "violated": None,
+                "unknown": unknown,
+                "origin": DecisionOrigin.TRIGGER,
+                "missed": None,
+                "explanations": explanations,
+                "_explanation": [],
+                "_for_people": [],
+                "_recorded": [],
+                "_parts": (rule, read, fired, status),
+            }
+        )
+        return d
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled (and copied) whole: ``values`` and ``conditions`` made, and what they were
+        made from left behind (it holds the compiled rule, which does not pickle)."""
+        if "_parts" not in self.__dict__:
+            return dict(self.__dict__)
+        self.__dict__["values"] = self.values  # made now if not yet
+        return {k: v for k, v in self.__dict__.items() if k != "_parts"}
+
+    if not TYPE_CHECKING:  # (to mypy every attribute is a field: a misspelt one stays an error)
+
+        def __getattr__(self, name: str) -> Any:
+            """``values`` and ``conditions`` of a decision :meth:`at_trigger` made, made when first
+            read (and kept: later reads are plain attribute reads)."""
+            if name == "values" or name == "conditions":
+                parts = self.__dict__.get("_parts")
+                if parts is not None:
+                    rule, read, fired, status = parts
+                    values = dict(zip(rule.value_names, read))
+                    for n, lits in rule.scale_values:  # scale positions back to their literals
+                        x = values[n]
+                        if x is not None:
+                            values[n] = lits[x]
+                    conditions = (
+                        (0, rule.trigger_text, fired),
+                        *zip(rule.clause_ids, rule.clause_texts, status),
+                    )
+                    self.__dict__.update(values=values, conditions=conditions)
+                    return self.__dict__[name]
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     @property
     def explanation(self) -> str:

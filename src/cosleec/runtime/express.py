@@ -21,7 +21,6 @@ to run against the general path alone.
 from __future__ import annotations
 
 import os
-from typing import Any
 
 from cosleec.records import Kind
 from cosleec.runtime.core import Core
@@ -123,26 +122,18 @@ class Express:
         decisions: list[Decision] = []
         jobs: list[Job] = []
         for rule, clause, obligations in chosen:
-            names = rule.value_names
-            values: dict[str, Any] = dict(zip(names, map(v.get, names)))
-            for n, lits in rule.scale_values:  # scale positions back to their literals
-                x = values[n]
-                if x is not None:
-                    values[n] = lits[x]
-            d = Decision.made(
+            d = Decision.at_trigger(
                 id=steps.count("decision"),
                 time=now,
                 event=name,
-                rule=rule.name,
+                rule=rule,
                 clause=clause,
-                layer=rule.layer_of(clause) if clause else None,
+                fired=True,
+                read=tuple(map(v.get, rule.value_names)),
+                status=status[rule.index].values,
                 semantics=layers.semantics,
-                values=values,
-                conditions=(
-                    (0, rule.trigger_text, True),
-                    *zip(rule.clause_ids, rule.clause_texts, status[rule.index].values),
-                ),
                 obligations=obligations,
+                missing=(),
                 context_version=context.version,
                 unknown=layers.unknown,
                 explanations=core.decider.explanations,

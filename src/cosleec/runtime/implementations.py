@@ -278,11 +278,13 @@ class Implementations:
                 )
                 return [Ran("task", None, f"clause {decision.clause} and layer {decision.layer} disagree")]
             composition = rule.compositions[decision.clause]
-        # the rule's layered method with the decision's layers active: added to whatever the
-        # caller has active, never replacing it
-        return self._guarded(
-            "task", rule, decision, activating, composition.layers, self.handler(rule), decision
-        )
+        # the decision's layers active (added to whatever the caller has active, never replacing
+        # it) around the rule's layered method; without a task, every variant of that method is
+        # the capabilities of the decision's events (compose), so they are called directly
+        layers = composition.layers
+        if rule.name in self.tasks:
+            return self._guarded("task", rule, decision, activating, layers, self.handler(rule), decision)
+        return self._guarded("task", rule, decision, activating, layers, self._capabilities, decision, set())
 
     def dispatch_fallback(self, rule: CompiledRule, decision: Decision) -> list[Ran]:
         """Run an ``otherwise`` decision: capabilities for its events, else the task's ``fallback``.

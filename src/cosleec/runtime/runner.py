@@ -89,9 +89,20 @@ class Runner:
         outcome records carry it, so a reader can tell what was in force when it started.
         ``actions``: the ids of the actions it was handed (they are no longer in flight).
         """
-        ran = self._call(rule, run, *args)
+        local = self._depth  # one level deeper, or refused past max_depth
+        depth = getattr(local, "n", 0)
+        if depth >= self.max_depth:
+            ran = self._too_deep(rule, depth)
+        else:
+            local.n = depth + 1
+            try:
+                ran = run(*args)
+            finally:
+                local.n = depth
         core = self.core
-        core.stats.task_failures += sum(1 for r in ran if not r.ok)
+        for r in ran:
+            if not r.ok:
+                core.stats.task_failures += 1
         if not core.steps.recording:
             return
         with core.steps.step() as step:
@@ -109,22 +120,16 @@ class Runner:
             if core.journal and core.dispatch:
                 self.gate.landed(d.id, actions, step)  # (a decision with actions still held keeps its entry)
 
-    def _call(self, rule: CompiledRule, run: Callable[..., list[Ran]], *args: Any) -> list[Ran]:
-        """Call ``run(*args)`` one level deeper, or refuse past ``max_depth``."""
-        depth = getattr(self._depth, "n", 0)
-        if depth >= self.max_depth:
-            ran = [
-                Ran(
-                    "task",
-                    None,
-                    f"not run: implementations triggered rules {depth} deep (max_depth={self.max_depth}); "
-                    f"does an implementation of {rule.name} trigger {rule.trigger} again?",
-                )
-            ]
-            log.error("%s: %s", rule.name, ran[0].error)
-            return ran
-        self._depth.n = depth + 1
-        try:
-            return run(*args)
-        finally:
-            self._depth.n = depth
+    def _too_deep(self, rule: CompiledRule, depth: int) -> list[Ran]:
+        """The outcome of an implementation not run: ``depth`` levels of implementations
+        triggering rules reached ``max_depth``."""
+        ran = [
+            Ran(
+                "task",
+                None,
+                f"not run: implementations triggered rules {depth} deep (max_depth={self.max_depth}); "
+                f"does an implementation of {rule.name} trigger {rule.trigger} again?",
+            )
+        ]
+        log.error("%s: %s", rule.name, ran[0].error)
+        return ran

@@ -8,9 +8,12 @@ fails here rather than in a run.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import inspect
+import pickle
 
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -227,3 +230,82 @@ def test_the_deadline_timer_is_woken_only_for_a_deadline_earlier_than_its_sleep(
         assert took < 1.4, f"judged after {took:.2f} s: the timer slept through the short deadline"
     finally:
         m.close()
+
+
+SCALED = """def_start
+  event T
+  event A
+  measure b: boolean
+  measure n: numeric
+  measure s: scale(low, mid, high)
+def_end
+rule_start
+R1 when T and {b} then A within 2 seconds unless ({s} >= mid) then A within 1 seconds unless ({n} > 2)
+rule_end
+"""
+
+
+@given(
+    b=st.none() | st.booleans(),
+    n=st.none() | st.integers(-3, 5),
+    s=st.none() | st.integers(0, 2),
+    fired=st.none() | st.booleans(),
+    status=st.tuples(st.none() | st.booleans(), st.none() | st.booleans()),
+    clause=st.none() | st.integers(0, 2),
+    read_first=st.sampled_from(["values", "conditions", "json", "eq"]),
+)
+def test_a_decision_made_at_a_trigger_is_the_one_made_whole(
+    b: bool | None,
+    n: int | None,
+    s: int | None,
+    fired: bool | None,
+    status: tuple[bool | None, bool | None],
+    clause: int | None,
+    read_first: str,
+) -> None:
+    from cosleec.runtime.ruleset import RuleSet
+
+    rule = RuleSet.from_text(SCALED).rules[0]
+    stored = {"b": b, "n": n, "s": s}  # a scale is stored as its position
+    read = tuple(stored[name] for name in rule.value_names)
+    common = dict(
+        id=4,
+        time=2.0,
+        event="T",
+        clause=clause,
+        semantics=HedgeSemantics.LAST_WINS,
+        obligations=(Obligation(event="A", within_s=2.0, rule="R1"),),
+        missing=("n",),
+        context_version=7,
+        unknown=Unknowns.UNDETERMINED,
+        explanations=None,
+    )
+    lazy = Decision.at_trigger(rule=rule, fired=fired, read=read, status=status, **common)  # type: ignore[arg-type]
+    assert "values" not in vars(lazy) and "conditions" not in vars(lazy)  # nothing made yet
+    literal = {"b": b, "n": n, "s": None if s is None else ("low", "mid", "high")[s]}
+    whole = Decision.made(
+        rule="R1",
+        layer=rule.layer_of(clause) if clause else None,
+        values={k: literal[k] for k in rule.value_names},
+        conditions=(
+            (0, rule.trigger_text, fired),
+            (1, rule.clause_texts[0], status[0]),
+            (2, rule.clause_texts[1], status[1]),
+        ),
+        **common,  # type: ignore[arg-type]
+    )
+    first = {
+        "values": lambda d: d.values,
+        "conditions": lambda d: d.conditions,
+        "json": lambda d: d.to_json(),
+        "eq": lambda d: d == whole,
+    }[read_first]
+    first(lazy)
+    assert lazy == whole and repr(lazy) == repr(whole)
+    assert lazy.to_json() == whole.to_json()
+    assert lazy.explanation == whole.explanation and lazy.for_people == whole.for_people
+    assert vars(lazy)["values"] is lazy.values  # made once, then kept
+    for again in (pickle.loads(pickle.dumps(lazy)), copy.deepcopy(lazy), dataclasses.replace(lazy)):
+        assert again == whole and "_parts" not in vars(again)
+    with pytest.raises(AttributeError, match="no attribute 'valuez'"):
+        lazy.valuez  # noqa: B018 - any other missing attribute is still an AttributeError
