@@ -16,6 +16,16 @@ same implementation called. The hand-coded loop runs 5 times over each round's s
 the least disturbed pass counts: at well under a microsecond a sample, one preemption of
 the process would otherwise multiply its mean, and flatter the ratio. ``ratio_*``: ours /
 hand-coded, mean, median and p99.
+
+The floor of the data model, in the same run (``floor_*``): the records a trigger keeps --
+its decision (``Decision.at_trigger``), its obligation (a ``Tracked``, indexed by event and
+deadline), the history -- and what runs it -- a lock, the re-check before the action
+starts, the outcome's collector, the rule's layer active around the capability, the
+outcome -- written as straight-line code over the Manager's own compiled rules and Layer
+Manager, with none of the runtime's parts. Timed like ours, on records of its own, each
+sample right after ours (on the same context). ``floor_ratio_mean``: floor / hand-coded
+(what keeping these records costs at best in CPython); ``ratio_to_floor_mean``: ours /
+floor (what the runtime's parts add).
 """
 
 from __future__ import annotations
@@ -26,6 +36,7 @@ import sys
 import time
 
 from _common import args, report
+from _floor import Floor
 from _rulesets import grid_rules
 from cosleec.runtime import Manager, Obligation, VirtualClock
 from cosleec.testing import percentile
@@ -48,19 +59,22 @@ class Path:
         self.m.update(self.current)
         self.values = dict(self.current)  # the hand-coded application's own context
         self.by_trigger = {f"E{i}": [f"c{i}_{j}" for j in range(CLAUSES)] for i in range(RULES)}
+        self.floor = Floor(self.m, {"Act": self.implementation, "Alt": self.implementation})
 
     def implementation(self, ob: Obligation | None, decision: object) -> None:
         self.hits.append(time.perf_counter())
         self.done = "Act" if ob is None else ob.event
 
-    def round(self, samples: int, rng: random.Random) -> tuple[list[float], list[float], list[float]]:
-        """(to capability, to return, hand-coded) seconds for ``samples`` triggers."""
+    def round(
+        self, samples: int, rng: random.Random
+    ) -> tuple[list[float], list[float], list[float], list[float]]:
+        """(to capability, to return, hand-coded, floor) seconds for ``samples`` triggers."""
         plan = [
             (f"E{r}", f"c{r}_{rng.randrange(CLAUSES)}")
             for r in (rng.randrange(RULES) for _ in range(samples))
         ]
-        m, hits = self.m, self.hits
-        ours, back = [], []
+        m, hits, floor = self.m, self.hits, self.floor
+        ours, back, lows = [], [], []
         for event, name in plan:
             self.current[name] = not self.current[name]
             m.update({name: self.current[name]})
@@ -73,6 +87,12 @@ class Path:
             ours.append(hits[-1] - t0)
             back.append(t1 - t0)
             m.event(self.done)  # the robot did it: the obligation is fulfilled (not timed)
+            t0 = time.perf_counter()
+            floor.trigger(event, 0.0)  # the same decision on the same context, straight through
+            if len(hits) != ran + 2:
+                raise AssertionError(f"{event}: the floor ran {len(hits) - ran - 1} capabilities, not one")
+            lows.append(hits[-1] - t0)
+            floor.fulfilled()
         values, by_trigger, implementation = self.values, self.by_trigger, self.implementation
         start = dict(values)
         best: list[float] = []
@@ -94,7 +114,7 @@ class Path:
             if not best or sum(base) < sum(best):
                 best = base
         del hits[:-1]
-        return ours, back, best
+        return ours, back, best, lows
 
 
 def main() -> int:
@@ -106,14 +126,18 @@ def main() -> int:
     ours: list[float] = []
     back: list[float] = []
     base: list[float] = []
+    low: list[float] = []
     for _ in range(rounds):
-        o, r, b = path.round(samples, rng)
+        o, r, b, f = path.round(samples, rng)
         ours += o
         back += r
         base += b
+        low += f
     outstanding = len(path.m.outstanding())
     path.m.close()
-    us = {k: [x * 1e6 for x in v] for k, v in (("ours", ours), ("back", back), ("base", base))}
+    us = {
+        k: [x * 1e6 for x in v] for k, v in (("ours", ours), ("back", back), ("base", base), ("floor", low))
+    }
 
     def stats(xs: list[float]) -> tuple[float, float, float]:
         return statistics.fmean(xs), statistics.median(xs), percentile(xs, 99)
@@ -121,6 +145,7 @@ def main() -> int:
     o_mean, o_med, o_p99 = stats(us["ours"])
     r_mean, r_med, r_p99 = stats(us["back"])
     b_mean, b_med, b_p99 = stats(us["base"])
+    f_mean, f_med, _ = stats(us["floor"])
     result = {
         "benchmark": "dispatch_path",
         "rules": RULES,
@@ -138,6 +163,10 @@ def main() -> int:
         "ratio_mean": round(o_mean / b_mean, 1),
         "ratio_median": round(o_med / b_med, 1),
         "ratio_p99": round(o_p99 / b_p99, 1),
+        "floor_mean_us": round(f_mean, 2),
+        "floor_median_us": round(f_med, 2),
+        "floor_ratio_mean": round(f_mean / b_mean, 1),
+        "ratio_to_floor_mean": round(o_mean / f_mean, 2),
         "outstanding_after": outstanding,
         "quick": a.quick,
     }
@@ -149,6 +178,11 @@ def main() -> int:
             "ours / hand-coded",
             f"mean {o_mean / b_mean:.1f}x",
             f"median {o_med / b_med:.1f}x, p99 {o_p99 / b_p99:.1f}x",
+        ),
+        (
+            "the same records, straight-line",
+            f"mean {f_mean:.1f} us",
+            f"{f_mean / b_mean:.1f}x hand-coded; ours {o_mean / f_mean:.2f}x this floor",
         ),
         ("samples", f"{len(ours)}", f"{RULES} rules x {CLAUSES} clauses; obligations left: {outstanding}"),
     ]

@@ -14,6 +14,11 @@
     layers), against the same update with only 100 rules loaded (cost must not depend on
     the rules an update does not touch); and the time to build that Manager from the text
     (parse + check + compile + Manager, best of a few).
+    At the largest point, a second baseline in the same run: the same records kept by
+    straight-line code (``_floor.Floor``: the values checked and stored, the rule's clause
+    conditions evaluated again, then the trigger's decision, obligation, history and the
+    capability under the rule's layer), over the same updates right after ours:
+    ``floor_ratio_at_60x20`` (floor / hand-coded) and ``ratio_to_floor_at_60x20``.
 (c) What a deployment pays at 60 x 20, interleaved with the bare path in the same run:
     with one observer (``Manager.subscribe``: every record handed to a consumer), with the
     JSON Lines audit log, and with the audit log and the SQLite journal (every step
@@ -34,17 +39,25 @@ import time
 from collections import deque
 
 from _common import args, report
+from _floor import Floor
 from _rulesets import Flipper, grid_rules, manager_build, measures_of, scaled_rules
 from cosleec.runtime import Manager, VirtualClock
 from cosleec.testing import percentile
 
 
 def run_point(
-    n_rules: int, n_clauses: int, cases: int, rng: random.Random, persist: str = "none"
-) -> tuple[list[float], list[float]]:
-    """Latencies of our path and of the hand-coded one; ``persist``: none, observer (one
-    subscriber that keeps the records it hears), audit or journal (the audit log and the
-    journal), written to a fresh temporary directory."""
+    n_rules: int,
+    n_clauses: int,
+    cases: int,
+    rng: random.Random,
+    persist: str = "none",
+    floor: bool = False,
+) -> tuple[list[float], list[float], list[float]]:
+    """Latencies of our path, of the hand-coded one and (``floor``) of the same records kept
+    by straight-line code (``_floor.Floor``, on its own copy of the context, over the same
+    updates right after ours); ``persist``: none, observer (one subscriber that keeps the
+    records it hears), audit or journal (the audit log and the journal), written to a fresh
+    temporary directory."""
     tmp = tempfile.TemporaryDirectory()
     durable: dict[str, str] = {}
     if persist in ("audit", "journal"):
@@ -74,6 +87,7 @@ def run_point(
         m.update(warm)
         current.update(warm)
         m.event(f"E{rule}")
+    low = Floor(m, {"Act": implementation, "Alt": implementation}, own_context=True) if floor else None
     updates = []
     for rule, _vec in vectors:  # every measure of the rule flips: a real change every time
         flip = {names[rule, j]: not current[names[rule, j]] for j in range(n_clauses)}
@@ -87,6 +101,15 @@ def run_point(
         if len(hits) != ran + 1:
             raise AssertionError(f"E{rule}: the implementation ran {len(hits) - ran} times, not once")
         ours.append(hits[-1] - t0)
+    lows: list[float] = []
+    for rule, update in updates if low is not None else ():
+        ran = len(hits)
+        t0 = time.perf_counter()
+        low.update(update, 0.0)  # type: ignore[union-attr]
+        low.trigger(f"E{rule}", 0.0)  # type: ignore[union-attr]
+        if len(hits) != ran + 1:
+            raise AssertionError(f"E{rule}: the floor ran {len(hits) - ran} implementations, not one")
+        lows.append(hits[-1] - t0)
     # baseline: the same decisions written by hand -- it reads the values it was given, picks
     # the last clause that holds (0: the default response) and calls the same implementation.
     # In its own loops after ours: a collection our allocations make due would otherwise land
@@ -108,7 +131,7 @@ def run_point(
             base = one
     m.close()
     tmp.cleanup()
-    return ours, base
+    return ours, base, lows
 
 
 def jitter_control(median_us: float, samples: int) -> tuple[float, float]:
@@ -165,14 +188,17 @@ def main() -> int:
     grid: dict[str, dict[str, float]] = {}
     rows = []
     means: dict[str, tuple[float, float]] = {}  # point -> (our mean, hand-coded mean), us
+    low: list[float] = []  # the floor at the largest point
     for nr in rules_axis:
         for nc in clause_axis:
             ours: list[float] = []
             base: list[float] = []
+            top_point = nr == rules_axis[-1] and nc == clause_axis[-1]
             for _ in range(rounds):
-                o, b = run_point(nr, nc, cases, rng)
+                o, b, f = run_point(nr, nc, cases, rng, floor=top_point)
                 ours += o
                 base += b
+                low += f
             us = [x * 1e6 for x in ours]
             base_us = [x * 1e6 for x in base]
             means[f"{nr}x{nc}"] = (statistics.fmean(us), statistics.fmean(base_us))
@@ -199,6 +225,14 @@ def main() -> int:
     last = grid[top]
     mean_ratio = means[top][0] / means[top][1]
     ctl_median, ctl_p99 = jitter_control(last["median_us"], cases * rounds)
+    floor_mean = statistics.fmean(low) * 1e6
+    rows.append(
+        (
+            f"{nr} x {nc}: the same records, straight-line",
+            f"mean {floor_mean:.1f} us",
+            f"{floor_mean / means[top][1]:.1f}x the hand-coded; ours {means[top][0] / floor_mean:.2f}x this floor",
+        )
+    )
     rows.append(
         (
             "control: busy loop of the same median",
@@ -211,7 +245,7 @@ def main() -> int:
     pooled: dict[str, list[float]] = {k: [] for k in kinds}
     for _ in range(rounds):
         for persist in kinds:
-            o, _b = run_point(nr, nc, cases, rng, persist)
+            o, _b, _f = run_point(nr, nc, cases, rng, persist)
             pooled[persist] += [x * 1e6 for x in o]
     durable = {k: (statistics.median(v), percentile(v, 99), statistics.fmean(v)) for k, v in pooled.items()}
     for k, label in (
@@ -250,6 +284,9 @@ def main() -> int:
         "mean_us_at_60x20": last["mean_us"],
         "handcoded_mean_us_at_60x20": round(means[top][1], 2),
         "mean_ratio_to_handcoded_at_60x20": round(mean_ratio, 1),
+        "floor_mean_us_at_60x20": round(floor_mean, 1),
+        "floor_ratio_at_60x20": round(floor_mean / means[top][1], 1),
+        "ratio_to_floor_at_60x20": round(means[top][0] / floor_mean, 2),
         "p99_us_at_60x20_bare": round(durable["none"][1], 1),
         "p99_us_at_60x20_observer": round(durable["observer"][1], 1),
         "p99_us_at_60x20_audit": round(durable["audit"][1], 1),

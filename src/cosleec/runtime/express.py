@@ -114,16 +114,21 @@ class Express:
         steps, tracker, context, layers = core.steps, core.tracker, core.context, core.layers
         now = step.now
         core.stats.events += 1
-        seq = steps.count("seq")
-        if steps.recording:
+        counters = steps.counters
+        seq = counters["seq"]
+        counters["seq"] = seq + 1
+        recording = steps.recording
+        if recording:
             step.emit(Kind.OCCURRENCE, {"event": name, "causal": seq}, now)
         v = context.values
         status = layers.status
         decisions: list[Decision] = []
         jobs: list[Job] = []
         for rule, clause, obligations in chosen:
+            did = counters["decision"]
+            counters["decision"] = did + 1
             d = Decision.at_trigger(
-                id=steps.count("decision"),
+                id=did,
                 time=now,
                 event=name,
                 rule=rule,
@@ -139,9 +144,15 @@ class Express:
                 explanations=core.decider.explanations,
             )
             decisions.append(d)
-            rec = core.record(d, step, queue=True)
-            started = [tracker.start(d.id, clause, ob, now, seq, 0, d.id) for ob in obligations]
-            for t in started:
-                core.track(t, step)
+            started = [tracker.start(did, clause, ob, now, seq, 0, did) for ob in obligations]
+            if recording:
+                rec = core.record(d, step, queue=True)
+                for t in started:
+                    core.track(t, step)
+            else:  # what those two do when nobody reads records
+                core.decisions.append(d)
+                core.stats.decisions += 1
+                tracker.forgotten.clear()
+                rec = None
             jobs.append(Job(rule, d, rule.compositions[clause], started, rec, core.implementations))
         return decisions, jobs

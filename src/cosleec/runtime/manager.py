@@ -404,28 +404,36 @@ class Manager:
         if not self._started:
             self._start_implicitly("event")
         self._catch_up()
+        timer = self._timer
         with core.steps.step() as step:
-            quiet = self._express.occur(name, step) if self._express is not None else None
-            if quiet is not None:  # the common case, straight through (cosleec.runtime.express)
-                decisions, followups = quiet
-            else:
-                if undeclared(self.core, name, "event", step, self.unknown_events) is not None:
+            # the common case straight through (cosleec.runtime.express), else the general path
+            taken = self._express.occur(name, step) if self._express is not None else None
+            if taken is None:
+                taken = self._general(name, step)
+                if taken is None:
                     return []
-                now = step.now
-                core.stats.events += 1
-                followups = self._advance(step)
-                seq = core.steps.count(
-                    "seq"
-                )  # after what time's passing started: this occurrence counts for it
-                if core.steps.recording:
-                    step.emit(Kind.OCCURRENCE, {"event": name, "causal": seq}, now)
-                followups += self._enforcer.occur(name, now, seq, step)
-                decisions, jobs, more = self._enforcer.trigger(name, now, seq, step)
-                followups = self._gate.ready(jobs + followups + more, now, step)
-            due = self._timer.due_at()
-        self._timer.notify(due)
+            decisions, followups = taken
+            due = timer.due_at() if timer.thread is not None else None
+        if due is not None:
+            timer.notify(due)
         self._runner.dispatch(followups)
         return decisions
+
+    def _general(self, name: str, step: Step) -> tuple[list[Decision], list[Job]] | None:
+        """(In ``step``.) Event ``name`` occurred: its decisions and the jobs that may run now
+        (None: an undeclared event, refused as ``unknown_events`` says)."""
+        core = self.core
+        if undeclared(core, name, "event", step, self.unknown_events) is not None:
+            return None
+        now = step.now
+        core.stats.events += 1
+        followups = self._advance(step)
+        seq = core.steps.count("seq")  # after what time's passing started: this occurrence counts for it
+        if core.steps.recording:
+            step.emit(Kind.OCCURRENCE, {"event": name, "causal": seq}, now)
+        followups += self._enforcer.occur(name, now, seq, step)
+        decisions, jobs, more = self._enforcer.trigger(name, now, seq, step)
+        return decisions, self._gate.ready(jobs + followups + more, now, step)
 
     def request(self, name: str, *, source: str = "") -> Permission:
         """The robot is about to do ``name``: may it, now? Call it for every real attempt.

@@ -139,12 +139,16 @@ class _Scope:
         return self.step
 
     def __exit__(self, *exc: object) -> None:
-        s = self.steps
+        s, step = self.steps, self.step
         try:
-            s.commit(self.step)  # every change made, even by a step that raised, with its records
+            # every change made, even by a step that raised, with its records (a step that
+            # made neither, with nothing to add, has nothing to commit)
+            if step.events or step._change is not None or s.before_commit is not None:
+                s.commit(step)
         finally:
             s.lock.release()
-            s.deliver()
+            if s._delivery:
+                s.deliver()
 
 
 class Steps:
