@@ -48,10 +48,8 @@ class Context:
 
     def validate(self, updates: Mapping[str, object]) -> dict[str, Any]:
         """The stored form of every update, or ContextError naming the first bad one."""
-        measures, booleans = self.measures, self._booleans
-        if booleans.issuperset(updates) and {*map(type, updates.values())} <= {bool}:
-            return dict(updates)  # the common case: booleans of boolean measures, stored as given
         out: dict[str, Any] = {}
+        measures, booleans = self.measures, self._booleans
         for name, value in updates.items():
             if (value is True or value is False) and name in booleans:
                 out[name] = value  # the common case, with no call
@@ -74,14 +72,14 @@ class Context:
 
     def apply(self, stored: Mapping[str, Any], now: float) -> set[str]:
         """Apply validated values; return the measures whose value changed (or became known)."""
-        values = self.values
-        changed = {
-            name
-            for name, v in stored.items()
-            if (old := values.get(name, _UNSET)) is _UNSET or old != v or type(old) is not type(v)
-        }
-        values.update(stored)
-        self.stamps.update(dict.fromkeys(stored, now))
+        changed = set()
+        values, stamps = self.values, self.stamps
+        for name, v in stored.items():
+            old = values.get(name, _UNSET)
+            if old is _UNSET or old != v or type(old) is not type(v):
+                changed.add(name)
+            values[name] = v
+            stamps[name] = now
         if changed:
             self.version += 1
         return changed

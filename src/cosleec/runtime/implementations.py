@@ -210,9 +210,11 @@ class Implementations:
         return handle  # type: ignore[no-any-return]
 
     def prepare(self, rules: Iterable[CompiledRule] | None = None) -> None:
-        """Build the layered handler of every rule now (call after binding, before triggers)."""
+        """Build the layered handler of every rule bound to a task now (call after binding,
+        before triggers); a rule without a task needs none (:meth:`dispatch`)."""
         for rule in rules if rules is not None else self.ruleset.rules:
-            self.handler(rule)
+            if rule.name in self.tasks:
+                self.handler(rule)
 
     def compose(self, decision: Decision) -> None:
         """Capability style: run the handler of every event the decision obliges.

@@ -153,8 +153,11 @@ class LayerManager:
 
     def update(self, changed: Iterable[str], v: Values) -> list[LayerSwitch]:
         """Re-evaluate the rules that read a ``changed`` measure; return the layer switches."""
+        touched: dict[int, CompiledRule] = {}
         index = self.index
-        touched = {r.index: r for m in changed for r in index.get(m, ())}
+        for m in changed:
+            for r in index.get(m, ()):
+                touched[r.index] = r
         switches = []
         status = self.status
         for i in sorted(touched):  # rule order: the same switches in the same order on every run
