@@ -21,7 +21,7 @@ from cosleec.runtime.decision import OTHERWISE, Decision, DecisionOrigin
 from cosleec.runtime.explanations import Explanations
 from cosleec.runtime.issuer import Issuer
 from cosleec.runtime.layers import LayerManager
-from cosleec.runtime.model import CompiledRule
+from cosleec.runtime.model import CompiledRule, Obligation
 from cosleec.runtime.obligations import Tracked
 from cosleec.runtime.stats import Stats
 from cosleec.runtime.values import Value
@@ -73,21 +73,8 @@ class Decider:
         if clause is None:
             self.stats.undetermined += 1
         if not self._reads:  # values and conditions made when first read
-            return Decision.at_trigger(
-                id=self.next_id(),
-                time=now,
-                event=event,
-                rule=rule,
-                clause=clause,
-                fired=fired,
-                read=tuple(map(v.get, rule.value_names)),
-                status=status.values,
-                semantics=self.layers.semantics,
-                obligations=issued.obligations,
-                missing=missing,
-                context_version=self.context.version,
-                unknown=self.layers.unknown,
-                explanations=self.explanations,
+            return self.at_trigger(
+                self.next_id(), rule, event, now, clause, fired, status.values, issued.obligations, missing
             )
         conds = ((0, rule.trigger_text, fired), *zip(rule.clause_ids, rule.clause_texts, status.values))
         names = rule.value_names
@@ -108,6 +95,40 @@ class Decider:
             values=values,
             conditions=conds,
             obligations=issued.obligations,
+            missing=missing,
+            context_version=self.context.version,
+            unknown=self.layers.unknown,
+            explanations=self.explanations,
+        )
+
+    def at_trigger(
+        self,
+        id: int,
+        rule: CompiledRule,
+        event: str,
+        now: float,
+        clause: int | None,
+        fired: bool | None,
+        status: tuple[bool | None, ...],
+        obligations: tuple[Obligation, ...],
+        missing: tuple[str, ...],
+    ) -> Decision:
+        """Decision ``id`` of ``rule`` at its trigger ``event``, as the context and the Layer
+        Manager read now: what it read kept, its values and conditions made when first read
+        (:meth:`Decision.at_trigger`). For :meth:`decide` and the express lane alike; not
+        for a decider whose explanations name more values (:attr:`speaks`)."""
+        v = self.context.values
+        return Decision.at_trigger(
+            id=id,
+            time=now,
+            event=event,
+            rule=rule,
+            clause=clause,
+            fired=fired,
+            read=tuple(map(v.get, rule.value_names)),
+            status=status,
+            semantics=self.layers.semantics,
+            obligations=obligations,
             missing=missing,
             context_version=self.context.version,
             unknown=self.layers.unknown,

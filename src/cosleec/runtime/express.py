@@ -111,7 +111,7 @@ class Express:
         """The occurrence, then each rule's decision and its obligations, with their records, in
         the order the general path makes them."""
         core = self.core
-        steps, tracker, context, layers = core.steps, core.tracker, core.context, core.layers
+        steps, tracker = core.steps, core.tracker
         now = step.now
         core.stats.events += 1
         counters = steps.counters
@@ -120,28 +120,14 @@ class Express:
         recording = steps.recording
         if recording:
             step.emit(Kind.OCCURRENCE, {"event": name, "causal": seq}, now)
-        v = context.values
-        status = layers.status
+        decider, status = core.decider, core.layers.status
         decisions: list[Decision] = []
         jobs: list[Job] = []
         for rule, clause, obligations in chosen:
             did = counters["decision"]
             counters["decision"] = did + 1
-            d = Decision.at_trigger(
-                id=did,
-                time=now,
-                event=name,
-                rule=rule,
-                clause=clause,
-                fired=True,
-                read=tuple(map(v.get, rule.value_names)),
-                status=status[rule.index].values,
-                semantics=layers.semantics,
-                obligations=obligations,
-                missing=(),
-                context_version=context.version,
-                unknown=layers.unknown,
-                explanations=core.decider.explanations,
+            d = decider.at_trigger(
+                did, rule, name, now, clause, True, status[rule.index].values, obligations, ()
             )
             decisions.append(d)
             started = [tracker.start(did, clause, ob, now, seq, 0, did) for ob in obligations]
