@@ -7,9 +7,10 @@ as the runtime does -- under a lock, checked again where it starts, the outcome'
 collector set, the rule's layer active around the capability, the outcome kept -- written
 as straight-line code over the Manager's own compiled rules, with none of the runtime's
 parts. ``update`` adds what a context update keeps: the values checked, stored and
-stamped, and the clause conditions of the rules that read them evaluated again. What this
-costs is what keeping these records costs at best in CPython: the figure the runtime's
-parts are measured against (``dispatch_path``, ``scalability_grid``).
+stamped under the lock, the clause conditions of the rules that read them evaluated again,
+and the layer switches they cause. What this costs is what keeping these records costs
+at best in CPython: the figure the runtime's parts are measured against
+(``dispatch_path``, ``scalability_grid``).
 """
 
 from __future__ import annotations
@@ -104,21 +105,30 @@ class Floor:
                 cap(ob, d)
                 runs.append(Ran("capability", ob.event))
 
-    def update(self, values: dict[str, Any], now: float) -> None:
+    def update(self, values: dict[str, Any], now: float) -> list[tuple[str, str, str]]:
         """Measures of boolean measures (checked as the Context checks them), stored and stamped;
-        each rule that reads one re-evaluated, its clause the last that holds."""
+        each rule that reads one re-evaluated, its clause the last that holds; under the lock
+        (the runtime serialises an update with every other step), the layer switches returned
+        (``Manager.update`` returns them)."""
         booleans, stored = self.booleans, self.values
         for name, value in values.items():
             if name not in booleans or type(value) is not bool:
                 raise ValueError(f"{name}: not a boolean measure's value")
-        changed = [n for n, x in values.items() if stored.get(n) is not x]
-        stored.update(values)
-        self.stamps.update(dict.fromkeys(values, now))
-        status = self.status
-        for i, rule in {r.index: r for n in changed for r in self.index.get(n, ())}.items():
-            assert rule.evaluate_all is not None
-            held = rule.evaluate_all(stored)
-            status[i] = RuleStatus(held, len(held) - held[::-1].index(True) if True in held else 0)
+        switches = []
+        with self.lock:
+            changed = [n for n, x in values.items() if stored.get(n) is not x]
+            stored.update(values)
+            self.stamps.update(dict.fromkeys(values, now))
+            status = self.status
+            for i, rule in {r.index: r for n in changed for r in self.index.get(n, ())}.items():
+                assert rule.evaluate_all is not None
+                held = rule.evaluate_all(stored)
+                new = RuleStatus(held, len(held) - held[::-1].index(True) if True in held else 0)
+                if new.clause != status[i].clause:
+                    names = rule.layer_names
+                    switches.append((rule.name, names[status[i].clause or 0], names[new.clause]))
+                status[i] = new
+        return switches
 
     def fulfilled(self) -> None:
         """The robot did what was obliged (not timed): the floor's records of it go."""

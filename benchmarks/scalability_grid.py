@@ -15,9 +15,9 @@
     the rules an update does not touch); and the time to build that Manager from the text
     (parse + check + compile + Manager, best of a few).
     At the largest point, a second baseline in the same run: the same records kept by
-    straight-line code (``_floor.Floor``: the values checked and stored, the rule's clause
-    conditions evaluated again, then the trigger's decision, obligation, history and the
-    capability under the rule's layer), over the same updates right after ours:
+    straight-line code (``_floor.Floor``: the values checked and stored under the lock, the
+    rule's clause conditions evaluated again and its layer switch returned, then the
+    trigger's decision, obligation, history and the capability under the rule's layer), over the same updates right after ours:
     ``floor_ratio_at_60x20`` (floor / hand-coded) and ``ratio_to_floor_at_60x20``.
 (c) What a deployment pays at 60 x 20, interleaved with the bare path in the same run:
     with one observer (``Manager.subscribe``: every record handed to a consumer), with the
