@@ -15,7 +15,8 @@ conflict-aware
     L is kept as long as possible: it is cancelled at the deadline ``d`` of an obligation that
     one of the two owes and the other's prohibition forbids at ``d`` (minus the reading's
     ``priority_lead``, no earlier than the two windows allow), both still pending then, before
-    anything else happens at that instant.
+    anything else happens at that instant -- or, when the later of the two is raised at that
+    instant, right after the step that raises it.
 
 Each lower rule's firing at a slot has a :class:`~cosleec.analysis.slots.Cut`: the earliest
 moment some higher firing cancels it. :class:`~cosleec.analysis.obligations.Obligations`
@@ -28,11 +29,12 @@ cancel it). Known simplifications: an item with an ``else`` counts as pending by
 window only, and a refused obligation as pending until its deadline; under cancel, when a
 higher firing is itself cancelled at the moment it fires, it is still taken to cancel the
 lower one; under conflict-aware, a cancellation forced at the very instant the later of its
-two items was raised (a zero-length window) is placed before every step at that instant,
-where the reference applies it after the step that raised that item; and firings at one
-step are taken together, where the reference fires them in file order (a lower rule's
-prohibition that refuses an obligation before a higher rule later in the file cancels it
-is taken as cancelled first).
+two items was raised is judged after that step (what came before it at that instant settles
+the two items first, as in the reference), but it spares the instance's other prohibitions
+from the start of that instant, where the reference lets steps before the raising one break
+them; and firings at one step are taken together, where the reference fires them in file
+order (a lower rule's prohibition that refuses an obligation before a higher rule later in
+the file cancels it is taken as cancelled first).
 """
 
 from __future__ import annotations
@@ -219,6 +221,26 @@ class Priorities:
             and p.occurrence.event == o.occurrence.event
         )
 
+    @staticmethod
+    def _precedes(at: Z3, other: Raised) -> Callable[[Slot], Z3]:
+        """Which occurrences come before a cancellation at ``at`` forced by a clash with
+        ``other``: those before ``at``, and those at ``at`` not after the step that raised
+        ``other`` -- when the later of the two items is raised at ``at`` itself, the reference
+        finds the clash once that step is over, so what came before it at that instant (an
+        obligation met, a prohibition broken) counts first."""
+        return lambda z: z3.Or(z.t < at, z3.And(z.t == at, z3.Not(other.after(z))))
+
+    @staticmethod
+    def _open(r: Raised, other: Raised, at: Z3) -> Z3:
+        """``r``'s window has not closed when its clash with ``other`` is forced at ``at``: it
+        has, when ``r``'s window ends at ``at`` and ``other`` is an ``otherwise`` that starts
+        there once time has passed a deadline -- the reference closes every window that ends
+        at an instant before the fallbacks of those misses start."""
+        if r.hi is None:
+            return z3.BoolVal(True, at.ctx)
+        step = other.after.step  # the moment the firing or fallback raising ``other`` starts
+        return z3.Not(z3.And(step.late, step.t == at, r.hi == at))
+
     def _forced(self, o: Raised, p: Raised, other: Cut | None) -> Case:
         """The cancellation ``p`` forbidding ``o`` at its deadline forces, and when."""
         d = o.hi
@@ -232,8 +254,10 @@ class Priorities:
             o.lo <= d,
             p.lo <= d,
             *([d <= p.hi] if p.hi is not None else []),
-            z3.Not(self._settled(o, lambda z: z.t < at)),
-            z3.Not(self._settled(p, lambda z: z.t < at)),
+            z3.Not(self._settled(o, self._precedes(at, p))),
+            z3.Not(self._settled(p, self._precedes(at, o))),
+            self._open(o, p, at),
+            self._open(p, o, at),
             *([z3.Not(z3.And(other.cancelled, other.at < at))] if other is not None else []),
         )
         return cond, at, None

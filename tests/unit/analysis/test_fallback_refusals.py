@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from cosleec.analysis import Settings
 from cosleec.analysis.checks import Analysis
 from cosleec.analysis.witness import final_breaches
-from cosleec.lang import PrioritySemantics, Reading, Specification, load
+from cosleec.lang import PrioritySemantics, Specification, load
 from cosleec.semantics import Step, judge
 
 from .differential import agrees
@@ -29,6 +29,7 @@ from .support import analyse, subjects
 
 HEAD = "def_start event A event B event D event C event E event X event Y measure c : boolean def_end\n"
 END = 200.0  # time goes on past every deadline the generated rules can set
+PLAIN = Settings()  # the default reading (no priority), for both oracles
 
 
 def _file(tmp_path: Path, rules: str) -> Path:
@@ -37,9 +38,9 @@ def _file(tmp_path: Path, rules: str) -> Path:
     return path
 
 
-def accepts(spec: Specification, trace: Sequence[tuple[float, str]], c: bool) -> bool:
+def accepts(spec: Specification, trace: Sequence[tuple[float, str]], c: bool, s: Settings = PLAIN) -> bool:
     """The encoding's answer: every rule holds on exactly ``trace`` (measure ``c`` constant)."""
-    a = Analysis(spec, {}, Settings())
+    a = Analysis(spec, {}, s)
     enc = a.new_encoding(2)
     mine = [enc.free(event) for _, event in trace]
     enc.unfold()
@@ -53,10 +54,12 @@ def accepts(spec: Specification, trace: Sequence[tuple[float, str]], c: bool) ->
     return bool(answer == z3.sat)
 
 
-def reference_accepts(spec: Specification, trace: Sequence[tuple[float, str]], c: bool) -> bool:
+def reference_accepts(
+    spec: Specification, trace: Sequence[tuple[float, str]], c: bool, s: Settings = PLAIN
+) -> bool:
     """The reference's answer on the same trace: no breach that nothing makes up for."""
     steps = [Step(0.0, None, {"c": c}), *(Step(t, e) for t, e in trace), Step(END)]
-    return not final_breaches(spec, judge(spec, steps, Reading()))
+    return not final_breaches(spec, judge(spec, steps, s.reading))
 
 
 # ---------------------------------------------------------------------- hand-made cases
@@ -294,6 +297,49 @@ def _prioritised(draw: st.DrawFn) -> tuple[str, frozenset[tuple[str, str]]]:
         rules.append(f"R{i} when {triggers[i - 1]} then {item}")
     high, low = draw(st.permutations(["R1", "R2", "R3"]))[:2]
     return "\n".join(rules), frozenset({(high, low)})
+
+
+def test_a_conflict_aware_cancellation_at_a_raising_step_follows_what_came_before_it(tmp_path: Path) -> None:
+    """R1 > R2, conflict-aware. B at R1's deadline (3 s) raises R2's prohibition of X there, so
+    the clash is forced at 3 s -- just after B's step, as the reference applies it: an X at 3 s
+    before B has met R1 already (nothing to cancel, R2 binds from B on: a later X breaks it),
+    one after B comes after the cancellation (it meets R1 and breaks nothing)."""
+    rules = "R1 when A then X within 3 seconds\nR2 when B then not X within 4 seconds"
+    spec = load(_file(tmp_path, rules))
+    s = Settings(priorities=frozenset({("R1", "R2")}), priority_semantics=PrioritySemantics.CONFLICT_AWARE)
+    cases = (
+        ([(0, "A"), (3, "X"), (3, "B"), (3.5, "X")], False),  # met before B: R2 kept, X breaks it
+        ([(0, "A"), (3, "X"), (3, "B"), (7, "X")], False),  # R2's window ends at 7 s, inclusive
+        ([(0, "A"), (3, "X"), (3, "B"), (7.5, "X")], True),
+        ([(0, "A"), (3, "B"), (3, "X")], True),  # X after B: R2 cancelled first, R1 met
+        ([(0, "A"), (3, "B"), (3, "X"), (3.5, "X")], True),
+        ([(0, "A"), (3, "B"), (3.5, "X")], False),  # R2 cancelled, but R1's X is late
+        ([(0, "A"), (2.5, "X"), (3, "B"), (3.5, "X")], False),
+    )
+    for trace, ok in cases:
+        assert reference_accepts(spec, trace, False, s) is ok, trace
+        assert accepts(spec, trace, False, s) is ok, trace
+
+
+def test_a_fallback_raised_at_a_deadline_clashes_with_no_window_that_closed_there(tmp_path: Path) -> None:
+    """R1 > R2, conflict-aware. R1's fallback forbids Y from R1's deadline, once time passes it.
+    When R2's Y is due at that same instant, both windows close together first: R2 is missed
+    (its fallback owes C), nothing is cancelled. Due later, R2 is cancelled at its deadline."""
+    rules = (
+        "R1 when A then X within 1 seconds otherwise {not Y within 2 seconds}\n"
+        "R2 when B then Y within 1 seconds otherwise C within 1 seconds"
+    )
+    spec = load(_file(tmp_path, rules))
+    s = Settings(priorities=frozenset({("R1", "R2")}), priority_semantics=PrioritySemantics.CONFLICT_AWARE)
+    cases = (
+        ([(0, "B"), (0, "A")], False),  # both due at 1 s: R2 missed, then C missed
+        ([(0, "B"), (0, "A"), (1.5, "C")], True),
+        ([(0, "B"), (0, "A"), (2.5, "C")], False),
+        ([(0, "A"), (0.5, "B")], True),  # R2 due at 1.5 s, R1's fallback forbids Y: cancelled then
+    )
+    for trace, ok in cases:
+        assert reference_accepts(spec, trace, False, s) is ok, trace
+        assert accepts(spec, trace, False, s) is ok, trace
 
 
 PRIORITY_TRACES = st.lists(
