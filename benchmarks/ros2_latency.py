@@ -10,7 +10,13 @@ benchmark, 3 hops (plus the context message, published just before the trigger).
 round trips measured interleaved in the same run, on the same machine; the ratios of their
 p50 and p99 are the figures (targets <= 2.0 and <= 1.8, issue 32). With 3 hops against 2, the structural floor of
 that ratio is about 1.5 (``hop_ratio``). The cosleec topics carry their ``cosleec_interfaces``
-types, as deployed (the default wire). The echo, the benchmark and the cosleec nodes spin the
+types, as deployed (the default wire).
+Third path, interleaved too: the same three hops and four messages through two relays
+(``_ros2_relay.py``) made in the shape of the running Manager and task node, read from the
+ROS graph -- the same publishers, subscriptions and services with the same types and
+QoS-event callbacks -- that forward and do nothing else: the floor of the node design in
+rclpy (``relay_ratio_p50``/``_p99`` against the raw round trip; ``ratio_to_relay_*``: ours
+against it). The echo, the benchmark and the cosleec nodes spin the
 same rclpy executor (the SingleThreadedExecutor).
 Runs inside a private network namespace (ros-setup.md §1): it re-executes itself there.
 """
@@ -28,6 +34,7 @@ import tempfile
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 from cosleec.testing import percentile
 
@@ -60,6 +67,72 @@ def reexec_isolated() -> None:
         *sys.argv,
     ]
     os.execvpe("unshare", cmd, env)
+
+
+def start_relays(node: Any, ns: str, tmp: Path, env: dict[str, str], procs: list[Any], qos: Any) -> Any:
+    """Start the two relays (``_ros2_relay.py``) of the running Manager's and task node's shape,
+    read from the ROS graph; return the function that times one round trip through them."""
+    from cosleec_interfaces.msg import ContextUpdate, Event, MeasureValue
+
+    def mirrored(entities: list[tuple[str, list[str]]]) -> list[tuple[str, str]]:
+        # what rclpy makes for every node by itself (parameters, type descriptions, /rosout) is
+        # made by the relay's rclpy too
+        auto = ("rcl_interfaces/", "type_description_interfaces/")
+        return [
+            (name, types[0])
+            for name, types in entities
+            if not types[0].startswith(auto) and name not in ("/rosout", "/parameter_events")
+        ]
+
+    shape = {}
+    for role in ("manager", "task"):  # the nodes are named after the namespace and their role
+        name, space = f"{ns.strip('/')}_{role}", "/"
+        shape[role] = {
+            "publishers": mirrored(node.get_publisher_names_and_types_by_node(name, space)),
+            "subscriptions": mirrored(node.get_subscriber_names_and_types_by_node(name, space)),
+            "services": mirrored(node.get_service_names_and_types_by_node(name, space)),
+        }
+    (tmp / "shape.json").write_text(json.dumps(shape))
+    for role in ("manager", "task"):
+        procs.append(
+            subprocess.Popen(
+                [sys.executable, str(HERE / "_ros2_relay.py"), role, str(tmp / "shape.json")],
+                env=env,
+                stdout=subprocess.DEVNULL,
+            )
+        )
+    ctx = node.create_publisher(ContextUpdate, "/bench_relay/context", qos)
+    ev = node.create_publisher(Event, "/bench_relay/events", qos)
+    got = threading.Event()
+    arrivals: list[float] = []
+
+    def answered(m: Event) -> None:
+        if m.event == "Pong":
+            arrivals.append(time.perf_counter())
+            got.set()
+
+    node.create_subscription(Event, "/bench_relay/events", answered, qos)
+    toggle = [False]
+
+    def relay_once(wait: float = 5.0) -> float:
+        got.clear()
+        toggle[0] = not toggle[0]
+        t0 = time.perf_counter()
+        value = MeasureValue(name="toggle", kind=MeasureValue.BOOLEAN, boolean=toggle[0])
+        ctx.publish(ContextUpdate(values=[value]))
+        ev.publish(Event(event="Ping"))
+        if not got.wait(wait):
+            raise TimeoutError("no answer through the relays")
+        return arrivals[-1] - t0
+
+    deadline = time.monotonic() + 60
+    while True:  # until every link of the relays' path is matched
+        try:
+            relay_once(0.5)
+            return relay_once
+        except TimeoutError:
+            if time.monotonic() > deadline:
+                raise
 
 
 def main() -> int:
@@ -170,13 +243,16 @@ def main() -> int:
                 raise TimeoutError("no report from the task node")
             return reports[-1] - t0
 
-        for _ in range(50):  # warm up both paths (discovery, first dispatch)
+        relay_once = start_relays(node, ns, tmp, env, procs, qos)
+        for _ in range(50):  # warm up the paths (discovery, first dispatch)
             raw_once()
             e2e_once()
-        raw, e2e = [], []
-        for _ in range(n):  # interleaved, so that machine noise hits both alike
+            relay_once()
+        raw, e2e, relay = [], [], []
+        for _ in range(n):  # interleaved, so that machine noise hits them alike
             raw.append(raw_once() * 1e6)
             e2e.append(e2e_once() * 1e6)
+            relay.append(relay_once() * 1e6)
     finally:
         executor.shutdown()
         spinner.join(5)
@@ -195,6 +271,12 @@ def main() -> int:
         "ratio_p99": round(percentile(e2e, 99) / percentile(raw, 99), 2),
         "target_ratio_p50": 2.0,
         "target_ratio_p99": 1.8,
+        "relay_p50_us": round(statistics.median(relay), 1),
+        "relay_p99_us": round(percentile(relay, 99), 1),
+        "relay_ratio_p50": round(statistics.median(relay) / statistics.median(raw), 2),
+        "relay_ratio_p99": round(percentile(relay, 99) / percentile(raw, 99), 2),
+        "ratio_to_relay_p50": round(statistics.median(e2e) / statistics.median(relay), 2),
+        "ratio_to_relay_p99": round(percentile(e2e, 99) / percentile(relay, 99), 2),
         "raw_message_type": "cosleec_interfaces/msg/Event",
         "raw_hops": RAW_HOPS,
         "e2e_hops": E2E_HOPS,
@@ -216,6 +298,12 @@ def main() -> int:
         ),
         ("ratio (e2e / raw)", f"p50 {result['ratio_p50']}x", f"p99 {result['ratio_p99']}x (targets <= 2.0, <= 1.8)"),
         ("hop ratio (structural floor)", f"{result['hop_ratio']}x", "3 hops against 2"),
+        (
+            "relays of the nodes' shape (same hops)",
+            f"p50 {result['relay_ratio_p50']}x raw",
+            f"p99 {result['relay_ratio_p99']}x raw; e2e / relays {result['ratio_to_relay_p50']}x, "
+            f"{result['ratio_to_relay_p99']}x",
+        ),
     ]
     report("ros2_latency", rows, result, a.json)
     return 0
