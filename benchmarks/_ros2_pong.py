@@ -6,12 +6,11 @@ nodes spin (rclpy's SingleThreadedExecutor, :class:`cosleec.ros.ros2.Ros2Transpo
 comparison measures what cosleec adds, not a different type or executor.
 """
 
-import signal
-import threading
-
 import rclpy
 from cosleec_interfaces.msg import Event
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+from _ros2_serve import serve
 
 rclpy.init()
 node = rclpy.create_node("bench_pong")
@@ -24,16 +23,4 @@ def echo(m: Event) -> None:
 
 
 node.create_subscription(Event, "/bench/ping", echo, qos)
-stop = threading.Event()
-signal.signal(signal.SIGTERM, lambda *_: stop.set())
-signal.signal(signal.SIGINT, lambda *_: stop.set())
-executor = rclpy.executors.SingleThreadedExecutor()
-executor.add_node(node)
-t = threading.Thread(target=executor.spin, daemon=True)
-t.start()
-print("pong ready", flush=True)
-stop.wait()
-executor.shutdown()
-t.join(5)
-node.destroy_node()
-rclpy.shutdown()
+serve(node, "pong ready")

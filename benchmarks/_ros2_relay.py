@@ -15,15 +15,15 @@ anything.
 
 import importlib
 import json
-import signal
 import sys
-import threading
 from typing import Any
 
 import rclpy
 from cosleec_interfaces.msg import Event
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+from _ros2_serve import serve
 
 NS, RELAY = "/bench_cosleec", "/bench_relay"
 
@@ -78,19 +78,7 @@ def main() -> None:
     for service, type_name in shape["services"]:
         cls = kind(type_name)
         node.create_service(cls, renamed(service, role), lambda _req, res: res)
-    stop = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
-    executor = rclpy.executors.SingleThreadedExecutor()
-    executor.add_node(node)
-    t = threading.Thread(target=executor.spin, daemon=True)
-    t.start()
-    print(f"relay {role} ready", flush=True)
-    stop.wait()
-    executor.shutdown()
-    t.join(5)
-    node.destroy_node()
-    rclpy.shutdown()
+    serve(node, f"relay {role} ready")
 
 
 if __name__ == "__main__":
