@@ -217,6 +217,22 @@ ROWS = [
         ("<=", 1.8),
         "raw rclpy round trip of the same Event type, same run (3 hops against 2: floor 1.5×)",
     ),
+    Row(
+        "ros2_latency",
+        "relay_ratio_p50",
+        "relays of our nodes' shape that only forward / raw round trip, p50",
+        "x",
+        None,
+        "the floor of the node design, same run",
+    ),
+    Row(
+        "ros2_latency",
+        "relay_ratio_p99",
+        "relays of our nodes' shape that only forward / raw round trip, p99",
+        "x",
+        None,
+        "the floor of the node design, same run",
+    ),
     Row("analyse_case_studies", "total_s", "analyse the 18 case-study files", "s", ("<=", 45)),
     Row(
         "repair_case_studies",

@@ -88,7 +88,7 @@ class Path:
             back.append(t1 - t0)
             m.event(self.done)  # the robot did it: the obligation is fulfilled (not timed)
             t0 = time.perf_counter()
-            floor.trigger(event, 0.0)  # the same decision on the same context, straight through
+            floor.trigger(event)  # the same decision on the same context, straight through
             if len(hits) != ran + 2:
                 raise AssertionError(f"{event}: the floor ran {len(hits) - ran - 1} capabilities, not one")
             lows.append(hits[-1] - t0)

@@ -15,9 +15,11 @@
     the rules an update does not touch); and the time to build that Manager from the text
     (parse + check + compile + Manager, best of a few).
     At the largest point, a second baseline in the same run: the same records kept by
-    straight-line code (``_floor.Floor``: the values checked and stored under the lock, the
-    rule's clause conditions evaluated again and its layer switch returned, then the
-    trigger's decision, obligation, history and the capability under the rule's layer), over the same updates right after ours:
+    straight-line code (``_floor.Floor``: each step reading the clock under the lock and
+    letting time pass first; the values checked and stored, the rule's clause conditions
+    evaluated again and its layer switch returned; then the occurrence met with what is in
+    force, the trigger's decision, obligation, history and the capability under the rule's
+    layer, in the depth guard), over the same updates right after ours:
     ``floor_ratio_at_60x20`` (floor / hand-coded) and ``ratio_to_floor_at_60x20``.
 (c) What a deployment pays at 60 x 20, interleaved with the bare path in the same run:
     with one observer (``Manager.subscribe``: every record handed to a consumer), with the
@@ -105,8 +107,8 @@ def run_point(
     for rule, update in updates if low is not None else ():
         ran = len(hits)
         t0 = time.perf_counter()
-        low.update(update, 0.0)  # type: ignore[union-attr]
-        low.trigger(f"E{rule}", 0.0)  # type: ignore[union-attr]
+        low.update(update)  # type: ignore[union-attr]
+        low.trigger(f"E{rule}")  # type: ignore[union-attr]
         if len(hits) != ran + 1:
             raise AssertionError(f"E{rule}: the floor ran {len(hits) - ran} implementations, not one")
         lows.append(hits[-1] - t0)
