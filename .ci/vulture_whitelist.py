@@ -24,6 +24,7 @@ _.typed_subscribers  # typed publishing for simulators and system tests
 proceed  # a clause variant receives proceed= from COP and deliberately does not call it
 _.active  # Tracker.active: the obligations in force, for callers and tests
 _.layers_message  # Driver.layers_message: the last `layers` message, for harnesses waiting on a switch
+_.updated  # Express.updated: the updates the express lane took, read by its tests
 
 # The transformers' methods are the grammar's rule callbacks: Lark calls them by rule name.
 _.prule  #

@@ -45,7 +45,7 @@ def corpus() -> list[Path]:
 
 # -- the express lane and the general path (scripts/test) --------------------------------
 # With COSLEEC_PATHS_OUT=DIR, each worker writes to DIR the node ids of the tests whose run the
-# express lane could have changed: it took a trigger in this process or in a Python process
+# express lane could have changed: it took a trigger or an update in this process or in a Python process
 # the test started (tests/tools/witness/sitecustomize.py tells), or the test started a
 # Python process without that witness (its own environment). Every other test ran the
 # general path's code alone (with the lane off, a Manager differs only in never asking it),
@@ -67,11 +67,18 @@ if _PATHS_OUT:
     from cosleec.runtime.express import Express
 
     _taking = Express._put_in_force
+    _updating = Express.update
     _spawning = subprocess.Popen.__init__
 
     def _taken(self: Express, *args: Any) -> Any:
         _witnessed[0] = True
         return _taking(self, *args)
+
+    def _updated(self: Express, *args: Any) -> Any:
+        out = _updating(self, *args)
+        if out is not None:  # the lane took the update
+            _witnessed[0] = True
+        return out
 
     def _spawned(self: subprocess.Popen[Any], args: Any, *rest: Any, **kw: Any) -> None:
         env = kw.get("env")
@@ -81,6 +88,7 @@ if _PATHS_OUT:
         _spawning(self, args, *rest, **kw)
 
     Express._put_in_force = _taken  # type: ignore[method-assign]
+    Express.update = _updated  # type: ignore[method-assign]
     subprocess.Popen.__init__ = _spawned  # type: ignore[method-assign]
 
     @pytest.fixture(autouse=True)

@@ -1,4 +1,4 @@
-"""The express lane: a trigger in the common, quiet case, as straight-line code.
+"""The express lane: a trigger or a context update in the common, quiet case, as straight-line code.
 
 Most triggers meet a quiet runtime: nothing in force names the event, nothing is
 forbidden or held, no deadline is due, every condition the rules read is known and no
@@ -7,6 +7,12 @@ meeting what is in force, the decider, the enforcer's settling, the gate -- each
 nothing to do, and what is left is what the guarantees require: the occurrence, each
 triggered rule's decision and its obligations put in force, each with its record. This
 lane does exactly that in one pass, without the stages' calls.
+
+A context update meets the same quiet runtime when, besides, nobody reads records: then
+the step's scope, time passing, the gate and the runner each find nothing to do, and what
+is left is the values validated, stored and stamped, and the rules that read them
+re-evaluated (:meth:`Express.update`). An update that is rejected goes the general way,
+which records why.
 
 It is a second implementation of that case, so it decides nothing the general path
 would not: it first checks, before changing anything, that every stage would find
@@ -21,12 +27,15 @@ to run against the general path alone.
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 
 from cosleec.records import Kind
 from cosleec.runtime.core import Core
 from cosleec.runtime.decision import Decision
+from cosleec.runtime.errors import ContextError
 from cosleec.runtime.gate import Gate
 from cosleec.runtime.jobs import Job
+from cosleec.runtime.layers import LayerSwitch
 from cosleec.runtime.model import CompiledRule, Obligation
 from cosleec.runtime.steps import Step
 
@@ -43,6 +52,37 @@ class Express:
         self.core = core
         self.gate = gate
         self.taken = 0  # triggers it took (the tests read it: each guard sends some elsewhere)
+        self.updated = 0  # updates it took
+
+    def update(self, updates: Mapping[str, object]) -> list[LayerSwitch] | None:
+        """Apply ``updates`` and return the layer switches, when the runtime is quiet and
+        nobody reads records; None, having changed nothing, when the general path must
+        (a rejected update among them: the general path records why)."""
+        core = self.core
+        steps, context = core.steps, core.context
+        with steps.lock:  # what the general path's step would check, under the same lock
+            if (
+                steps.broken is not None
+                or steps.closed
+                or steps.journal is not None
+                or steps.before_commit is not None
+                or steps.recording
+                or context.aging
+                or core.aware
+                or self.gate.held
+            ):
+                return None
+            now = steps.clock.now()  # read under the lock, as a step reads it
+            if core.tracker.backlog(now):
+                return None
+            try:
+                stored = context.validate(updates)
+            except ContextError:
+                return None
+            core.stats.updates += 1
+            self.updated += 1
+            changed = context.apply(stored, now)
+            return core.layers.update(changed, context.values) if changed else []
 
     def occur(self, name: str, step: Step) -> tuple[list[Decision], list[Job]] | None:
         """(In ``step``.) Event ``name`` occurred: its decisions and the jobs that run them, when

@@ -326,6 +326,10 @@ class Manager:
         core = self.core
         if not self._started:
             self._start_implicitly("update")
+        if self._express is not None:  # the quiet case straight through (cosleec.runtime.express)
+            quiet = self._express.update(updates)
+            if quiet is not None:
+                return quiet
         self._catch_up()
         with core.steps.step() as step:
             try:

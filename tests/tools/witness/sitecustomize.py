@@ -2,9 +2,10 @@
 
 A test run with ``COSLEEC_PATHS_OUT`` puts this directory first on the ``PYTHONPATH`` of the
 processes a test starts, and names a file in ``COSLEEC_PATHS_WITNESS``. When such a child
-imports the express lane, the lane is wrapped so that its first trigger creates that file:
-the test then counts as one the lane could have changed (``scripts/test`` runs it again
-with ``COSLEEC_EXPRESS=0``). A child that never imports cosleec pays one environment read.
+imports the express lane, the lane is wrapped so that the first trigger or update it takes
+creates that file: the test then counts as one the lane could have changed
+(``scripts/test`` runs it again with ``COSLEEC_EXPRESS=0``). A child that never imports
+cosleec pays one environment read.
 """
 
 from __future__ import annotations
@@ -35,14 +36,24 @@ class _Witness:
         def exec_module(module: ModuleType) -> None:
             load(module)
             lane = module.Express
-            took = lane._put_in_force
+            took, updating = lane._put_in_force, lane.update
 
-            def taken(self: Any, *args: Any) -> Any:
+            def seen() -> None:
                 if _WITNESS and not os.path.exists(_WITNESS):
                     open(_WITNESS, "a").close()
+
+            def taken(self: Any, *args: Any) -> Any:
+                seen()
                 return took(self, *args)
 
+            def updated(self: Any, *args: Any) -> Any:
+                out = updating(self, *args)
+                if out is not None:  # the lane took the update
+                    seen()
+                return out
+
             lane._put_in_force = taken
+            lane.update = updated
 
         loader.exec_module = exec_module  # type: ignore[method-assign]
         return spec

@@ -400,3 +400,72 @@ def test_a_noted_rejection_is_counted_and_a_reload_attempt_is_not() -> None:
     assert m.stats["rejected"] == 2
     assert heard == ["reload-attempt", "rejected", "rejected"]
     m.close()
+
+
+# ---------------------------------------------------------------------------- express: a quiet update
+
+
+def _quiet_manager(text: str, clock: SetClock, calls: list[str], events: str = "AB") -> Manager:
+    """A Manager on a clock that tells it nothing (a VirtualClock's moves judge what fell
+    due before they return: the update would find nothing due)."""
+    m = Manager.from_text(text, clock=clock)
+    for event in events:
+        m.capability(event)(lambda ob, d, e=event: calls.append(e))
+    m.start()
+    return m
+
+
+def test_an_update_after_a_deadline_passed_judges_the_deadline_first() -> None:
+    """express-update-ignores-a-due-deadline: an update taken by the express lane while a
+    deadline is due would apply its values before the violation (and its ``otherwise``)
+    that came first; the violation is there as soon as the update returns."""
+    text = (
+        "def_start event C event A event B measure b : boolean def_end rule_start "
+        "R1 when C then B within 1 seconds otherwise A "
+        "R2 when A then B within 9 seconds unless {b} then A within 9 seconds rule_end"
+    )
+    clock, calls = SetClock(0.0), []
+    m = _quiet_manager(text, clock, calls)
+    m.update({"b": False})
+    m.event("C")
+    clock.t = 3.0
+    m.update({"b": True})
+    assert m.stats["violations"] == 1 and calls[-1] == "A"  # the otherwise ran at the update
+    m.close()
+
+
+def test_an_update_after_a_held_action_s_interval_opened_dispatches_it() -> None:
+    """express-update-ignores-held: an update taken by the express lane while an action is
+    held would leave it held past the opening of its interval, which the update's step
+    notices (no timer runs on a virtual clock)."""
+    text = (
+        "def_start event C event A event B measure b : boolean def_end rule_start "
+        "R1 when C then B within [2 seconds, 5 seconds] rule_end"
+    )
+    clock, calls = SetClock(0.0), []
+    m = _quiet_manager(text, clock, calls, "B")
+    m.update({"b": False})
+    m.event("C")
+    assert calls == []  # held until its interval opens
+    clock.t = 2.5
+    m.update({"b": True})
+    assert calls == ["B"]
+    m.close()
+
+
+def test_a_trigger_that_also_fulfils_an_obligation_fulfils_it() -> None:
+    """express-ignores-what-is-awaited: a trigger that the express lane took while an
+    obligation in force awaits its event would decide its rule and leave that obligation
+    owed (the lane does not meet an occurrence with what is in force)."""
+    text = (
+        "def_start event C event A event B measure b : boolean def_end rule_start "
+        "R1 when C then A within 5 seconds R2 when A then B within 5 seconds rule_end"
+    )
+    clock, calls = SetClock(0.0), []
+    m = _quiet_manager(text, clock, calls)
+    m.update({"b": False})
+    m.event("C")
+    clock.t = 1.0
+    m.event("A")
+    assert [(t.rule, t.event) for t in m.outstanding()] == [("R2", "B")]
+    m.close()
