@@ -84,6 +84,27 @@ class Context:
             self.version += 1
         return changed
 
+    def apply_booleans(self, updates: Mapping[str, object], now: float) -> list[str] | None:
+        """:meth:`validate` and :meth:`apply` at once, for the hot path's common update: only
+        boolean values of boolean measures (stored as they are, so a value changed exactly
+        when it is not the one stored); the measures whose value changed, in the update's
+        order. None, having changed nothing, for any other update (:meth:`validate` says
+        what is wrong with it, or stores it)."""
+        if not self._booleans.issuperset(updates) or [*map(type, updates.values())].count(bool) != len(
+            updates
+        ):
+            return None
+        values, stamps = self.values, self.stamps
+        if updates.items() <= values.items():  # nothing changes (bools: equal is identical)
+            changed = []
+        else:
+            changed = [n for n, v in updates.items() if values.get(n) is not v]
+            values.update(updates)
+            self.version += 1
+        for name in updates:
+            stamps[name] = now
+        return changed
+
     def expire(self, now: float) -> set[str]:
         """Forget values older than their measure's max_age: they become unknown."""
         gone = set()

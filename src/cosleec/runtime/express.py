@@ -75,13 +75,15 @@ class Express:
             now = steps.clock.now()  # read under the lock, as a step reads it
             if core.tracker.backlog(now):
                 return None
-            try:
-                stored = context.validate(updates)
-            except ContextError:
-                return None
+            changed = context.apply_booleans(updates, now)
+            if changed is None:  # not only booleans: checked and stored as the general path does
+                try:
+                    stored = context.validate(updates)
+                except ContextError:
+                    return None
+                changed = list(context.apply(stored, now))
             core.stats.updates += 1
             self.updated += 1
-            changed = context.apply(stored, now)
             return core.layers.update(changed, context.values) if changed else []
 
     def occur(self, name: str, step: Step) -> tuple[list[Decision], list[Job]] | None:

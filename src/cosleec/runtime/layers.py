@@ -98,6 +98,7 @@ def evaluate(conds: Iterable[Clause], v: Values) -> tuple[tuple[bool | None, ...
 
 
 _DEFAULT = RuleStatus((), 0)  # a rule without clauses
+_tuple_new = tuple.__new__
 
 
 class LayerManager:
@@ -142,11 +143,10 @@ class LayerManager:
         except KeyError:
             pass  # some measure is unknown: find out which, clause by clause
         else:  # every value known (True or False): no ``unknown`` policy applies
-            if self.semantics == HedgeSemantics.LAST_WINS:  # the last clause that holds
-                try:
-                    return RuleStatus(values, len(values) - values[::-1].index(True))
-                except ValueError:
-                    return RuleStatus(values, 0)
+            if self.semantics is HedgeSemantics.LAST_WINS:  # the last clause that holds
+                # (what RuleStatus(values, k) makes, without the named tuple's Python frame)
+                k = len(values) - values[::-1].index(True) if True in values else 0
+                return _tuple_new(RuleStatus, (values, k, ()))
             return RuleStatus(values, choose(values, self.semantics, self.unknown))
         values, missing = evaluate(r.clauses, v)
         return RuleStatus(values, choose(values, self.semantics, self.unknown), missing)

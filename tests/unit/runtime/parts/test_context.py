@@ -1,0 +1,78 @@
+"""Context: the express lane's one-pass boolean update against validate-then-apply.
+
+``Context.apply_booleans`` is the hot path's update of boolean measures; the general path
+is ``validate`` then ``apply``. On generated contexts and updates (boolean, numeric and
+scale measures; values of every kind, unknown names) the two must leave the same values,
+stamps and version and report the same changed measures -- or ``apply_booleans`` must
+decline, changing nothing, exactly when the update holds anything but boolean values of
+boolean measures.
+"""
+
+from __future__ import annotations
+
+import copy
+
+from hypothesis import given
+from hypothesis import strategies as st
+
+from cosleec.runtime.context import Context
+from cosleec.runtime.errors import ContextError
+from cosleec.runtime.values import MeasureSpec
+
+MEASURES = {
+    "a": MeasureSpec("a", "boolean"),
+    "b": MeasureSpec("b", "boolean"),
+    "c": MeasureSpec("c", "boolean"),
+    "n": MeasureSpec("n", "numeric"),
+    "s": MeasureSpec("s", "scale", ("low", "high")),
+}
+NAMES = st.sampled_from([*MEASURES, "zz"])
+VALUES = st.sampled_from([True, False, 0, 1, 1.0, 0.0, 2, "low", "x", None])
+UPDATES = st.dictionaries(NAMES, VALUES, max_size=5)
+
+
+def general(ctx: Context, update: dict[str, object], now: float) -> set[str] | None:
+    """validate then apply (None: rejected, nothing changed)."""
+    try:
+        stored = ctx.validate(update)
+    except ContextError:
+        return None
+    return ctx.apply(stored, now)
+
+
+def state(ctx: Context) -> tuple[object, ...]:
+    return ({k: (type(v), v) for k, v in ctx.values.items()}, dict(ctx.stamps), ctx.version)
+
+
+@given(st.lists(UPDATES, max_size=4), UPDATES)
+def test_the_one_pass_update_agrees_with_validate_then_apply(
+    before: list[dict[str, object]], update: dict[str, object]
+) -> None:
+    ctx = Context(MEASURES)
+    for i, earlier in enumerate(before):
+        general(ctx, earlier, float(i))
+    other = copy.deepcopy(ctx)
+    got = ctx.apply_booleans(update, 9.0)
+    only_booleans = all(
+        MEASURES.get(k, MEASURES["n"]).kind == "boolean" and type(v) is bool for k, v in update.items()
+    )
+    if got is None:
+        assert not only_booleans
+        assert state(ctx) == state(other)  # declined: nothing changed
+        return
+    assert only_booleans
+    want = general(other, update, 9.0)
+    assert want is not None  # booleans of boolean measures are never rejected
+    assert set(got) == want
+    assert got == [k for k in update if k in want]  # in the update's order
+    assert state(ctx) == state(other)
+
+
+def test_an_update_that_changes_nothing_stamps_but_keeps_the_version() -> None:
+    ctx = Context(MEASURES)
+    assert ctx.apply_booleans({"a": True, "b": False}, 1.0) == ["a", "b"]
+    assert ctx.version == 1
+    assert ctx.apply_booleans({"a": True}, 2.0) == []
+    assert (ctx.version, ctx.stamps["a"], ctx.stamps["b"]) == (1, 2.0, 1.0)
+    assert ctx.apply_booleans({"a": 1}, 3.0) is None  # 1 is not a boolean value
+    assert ctx.apply_booleans({"n": True}, 3.0) is None  # n is not a boolean measure
