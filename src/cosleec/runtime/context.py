@@ -51,7 +51,7 @@ class Context:
         out: dict[str, Any] = {}
         measures, booleans = self.measures, self._booleans
         for name, value in updates.items():
-            if (value is True or value is False) and name in booleans:
+            if (value is True or value is False) and type(name) is str and name in booleans:
                 out[name] = value  # the common case, with no call
                 continue
             spec = measures.get(name) if isinstance(name, str) else None
@@ -90,8 +90,11 @@ class Context:
         when it is not the one stored); the measures whose value changed, in the update's
         order. None, having changed nothing, for any other update (:meth:`validate` says
         what is wrong with it, or stores it)."""
-        if not self._booleans.issuperset(updates) or [*map(type, updates.values())].count(bool) != len(
-            updates
+        n = len(updates)
+        if (
+            [*map(type, updates)].count(str) != n  # (a key that only compares equal to a name is no name)
+            or not self._booleans.issuperset(updates)
+            or [*map(type, updates.values())].count(bool) != n
         ):
             return None
         values, stamps = self.values, self.stamps

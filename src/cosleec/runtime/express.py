@@ -11,8 +11,8 @@ lane does exactly that in one pass, without the stages' calls.
 A context update meets the same quiet runtime when, besides, nobody reads records: then
 the step's scope, time passing, the gate and the runner each find nothing to do, and what
 is left is the values validated, stored and stamped, and the rules that read them
-re-evaluated (:meth:`Express.update`). An update that is rejected goes the general way,
-which records why.
+re-evaluated (:meth:`Express.update`). An update that is rejected is recorded by the
+general path, with the reason the lane found.
 
 It is a second implementation of that case, so it decides nothing the general path
 would not: it first checks, before changing anything, that every stage would find
@@ -27,7 +27,7 @@ to run against the general path alone.
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 from cosleec.records import Kind
 from cosleec.runtime.core import Core
@@ -54,10 +54,12 @@ class Express:
         self.taken = 0  # triggers it took (the tests read it: each guard sends some elsewhere)
         self.updated = 0  # updates it took
 
-    def update(self, updates: Mapping[str, object]) -> list[LayerSwitch] | None:
+    def update(self, updates: Mapping[str, object]) -> list[LayerSwitch] | ContextError | None:
         """Apply ``updates`` and return the layer switches, when the runtime is quiet and
-        nobody reads records; None, having changed nothing, when the general path must
-        (a rejected update among them: the general path records why)."""
+        nobody reads records; None, having changed nothing, when the general path must; the
+        ContextError, having changed nothing, when the update is rejected (the general path
+        records the rejection with it: the values are not checked twice, and a value's
+        ``repr`` runs as often as on the general path)."""
         core = self.core
         steps, context = core.steps, core.context
         with steps.lock:  # what the general path's step would check, under the same lock
@@ -79,16 +81,49 @@ class Express:
             if changed is None:  # not only booleans: checked and stored as the general path does
                 try:
                     stored = context.validate(updates)
-                except ContextError:
-                    return None
+                except ContextError as e:
+                    return e
                 changed = list(context.apply(stored, now))
             core.stats.updates += 1
             self.updated += 1
             return core.layers.update(changed, context.values) if changed else []
 
+    def trigger(
+        self, name: str, due_at: Callable[[], float | None]
+    ) -> tuple[list[Decision], list[Job], float | None] | None:
+        """Event ``name`` occurred, when the case is quiet and nobody reads records: its
+        decisions, the jobs that run them and (``due_at``, read under the lock) when the timer
+        must next judge; None, having changed nothing, otherwise (the general path takes it,
+        or :meth:`occur` in its step when records are read).
+
+        It takes the runtime's lock without a step: a step would have nothing to record,
+        commit or deliver (no journal, audit log or observer), so what the lock alone
+        guarantees -- this occurrence ordered with every other step -- is what is left.
+        """
+        steps = self.core.steps
+        with steps.lock:
+            if steps.broken is not None or steps.closed or steps.recording:
+                return None  # (a refusal, or records to make: the general way, with a step)
+            now = steps.clock.now()  # read under the lock, as a step reads it
+            chosen = self._quiet(name, now)
+            if chosen is None:
+                return None
+            self.taken += 1
+            decisions, jobs = self._put_in_force(name, chosen, now, None)
+            return decisions, jobs, due_at()
+
     def occur(self, name: str, step: Step) -> tuple[list[Decision], list[Job]] | None:
         """(In ``step``.) Event ``name`` occurred: its decisions and the jobs that run them, when
         the case is quiet; None, having changed nothing, when the general path must take it."""
+        chosen = self._quiet(name, step.now)
+        if chosen is None:
+            return None
+        self.taken += 1
+        return self._put_in_force(name, chosen, step.now, step)
+
+    def _quiet(self, name: str, now: float) -> list[tuple[CompiledRule, int, tuple[Obligation, ...]]] | None:
+        """(Under the lock.) What the rules ``name`` triggers decide, when every stage of the
+        general path would find nothing to do at ``now``; None otherwise."""
         core = self.core
         rules = core.ruleset.by_trigger.get(name)
         tracker = core.tracker
@@ -99,16 +134,12 @@ class Express:
             or self.gate.held
             or core.priorities.above
             or core.context.aging
-            or tracker.backlog(step.now)
+            or tracker.backlog(now)
             or tracker.waits_for(name)
             or core.decider.speaks
         ):
             return None
-        chosen = self._choose(rules)
-        if chosen is None:
-            return None
-        self.taken += 1
-        return self._put_in_force(name, chosen, step)
+        return self._choose(rules)
 
     def _choose(
         self, rules: tuple[CompiledRule, ...]
@@ -148,19 +179,24 @@ class Express:
         return chosen
 
     def _put_in_force(
-        self, name: str, chosen: list[tuple[CompiledRule, int, tuple[Obligation, ...]]], step: Step
+        self,
+        name: str,
+        chosen: list[tuple[CompiledRule, int, tuple[Obligation, ...]]],
+        now: float,
+        step: Step | None,
     ) -> tuple[list[Decision], list[Job]]:
-        """The occurrence, then each rule's decision and its obligations, with their records, in
-        the order the general path makes them."""
+        """(Under the lock.) The occurrence at ``now``, then each rule's decision and its
+        obligations, with their records in ``step`` (None: nobody reads records), in the
+        order the general path makes them."""
         core = self.core
         steps, tracker = core.steps, core.tracker
-        now = step.now
         core.stats.events += 1
         counters = steps.counters
         seq = counters["seq"]
         counters["seq"] = seq + 1
-        recording = steps.recording
+        recording = step is not None and steps.recording
         if recording:
+            assert step is not None
             step.emit(Kind.OCCURRENCE, {"event": name, "causal": seq}, now)
         decider, status = core.decider, core.layers.status
         decisions: list[Decision] = []
@@ -174,6 +210,7 @@ class Express:
             decisions.append(d)
             started = [tracker.start(did, clause, ob, now, seq, 0, did) for ob in obligations]
             if recording:
+                assert step is not None
                 rec = core.record(d, step, queue=True)
                 for t in started:
                     core.track(t, step)

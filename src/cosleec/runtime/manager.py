@@ -326,13 +326,18 @@ class Manager:
         core = self.core
         if not self._started:
             self._start_implicitly("update")
+        known, context = None, core.context
         if self._express is not None:  # the quiet case straight through (cosleec.runtime.express)
             quiet = self._express.update(updates)
-            if quiet is not None:
+            if isinstance(quiet, ContextError):
+                known = quiet  # rejected there: recorded here, as any rejection (not checked twice)
+            elif quiet is not None:
                 return quiet
         self._catch_up()
         with core.steps.step() as step:
             try:
+                if known is not None and core.context is context:  # (a reload since: check again)
+                    raise known
                 stored = core.context.validate(updates)
             except ContextError as e:
                 core.stats.rejected += 1
@@ -407,11 +412,20 @@ class Manager:
         core = self.core
         if not self._started:
             self._start_implicitly("event")
-        self._catch_up()
         timer = self._timer
+        lane = self._express
+        if lane is not None:  # the common case straight through (cosleec.runtime.express)
+            quiet = lane.trigger(name, timer.due_at)
+            if quiet is not None:
+                decisions, followups, due = quiet
+                if due is not None:
+                    timer.notify(due)
+                self._runner.dispatch(followups)
+                return decisions
+        self._catch_up()
         with core.steps.step() as step:
-            # the common case straight through (cosleec.runtime.express), else the general path
-            taken = self._express.occur(name, step) if self._express is not None else None
+            # the lane again when records are read (it took no step above), else the general path
+            taken = lane.occur(name, step) if lane is not None and core.steps.recording else None
             if taken is None:
                 taken = self._general(name, step)
                 if taken is None:

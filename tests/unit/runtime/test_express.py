@@ -282,3 +282,29 @@ def test_the_lane_changes_nothing_on_generated_rules(case: Case, action_triggers
         priority_semantics=case.priority_semantics,
         priority_lead=case.lead,
     )
+
+
+class _Reading:
+    """A value whose ``repr`` counts its calls (a sensor reading that shows a sample number)."""
+
+    shown = 0
+
+    def __repr__(self) -> str:
+        _Reading.shown += 1
+        return f"<reading #{_Reading.shown}>"
+
+
+def test_a_rejected_update_is_checked_once_and_recorded_with_the_reason_the_lane_found() -> None:
+    # the lane found the update wrong: the general path records it without checking it
+    # again, so user code that checking runs (a value's repr) runs as often on both paths
+    seen = []
+    for express in (False, True):
+        m = build(QUIET, express, clock=VirtualClock())
+        m.start(check=False)
+        _Reading.shown = 0
+        try:
+            m.update({"n": _Reading()})
+        except ContextError as e:
+            seen.append((e.message, _Reading.shown, m.stats["rejected"], m.stats["updates"]))
+        m.close()
+    assert seen[0] == seen[1] == ("n is numeric; got _Reading <reading #1>", 2, 1, 0)
