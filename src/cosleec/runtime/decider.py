@@ -14,6 +14,7 @@ and the enforcer do).
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
+from typing import Any
 
 from cosleec.lang import Unknowns
 from cosleec.runtime.context import Context
@@ -25,6 +26,9 @@ from cosleec.runtime.model import CompiledRule, Obligation
 from cosleec.runtime.obligations import Tracked
 from cosleec.runtime.stats import Stats
 from cosleec.runtime.values import Value
+
+id_of = id  # (the builtin: ``id`` is a decision's number here)
+_FIELDS_KEPT = 1 << 16  # rule clauses whose common decision fields are kept
 
 
 class Decider:
@@ -40,6 +44,9 @@ class Decider:
         self.stats = stats
         self.explanations: Explanations | None = None
         self._reads: dict[str, tuple[str, ...]] = {}  # rule -> the measures its sentences name
+        # (id of a rule, clause) -> (the rule, semantics, unknown, explanations it was made
+        # under, the fields every decision of that clause has in common)
+        self._fields: dict[tuple[int, int | None], tuple[Any, ...]] = {}
 
     def explain_with(self, explanations: Explanations | None, rules: Iterable[CompiledRule]) -> None:
         """Give every decision from now on ``explanations`` (None: sentences in plain words only),
@@ -118,21 +125,36 @@ class Decider:
         (:meth:`Decision.at_trigger`). For :meth:`decide` and the express lane alike; not
         for a decider whose explanations name more values (:attr:`speaks`)."""
         v = self.context.values
-        return Decision.at_trigger(
-            id=id,
-            time=now,
-            event=event,
-            rule=rule,
-            clause=clause,
-            fired=fired,
-            read=tuple(map(v.get, rule.value_names)),
-            status=status,
-            semantics=self.layers.semantics,
-            obligations=obligations,
-            missing=missing,
-            context_version=self.context.version,
-            unknown=self.layers.unknown,
-            explanations=self.explanations,
+        layers, explanations = self.layers, self.explanations
+        kept = self._fields.get((id_of(rule), clause))  # made once per rule and clause, as read now
+        if (
+            kept is None
+            or kept[0] is not rule
+            or kept[1] is not layers.semantics
+            or kept[2] is not layers.unknown
+            or kept[3] is not explanations
+        ):
+            if len(self._fields) > _FIELDS_KEPT:  # (rules a reload replaced keep theirs: forget them all)
+                self._fields.clear()
+            fields = Decision.trigger_fields(
+                rule, clause, semantics=layers.semantics, unknown=layers.unknown, explanations=explanations
+            )
+            kept = self._fields[id_of(rule), clause] = (
+                rule,
+                layers.semantics,
+                layers.unknown,
+                explanations,
+                fields,
+            )
+        return Decision.from_trigger_fields(
+            kept[4],
+            id,
+            now,
+            event,
+            obligations,
+            missing,
+            self.context.version,
+            (rule, tuple(map(v.get, rule.value_names)), fired, status),
         )
 
     def _spoken(self, rule: str, values: dict[str, Value | None]) -> None:

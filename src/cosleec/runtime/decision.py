@@ -158,31 +158,73 @@ class Decision:
         Layer Manager's, never changed once made). Most decisions are never read: a
         decision of 20 clauses no longer builds 21 tuples and a dict each time. Equal, field
         for field, to the one :meth:`made` makes from the same parts (a test holds it so)."""
-        d = object.__new__(cls)
-        d.__dict__.update(
-            {
-                "id": id,
-                "time": time,
-                "event": event,
-                "rule": rule.name,
-                "clause": clause,
-                "layer": rule.layer_names[clause] if clause else None,
-                "semantics": semantics,
-                "obligations": obligations,
-                "missing": missing,
-                "reason": "",
-                "context_version": context_version,
-                "violated": None,
-                "unknown": unknown,
-                "origin": DecisionOrigin.TRIGGER,
-                "missed": None,
-                "explanations": explanations,
-                "_explanation": [],
-                "_for_people": [],
-                "_recorded": [],
-                "_parts": (rule, read, fired, status),
-            }
+        fields = cls.trigger_fields(
+            rule, clause, semantics=semantics, unknown=unknown, explanations=explanations
         )
+        return cls.from_trigger_fields(
+            fields, id, time, event, obligations, missing, context_version, (rule, read, fired, status)
+        )
+
+    @staticmethod
+    def trigger_fields(
+        rule: CompiledRule,
+        clause: int | None,
+        *,
+        semantics: HedgeSemantics,
+        unknown: Unknowns,
+        explanations: Explanations | None,
+    ) -> dict[str, Any]:
+        """The fields that every decision :meth:`at_trigger` makes for ``rule`` at ``clause``
+        has in common (read as they are now): made once, kept by the decider, and copied and
+        completed by :meth:`from_trigger_fields` for each decision."""
+        return {
+            "id": 0,
+            "time": 0.0,
+            "event": "",
+            "rule": rule.name,
+            "clause": clause,
+            "layer": rule.layer_names[clause] if clause else None,
+            "semantics": semantics,
+            "obligations": (),
+            "missing": (),
+            "reason": "",
+            "context_version": 0,
+            "violated": None,
+            "unknown": unknown,
+            "origin": DecisionOrigin.TRIGGER,
+            "missed": None,
+            "explanations": explanations,
+        }
+
+    @classmethod
+    def from_trigger_fields(
+        cls,
+        fields: dict[str, Any],
+        id: int,
+        time: float,
+        event: str,
+        obligations: tuple[Obligation, ...],
+        missing: tuple[str, ...],
+        context_version: int,
+        parts: tuple[CompiledRule, tuple[Any, ...], bool | None, tuple[bool | None, ...]],
+        /,
+    ) -> Decision:
+        """The decision :meth:`at_trigger` makes, from its rule and clause's
+        :meth:`trigger_fields` and what is its own (positional: the hot path's call);
+        ``parts`` is ``(rule, read, fired, status)``."""
+        dd = fields.copy()
+        dd["id"] = id
+        dd["time"] = time
+        dd["event"] = event
+        dd["obligations"] = obligations
+        dd["missing"] = missing
+        dd["context_version"] = context_version
+        dd["_explanation"] = []
+        dd["_for_people"] = []
+        dd["_recorded"] = []
+        dd["_parts"] = parts
+        d = object.__new__(cls)
+        object.__setattr__(d, "__dict__", dd)  # (frozen: its fields are set once, here)
         return d
 
     def __getstate__(self) -> dict[str, Any]:
