@@ -296,7 +296,11 @@ def main() -> int:
             f"p50 {result['e2e_p50_us']} us",
             f"p99 {result['e2e_p99_us']} us",
         ),
-        ("ratio (e2e / raw)", f"p50 {result['ratio_p50']}x", f"p99 {result['ratio_p99']}x (targets <= 2.0, <= 1.8)"),
+        (
+            "ratio (e2e / raw)",
+            f"p50 {result['ratio_p50']}x",
+            f"p99 {result['ratio_p99']}x (targets <= 2.0, <= 1.8)",
+        ),
         ("hop ratio (structural floor)", f"{result['hop_ratio']}x", "3 hops against 2"),
         (
             "relays of the nodes' shape (same hops)",

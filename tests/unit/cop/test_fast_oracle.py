@@ -209,7 +209,9 @@ class Oracle:
 # ---------------------------------------------------------------- programs
 
 Step = tuple[Any, ...]
-calls = st.tuples(st.just("call"), st.sampled_from(["usual", "pos", "kw"]), st.integers(0, 9), st.integers(0, 9))
+calls = st.tuples(
+    st.just("call"), st.sampled_from(["usual", "pos", "kw"]), st.integers(0, 9), st.integers(0, 9)
+)
 globals_ = st.tuples(st.sampled_from(["gact", "gdeact"]), st.integers(0, N - 1))
 layer_lists = st.lists(st.integers(0, N - 1), min_size=1, max_size=3)
 programs = st.recursive(
@@ -305,7 +307,11 @@ def outcome_of_runtime(
 ) -> list[Any]:
     layers = [Layer(f"P{i}", priority=p) for i, p in enumerate(prios)]
     ops = RealOps(layers)
-    env = Env(call=lambda x, y: None, without=lambda i: deactivate(layers[i]), gact=lambda i: ops.global_op("activate", i))
+    env = Env(
+        call=lambda x, y: None,
+        without=lambda i: deactivate(layers[i]),
+        gact=lambda i: ops.global_op("activate", i),
+    )
     base, recv, make_call = make_base(shape, env.log)
     fn = layered(base, method=bool(recv), fast=fast)
     for i, kind in enumerate(kinds):
@@ -354,7 +360,9 @@ def finish(env: Env) -> None:
 def test_dispatch_equals_the_model(
     fast: bool, shape: str, prios: list[int], kinds: list[str], program: list[Step]
 ) -> None:
-    assert outcome_of_runtime(fast, shape, prios, kinds, program) == outcome_of_model(shape, prios, kinds, program)
+    assert outcome_of_runtime(fast, shape, prios, kinds, program) == outcome_of_model(
+        shape, prios, kinds, program
+    )
 
 
 @pytest.mark.parametrize("fast", [True, False], ids=["fast", "reference"])
