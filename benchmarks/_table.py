@@ -118,7 +118,7 @@ ROWS = [
     Row(
         "dispatch_path",
         "floor_ratio_mean",
-        "the same records by straight-line code, mean / hand-coded",
+        "the same records kept as fast as CPython allows (the floor), mean / hand-coded",
         "x",
         None,
         "the floor of the data model, same run",
@@ -142,7 +142,7 @@ ROWS = [
     Row(
         "scalability_grid",
         "floor_ratio_at_60x20",
-        "the same records by straight-line code at 60 × 20, mean / hand-coded",
+        "the floor at 60 × 20, mean / hand-coded",
         "x",
         None,
         "the floor of the data model, same run",

@@ -124,6 +124,8 @@ class Express:
     def _quiet(self, name: str, now: float) -> list[tuple[CompiledRule, int, tuple[Obligation, ...]]] | None:
         """(Under the lock.) What the rules ``name`` triggers decide, when every stage of the
         general path would find nothing to do at ``now``; None otherwise."""
+        if type(name) is not str:  # (a lookalike or unhashable name: the general path refuses it)
+            return None
         core = self.core
         rules = core.ruleset.by_trigger.get(name)
         tracker = core.tracker

@@ -308,3 +308,35 @@ def test_a_rejected_update_is_checked_once_and_recorded_with_the_reason_the_lane
             seen.append((e.message, _Reading.shown, m.stats["rejected"], m.stats["updates"]))
         m.close()
     assert seen[0] == seen[1] == ("n is numeric; got _Reading <reading #1>", 2, 1, 0)
+
+
+class _Lookalike:
+    """Not a string, but hashes and compares as the event ``T``."""
+
+    def __hash__(self) -> int:
+        return hash("T")
+
+    def __eq__(self, other: object) -> bool:
+        return other == "T"
+
+
+def test_an_event_not_named_by_a_string_is_refused_on_either_path(tmp_path: Any) -> None:
+    # the lane must not take what only looks like a declared event, nor fail on an
+    # unhashable name: the general path refuses both, recorded and counted
+    seen = []
+    for express in (False, True):
+        for audit in (None, tmp_path / f"{express}.jsonl"):
+            m = build(QUIET, express, clock=VirtualClock(), unknown_events="refuse", audit=audit)
+            m.start(check=False)
+            m.update({"b": False, "n": 1})
+            outcome = []
+            for name in (_Lookalike(), ["T"]):
+                try:
+                    outcome.append(len(m.event(name)))  # type: ignore[arg-type]
+                except Exception as e:
+                    outcome.append(type(e).__name__)
+            outcome.append((m.stats["events"], m.stats["rejected"], len(m.outstanding())))
+            seen.append(outcome)
+            m.close()
+    assert seen[0] == seen[1] == seen[2] == seen[3]
+    assert seen[0][-1] == (0, 2, 0)

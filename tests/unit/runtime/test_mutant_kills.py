@@ -469,3 +469,26 @@ def test_a_trigger_that_also_fulfils_an_obligation_fulfils_it() -> None:
     m.event("A")
     assert [(t.rule, t.event) for t in m.outstanding()] == [("R2", "B")]
     m.close()
+
+
+class _Lookalike:
+    """Not a string, but hashes and compares as the event ``C``."""
+
+    def __hash__(self) -> int:
+        return hash("C")
+
+    def __eq__(self, other: object) -> bool:
+        return other == "C"
+
+
+def test_an_event_named_by_a_lookalike_of_a_string_is_refused() -> None:
+    """express-takes-any-name: the express lane would put a trigger in force for a name that
+    only compares equal to a declared event; the general path refuses it (fail closed)."""
+    text = "def_start event C event A measure b : boolean def_end rule_start R1 when C then A within 5 seconds rule_end"
+    clock, calls = SetClock(0.0), []
+    m = _quiet_manager(text, clock, calls, "A")
+    m.update({"b": False})
+    with pytest.raises(Exception, match="string"):
+        m.event(_Lookalike())  # type: ignore[arg-type]
+    assert m.outstanding() == [] and m.stats["rejected"] == 1
+    m.close()
