@@ -90,11 +90,11 @@ class Context:
         when it is not the one stored); the measures whose value changed, in the update's
         order. None, having changed nothing, for any other update (:meth:`validate` says
         what is wrong with it, or stores it)."""
-        n = len(updates)
+        size = len(updates)
         if (
-            [*map(type, updates)].count(str) != n  # (a key that only compares equal to a name is no name)
+            [*map(type, updates)].count(str) != size  # (a key that only compares equal to a name is no name)
             or not self._booleans.issuperset(updates)
-            or [*map(type, updates.values())].count(bool) != n
+            or [*map(type, updates.values())].count(bool) != size
         ):
             return None
         values, stamps = self.values, self.stamps

@@ -122,8 +122,9 @@ class Decider:
     ) -> Decision:
         """Decision ``id`` of ``rule`` at its trigger ``event``, as the context and the Layer
         Manager read now: what it read kept, its values and conditions made when first read
-        (:meth:`Decision.at_trigger`). For :meth:`decide` and the express lane alike; not
-        for a decider whose explanations name more values (:attr:`speaks`)."""
+        (what :meth:`Decision.at_trigger` makes, with the fields common to the rule's clause
+        made once and kept here). For :meth:`decide` and the express lane alike; not for a
+        decider whose explanations name more values (:attr:`speaks`)."""
         v = self.context.values
         layers, explanations = self.layers, self.explanations
         kept = self._fields.get((id_of(rule), clause))  # made once per rule and clause, as read now
@@ -134,7 +135,7 @@ class Decider:
             or kept[2] is not layers.unknown
             or kept[3] is not explanations
         ):
-            if len(self._fields) > _FIELDS_KEPT:  # (rules a reload replaced keep theirs: forget them all)
+            if len(self._fields) > _FIELDS_KEPT:  # (a bound, in defence: a reload makes a new decider)
                 self._fields.clear()
             fields = Decision.trigger_fields(
                 rule, clause, semantics=layers.semantics, unknown=layers.unknown, explanations=explanations

@@ -402,7 +402,8 @@ class Manager:
         """
         if not self._started:
             self._start_implicitly("event")
-        if values and name in self.core.ruleset.events:  # (an unknown event takes no value: all or nothing)
+        if values and isinstance(name, str) and name in self.core.ruleset.events:
+            # (an unknown event, or a name that is no string, takes no value: all or nothing)
             with self.core.steps.lock:  # re-entrant: the two steps below take it too
                 self.update(values)
                 return self._occur(name)

@@ -214,6 +214,19 @@ def test_priorities_a_journal_aging_values_and_spoken_values_send_triggers_to_th
     assert same(text, trace, explanations=spoken).triggers == 0
 
 
+class _LookalikeKey:
+    """Not a string, but hashes and compares as the measure ``b``."""
+
+    def __hash__(self) -> int:
+        return hash("b")
+
+    def __eq__(self, other: object) -> bool:
+        return other == "b"
+
+    def __repr__(self) -> str:
+        return "_LookalikeKey()"
+
+
 def test_updates_take_the_lane_only_when_quiet_and_change_what_the_general_path_changes() -> None:
     # rejected updates (a wrong type, an unknown measure, a misspelt one) go the general way,
     # which says why, and change nothing; a number that changes only its type (1 -> 1.0)
@@ -223,6 +236,7 @@ def test_updates_take_the_lane_only_when_quiet_and_change_what_the_general_path_
         (0.5, {"b": 3}),
         (0.6, {"bb": True}),
         (0.7, {"n": "x", "b": True}),
+        (0.8, {_LookalikeKey(): True}),
         (1.0, {"n": 1.0}),
         (1.5, {"b": True, "n": 2}),
         (2.0, {"b": True}),
@@ -230,7 +244,7 @@ def test_updates_take_the_lane_only_when_quiet_and_change_what_the_general_path_
         (3.0, {"b": False}),
         (4.0, "T"),
     ]
-    assert same(QUIET, trace) == (2, 5)  # the 3 rejected updates went the general way
+    assert same(QUIET, trace) == (2, 5)  # the 4 rejected updates went the general way
 
 
 # each: rules, a trace whose last update is not quiet, and why the lane must leave it
@@ -340,3 +354,35 @@ def test_an_event_not_named_by_a_string_is_refused_on_either_path(tmp_path: Any)
             m.close()
     assert seen[0] == seen[1] == seen[2] == seen[3]
     assert seen[0][-1] == (0, 2, 0)
+
+
+def test_a_decision_after_a_change_of_semantics_says_the_semantics_it_was_made_under() -> None:
+    # the decider keeps each rule clause's common fields: a change of semantics makes them again
+    text = rules("R1 when T then A within 5 seconds unless {b} then B within 2 seconds")
+    for express in (False, True):
+        m = build(text, express, clock=VirtualClock())
+        m.start(check=False)
+        m.update({"b": True, "n": 1})
+        (before,) = m.event("T")
+        m.set_semantics("nested")
+        (after,) = m.event("T")
+        assert (before.semantics, after.semantics) == ("last-wins", "nested"), express
+        assert before.to_json()["semantics"] == "last-wins" and after.to_json()["semantics"] == "nested"
+        m.close()
+
+
+def test_values_given_with_an_event_not_named_by_a_string_are_not_applied() -> None:
+    # all or nothing: the event is refused, so its values are not applied either
+    for express in (False, True):
+        m = build(QUIET, express, clock=VirtualClock(), unknown_events="raise")
+        m.start(check=False)
+        m.update({"b": False, "n": 1})
+        for name in (_Lookalike(), ["T"]):
+            try:
+                m.event(name, {"b": True})  # type: ignore[arg-type]
+            except Exception as e:
+                assert "string" in str(e), (express, e)
+            else:
+                raise AssertionError("an event not named by a string was taken")
+            assert m.values()["b"] is False, express
+        m.close()

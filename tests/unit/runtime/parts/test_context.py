@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import copy
 
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -26,9 +27,21 @@ MEASURES = {
     "n": MeasureSpec("n", "numeric"),
     "s": MeasureSpec("s", "scale", ("low", "high")),
 }
-NAMES = st.sampled_from([*MEASURES, "zz"])
+
+
+class Lookalike:
+    """Not a string, but hashes and compares as the measure ``b``: no measure's name."""
+
+    def __hash__(self) -> int:
+        return hash("b")
+
+    def __eq__(self, other: object) -> bool:
+        return other == "b"
+
+
+NAMES = st.sampled_from([*MEASURES, "zz", Lookalike()])
 VALUES = st.sampled_from([True, False, 0, 1, 1.0, 0.0, 2, "low", "x", None])
-UPDATES = st.dictionaries(NAMES, VALUES, max_size=5)
+UPDATES = st.dictionaries(NAMES, VALUES, max_size=5)  # type: ignore[arg-type]
 
 
 def general(ctx: Context, update: dict[str, object], now: float) -> set[str] | None:
@@ -54,7 +67,8 @@ def test_the_one_pass_update_agrees_with_validate_then_apply(
     other = copy.deepcopy(ctx)
     got = ctx.apply_booleans(update, 9.0)
     only_booleans = all(
-        MEASURES.get(k, MEASURES["n"]).kind == "boolean" and type(v) is bool for k, v in update.items()
+        type(k) is str and MEASURES.get(k, MEASURES["n"]).kind == "boolean" and type(v) is bool
+        for k, v in update.items()
     )
     if got is None:
         assert not only_booleans
@@ -76,3 +90,11 @@ def test_an_update_that_changes_nothing_stamps_but_keeps_the_version() -> None:
     assert (ctx.version, ctx.stamps["a"], ctx.stamps["b"]) == (1, 2.0, 1.0)
     assert ctx.apply_booleans({"a": 1}, 3.0) is None  # 1 is not a boolean value
     assert ctx.apply_booleans({"n": True}, 3.0) is None  # n is not a boolean measure
+
+
+def test_a_key_that_only_compares_equal_to_a_name_names_no_measure() -> None:
+    ctx = Context(MEASURES)
+    assert ctx.apply_booleans({Lookalike(): True}, 1.0) is None  # type: ignore[dict-item]
+    with pytest.raises(ContextError, match="named by a string"):
+        ctx.validate({Lookalike(): True})  # type: ignore[dict-item]
+    assert ctx.values == {} and ctx.version == 0
