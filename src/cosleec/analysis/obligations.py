@@ -143,7 +143,7 @@ class Obligations:
         has always been (state.py says why that order matters)."""
         occ = it.occurrence
         lo, hi = self.windows.window(occ, it.otherwise is not None, start, snap, untimed)
-        self.priorities.note(it, lo, hi, start, after)
+        noted = self.priorities.note(it, lo, hi, start, after)
         cut = None if self.state.situation else self.state.cut
         if occ.negated:
             if self.state.imposed and self.state.within and not self.state.situation:
@@ -170,6 +170,8 @@ class Obligations:
             # refused at once by a prohibition that covers its whole window: a breach, even if
             # the event then occurs (breaking that prohibition, whose own otherwise may be met)
             refusal = self.refusals.refusal(Owed(occ.event, lo, hi, start, after, snap))
+            if noted is not None:
+                noted.refusal = refusal
             if refusal is not None:
                 ok = z3.And(z3.Not(refusal.refused), ok)
             if cut is not None:
@@ -178,6 +180,8 @@ class Obligations:
             ok = z3.Or(ok, cut.saves(lo, hi))
         if it.otherwise is not None and hi is not None:
             ok, at, refusal, fb = self._fallback_start(it, ok, lo, hi, start, after, snap)
+            if noted is not None:
+                noted.refusal = refusal
             later = _FallbackStart(at, hi < lo, after, refusal)
             with self._within(z3.Not(ok)), self._fallback_of(refusal):
                 fallback = self._response(it.otherwise, at, later, fb.snap, untimed)

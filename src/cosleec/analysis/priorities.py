@@ -16,7 +16,8 @@ conflict-aware
     one of the two owes and the other's prohibition forbids at ``d`` (minus the reading's
     ``priority_lead``, no earlier than the two windows allow), both still pending then, before
     anything else happens at that instant -- or, when the later of the two is raised at that
-    instant, right after the step that raises it.
+    instant, right after the step that raises it. An obligation a third rule's prohibition
+    refused before then (blocked: no longer pending) forces nothing.
 
 Each lower rule's firing at a slot has a :class:`~cosleec.analysis.slots.Cut`: the earliest
 moment some higher firing cancels it. :class:`~cosleec.analysis.obligations.Obligations`
@@ -26,15 +27,16 @@ records what each firing of an ordered rule raises (:class:`~cosleec.analysis.sl
 :meth:`Priorities.settle` then defines each cut from those records. The unfolding offers,
 for each firing of a lower rule, an occurrence that triggers each higher rule (what may
 cancel it). Known simplifications: an item with an ``else`` counts as pending by its own
-window only, and a refused obligation as pending until its deadline; under cancel, when a
-higher firing is itself cancelled at the moment it fires, it is still taken to cancel the
-lower one; under conflict-aware, a cancellation forced at the very instant the later of its
-two items was raised is judged after that step (what came before it at that instant settles
-the two items first, as in the reference), but it spares the instance's other prohibitions
-from the start of that instant, where the reference lets steps before the raising one break
-them; and firings at one step are taken together, where the reference fires them in file
-order (a lower rule's prohibition that refuses an obligation before a higher rule later in
-the file cancels it is taken as cancelled first).
+window only, and under cancel a refused obligation as pending until its deadline (under
+conflict-aware, an obligation refused before its clash is forced forces nothing:
+``_refused_first``); under cancel, when a higher firing is itself cancelled at the moment it
+fires, it is still taken to cancel the lower one; under conflict-aware, a cancellation forced
+at the very instant the later of its two items was raised is judged after that step (what
+came before it at that instant settles the two items first, as in the reference), but it
+spares the instance's other prohibitions from the start of that instant, where the reference
+lets steps before the raising one break them; and firings at one step are taken together,
+where the reference fires them in file order (a lower rule's prohibition that refuses an
+obligation before a higher rule later in the file cancels it is taken as cancelled first).
 """
 
 from __future__ import annotations
@@ -105,13 +107,14 @@ class Priorities:
         finally:
             self.state.rule, self.state.firing, self.state.cut = outer
 
-    def note(self, it: A.ResponseItem, lo: Z3, hi: Z3 | None, start: Z3, after: object) -> None:
-        """Record an item the firing being encoded raises (when a priority orders its rule)."""
+    def note(self, it: A.ResponseItem, lo: Z3, hi: Z3 | None, start: Z3, after: object) -> Raised | None:
+        """Record an item the firing being encoded raises (when a priority orders its rule);
+        the record, for its refusal to be added once asked for."""
         if self.state.firing is None:
-            return
-        self.state.raised.setdefault(self.state.firing, []).append(
-            Raised(it.occurrence, lo, hi, start, after, self.state.guard, it.alternative is None)
-        )
+            return None
+        raised = Raised(it.occurrence, lo, hi, start, after, self.state.guard, it.alternative is None)
+        self.state.raised.setdefault(self.state.firing, []).append(raised)
+        return raised
 
     # ------------------------------------------------------------------ the cuts
     def settle(self) -> None:
@@ -241,6 +244,20 @@ class Priorities:
         step = other.after.step  # the moment the firing or fallback raising ``other`` starts
         return z3.Not(z3.And(step.late, step.t == at, r.hi == at))
 
+    @staticmethod
+    def _refused_first(o: Raised, p: Raised, at: Z3) -> Z3:
+        """A third rule's prohibition refused ``o`` before its clash with ``p`` is forced at
+        ``at``: the reference then holds ``o`` blocked (no longer pending), so nothing is
+        cancelled for it. Before: at an earlier time, or at ``at`` at a step not after both
+        raising steps (the clash is found once the later of the two is raised, a refusal at
+        that step or before it comes first; raised earlier, the cancellation comes first)."""
+        r = o.refusal
+        if r is None:
+            return z3.BoolVal(False, at.ctx)
+        assert r.step is not None  # always said when priorities are declared (Refusals.refusal)
+        later = z3.And(r.step.after(o.after.step), r.step.after(p.after.step))
+        return z3.And(r.refused, z3.Or(r.when < at, z3.And(r.when == at, z3.Not(later))))
+
     def _forced(self, o: Raised, p: Raised, other: Cut | None) -> Case:
         """The cancellation ``p`` forbidding ``o`` at its deadline forces, and when."""
         d = o.hi
@@ -256,6 +273,7 @@ class Priorities:
             *([d <= p.hi] if p.hi is not None else []),
             z3.Not(self._settled(o, self._precedes(at, p))),
             z3.Not(self._settled(p, self._precedes(at, o))),
+            z3.Not(self._refused_first(o, p, at)),
             self._open(o, p, at),
             self._open(p, o, at),
             *([z3.Not(z3.And(other.cancelled, other.at < at))] if other is not None else []),

@@ -173,12 +173,14 @@ class FallbackBan:
     within: tuple[Any, ...]
 
 
-@dataclass(frozen=True)
+@dataclass(eq=False)
 class Raised:
     """An obligation or prohibition (``occurrence``) a firing of a rule that a priority orders
     raises, at any depth: its window ``[lo, hi]``, the time its response started, which
     occurrences come after the step that raised it (``after``), and when it is raised
-    (``guard``: the rule fires, its clause is chosen, an ``otherwise`` has started)."""
+    (``guard``: the rule fires, its clause is chosen, an ``otherwise`` has started); an
+    obligation's ``refusal`` (:class:`~cosleec.analysis.refusals.Refusal`), once the encoding
+    has asked for it (None: nothing refuses it)."""
 
     occurrence: Any
     lo: Z3
@@ -187,6 +189,7 @@ class Raised:
     after: Any
     guard: Z3
     plain: bool  # no `else`: the reference judges it by its own window alone
+    refusal: Any = None
 
 
 def before(z: Slot, y: Slot) -> Z3:

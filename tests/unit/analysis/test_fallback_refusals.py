@@ -342,6 +342,35 @@ def test_a_fallback_raised_at_a_deadline_clashes_with_no_window_that_closed_ther
         assert accepts(spec, trace, False, s) is ok, trace
 
 
+def test_an_obligation_refused_before_its_clash_is_forced_cancels_nothing(tmp_path: Path) -> None:
+    """R3 > R1, conflict-aware. R3 forbids R1's Y to its deadline, which would cancel R1 then;
+    but B, before that, raises R2's prohibition (no priority orders R1 and R2) over what is
+    left of R1's window: R1 is refused there and its fallback owes C -- blocked first, it is no
+    longer pending when the clash is due, so nothing is cancelled (the encoding cancelled R1 at
+    its deadline, sparing the fallback). At the instant the clash is raised, the order decides."""
+    rules = (
+        "R1 when A then Y within 1 seconds otherwise C within 2 seconds\n"
+        "R2 when B then not Y within 4 seconds\n"
+        "R3 when D then not Y within 2 seconds"
+    )
+    path = tmp_path / "rules.sleec"
+    path.write_text(PRIORITY_HEAD + f"rule_start\n{rules}\nrule_end\n", encoding="utf-8")
+    spec = load(path)
+    s = Settings(priorities=frozenset({("R3", "R1")}), priority_semantics=PrioritySemantics.CONFLICT_AWARE)
+    cases = (
+        ([(0, "D"), (0.5, "A"), (1, "B")], False),  # refused at 1 s, C never comes
+        ([(0, "D"), (0.5, "A"), (1, "B"), (2, "C")], True),
+        ([(0, "D"), (0.5, "A"), (1, "B"), (3.5, "C")], False),  # C after its window [1, 3]
+        ([(0, "D"), (0.5, "A"), (1.5, "B")], True),  # B at the deadline: R1 cancelled first
+        ([(0, "A"), (1, "B"), (1, "D")], False),  # refused at B's step, before D raises the clash
+        ([(0, "A"), (1, "D"), (1, "B")], True),  # cancelled once D's step is over, before B
+        ([(0, "D"), (1, "B"), (1, "A")], False),  # refused as A raises it
+    )
+    for trace, ok in cases:
+        assert reference_accepts(spec, trace, False, s) is ok, trace
+        assert accepts(spec, trace, False, s) is ok, trace
+
+
 PRIORITY_TRACES = st.lists(
     st.tuples(st.integers(min_value=0, max_value=16).map(lambda t: t / 2), st.sampled_from("ABCDXY")),
     min_size=1,
