@@ -22,6 +22,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cosleec.runtime import ContextError, Manager, VirtualClock
+from tests.unit.runtime.lookalike import Lookalike
 from tests.unit.semantics.differential import Case, HandClock, cases, reference, runtime
 
 HEADER = """def_start
@@ -214,19 +215,6 @@ def test_priorities_a_journal_aging_values_and_spoken_values_send_triggers_to_th
     assert same(text, trace, explanations=spoken).triggers == 0
 
 
-class _LookalikeKey:
-    """Not a string, but hashes and compares as the measure ``b``."""
-
-    def __hash__(self) -> int:
-        return hash("b")
-
-    def __eq__(self, other: object) -> bool:
-        return other == "b"
-
-    def __repr__(self) -> str:
-        return "_LookalikeKey()"
-
-
 def test_updates_take_the_lane_only_when_quiet_and_change_what_the_general_path_changes() -> None:
     # rejected updates (a wrong type, an unknown measure, a misspelt one) go the general way,
     # which says why, and change nothing; a number that changes only its type (1 -> 1.0)
@@ -236,7 +224,7 @@ def test_updates_take_the_lane_only_when_quiet_and_change_what_the_general_path_
         (0.5, {"b": 3}),
         (0.6, {"bb": True}),
         (0.7, {"n": "x", "b": True}),
-        (0.8, {_LookalikeKey(): True}),
+        (0.8, {Lookalike("b"): True}),
         (1.0, {"n": 1.0}),
         (1.5, {"b": True, "n": 2}),
         (2.0, {"b": True}),
@@ -324,16 +312,6 @@ def test_a_rejected_update_is_checked_once_and_recorded_with_the_reason_the_lane
     assert seen[0] == seen[1] == ("n is numeric; got _Reading <reading #1>", 2, 1, 0)
 
 
-class _Lookalike:
-    """Not a string, but hashes and compares as the event ``T``."""
-
-    def __hash__(self) -> int:
-        return hash("T")
-
-    def __eq__(self, other: object) -> bool:
-        return other == "T"
-
-
 def test_an_event_not_named_by_a_string_is_refused_on_either_path(tmp_path: Any) -> None:
     # the lane must not take what only looks like a declared event, nor fail on an
     # unhashable name: the general path refuses both, recorded and counted
@@ -344,7 +322,7 @@ def test_an_event_not_named_by_a_string_is_refused_on_either_path(tmp_path: Any)
             m.start(check=False)
             m.update({"b": False, "n": 1})
             outcome = []
-            for name in (_Lookalike(), ["T"]):
+            for name in (Lookalike("T"), ["T"]):
                 try:
                     outcome.append(len(m.event(name)))  # type: ignore[arg-type]
                 except Exception as e:
@@ -377,7 +355,7 @@ def test_values_given_with_an_event_not_named_by_a_string_are_not_applied() -> N
         m = build(QUIET, express, clock=VirtualClock(), unknown_events="raise")
         m.start(check=False)
         m.update({"b": False, "n": 1})
-        for name in (_Lookalike(), ["T"]):
+        for name in (Lookalike("T"), ["T"]):
             try:
                 m.event(name, {"b": True})  # type: ignore[arg-type]
             except Exception as e:

@@ -33,6 +33,7 @@ from cosleec.runtime.reload import Plan
 from cosleec.runtime.runner import Runner
 from cosleec.runtime.steps import Step, Steps
 
+from .lookalike import Lookalike
 from .parts.build import parts, ruleset
 
 # ---------------------------------------------------------------------------- steps: a fresh step
@@ -471,16 +472,6 @@ def test_a_trigger_that_also_fulfils_an_obligation_fulfils_it() -> None:
     m.close()
 
 
-class _Lookalike:
-    """Not a string, but hashes and compares as the event ``C``."""
-
-    def __hash__(self) -> int:
-        return hash("C")
-
-    def __eq__(self, other: object) -> bool:
-        return other == "C"
-
-
 def test_an_event_named_by_a_lookalike_of_a_string_is_refused() -> None:
     """express-takes-any-name: the express lane would put a trigger in force for a name that
     only compares equal to a declared event; the general path refuses it (fail closed)."""
@@ -489,6 +480,6 @@ def test_an_event_named_by_a_lookalike_of_a_string_is_refused() -> None:
     m = _quiet_manager(text, clock, calls, "A")
     m.update({"b": False})
     with pytest.raises(Exception, match="string"):
-        m.event(_Lookalike())  # type: ignore[arg-type]
+        m.event(Lookalike("C"))  # type: ignore[arg-type]
     assert m.outstanding() == [] and m.stats["rejected"] == 1
     m.close()

@@ -20,6 +20,8 @@ from cosleec.runtime.context import Context
 from cosleec.runtime.errors import ContextError
 from cosleec.runtime.values import MeasureSpec
 
+from ..lookalike import Lookalike
+
 MEASURES = {
     "a": MeasureSpec("a", "boolean"),
     "b": MeasureSpec("b", "boolean"),
@@ -29,17 +31,7 @@ MEASURES = {
 }
 
 
-class Lookalike:
-    """Not a string, but hashes and compares as the measure ``b``: no measure's name."""
-
-    def __hash__(self) -> int:
-        return hash("b")
-
-    def __eq__(self, other: object) -> bool:
-        return other == "b"
-
-
-NAMES = st.sampled_from([*MEASURES, "zz", Lookalike()])
+NAMES = st.sampled_from([*MEASURES, "zz", Lookalike("b")])
 VALUES = st.sampled_from([True, False, 0, 1, 1.0, 0.0, 2, "low", "x", None])
 UPDATES = st.dictionaries(NAMES, VALUES, max_size=5)  # type: ignore[arg-type]
 
@@ -94,7 +86,7 @@ def test_an_update_that_changes_nothing_stamps_but_keeps_the_version() -> None:
 
 def test_a_key_that_only_compares_equal_to_a_name_names_no_measure() -> None:
     ctx = Context(MEASURES)
-    assert ctx.apply_booleans({Lookalike(): True}, 1.0) is None  # type: ignore[dict-item]
+    assert ctx.apply_booleans({Lookalike("b"): True}, 1.0) is None  # type: ignore[dict-item]
     with pytest.raises(ContextError, match="named by a string"):
-        ctx.validate({Lookalike(): True})  # type: ignore[dict-item]
+        ctx.validate({Lookalike("b"): True})  # type: ignore[dict-item]
     assert ctx.values == {} and ctx.version == 0
