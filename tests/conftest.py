@@ -65,14 +65,27 @@ def _python_child(args: object) -> bool:
 
 if _PATHS_OUT:
     from cosleec.runtime.express import Express
+    from cosleec.runtime.plans import Plans
 
     _taking = Express._put_in_force
+    _planning = Plans.trigger_function
     _updating = Express.update
     _spawning = subprocess.Popen.__init__
 
     def _taken(self: Express, *args: Any) -> Any:
         _witnessed[0] = True
         return _taking(self, *args)
+
+    def _planned(self: Plans) -> Any:
+        trigger = _planning(self)
+
+        def noted(name: str) -> Any:
+            out = trigger(name)
+            if out is not None:  # a plan took the trigger
+                _witnessed[0] = True
+            return out
+
+        return noted
 
     def _updated(self: Express, *args: Any) -> Any:
         out = _updating(self, *args)
@@ -88,6 +101,7 @@ if _PATHS_OUT:
         _spawning(self, args, *rest, **kw)
 
     Express._put_in_force = _taken  # type: ignore[method-assign]
+    Plans.trigger_function = _planned  # type: ignore[method-assign]
     Express.update = _updated  # type: ignore[method-assign]
     subprocess.Popen.__init__ = _spawned  # type: ignore[method-assign]
 

@@ -83,3 +83,33 @@ def quick_init(cls: C) -> C:
     init.__module__ = cls.__module__
     setattr(cls, "__init__", init)  # noqa: B010 - mypy refuses a plain assignment to a method
     return cls
+
+
+def positional_init(cls: type, given: tuple[str, ...]) -> Any:
+    """``init(obj, *values)``: what ``cls``'s dataclass ``__init__`` does with ``given``'s
+    fields passed in that order (positionally) -- every other field from its default or
+    default factory -- without matching keywords; for a hot path that makes one record
+    (``object.__new__(cls)`` then ``init``) where a keyword-only ``__init__`` would cost
+    more than the record. ``cls`` must be a non-frozen dataclass without ``__post_init__``
+    whose fields outside ``given`` all have a default (TypeError otherwise)."""
+    fields = dataclasses.fields(cls)
+    names = {f.name for f in fields}
+    if hasattr(cls, "__post_init__") or not set(given) <= names:
+        raise TypeError(f"positional_init cannot make {cls.__name__} from {given}")
+    env: dict[str, Any] = {}
+    body = []
+    for f in fields:  # in the dataclass's field order, as its own __init__ stores them
+        if f.name in given:
+            body.append(f"    obj.{f.name} = {f.name}")
+        elif f.default_factory is not dataclasses.MISSING:
+            env[f"_factory_{f.name}"] = f.default_factory
+            body.append(f"    obj.{f.name} = _factory_{f.name}()")
+        elif f.default is not dataclasses.MISSING:
+            env[f"_default_{f.name}"] = f.default
+            body.append(f"    obj.{f.name} = _default_{f.name}")
+        else:
+            raise TypeError(f"positional_init: {cls.__name__}.{f.name} has no default and is not given")
+    exec(f"def init(obj, {', '.join(given)}) -> None:\n" + "\n".join(body), env)
+    init: Any = env["init"]
+    init.__qualname__ = f"{cls.__name__}.positional_init"
+    return init

@@ -27,7 +27,7 @@ to run against the general path alone.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 
 from cosleec.records import Kind
 from cosleec.runtime.core import Core
@@ -88,33 +88,11 @@ class Express:
             self.updated += 1
             return core.layers.update(changed, context.values) if changed else []
 
-    def trigger(
-        self, name: str, due_at: Callable[[], float | None]
-    ) -> tuple[list[Decision], list[Job], float | None] | None:
-        """Event ``name`` occurred, when the case is quiet and nobody reads records: its
-        decisions, the jobs that run them and (``due_at``, read under the lock) when the timer
-        must next judge; None, having changed nothing, otherwise (the general path takes it,
-        or :meth:`occur` in its step when records are read).
-
-        It takes the runtime's lock without a step: a step would have nothing to record,
-        commit or deliver (no journal, audit log or observer), so what the lock alone
-        guarantees -- this occurrence ordered with every other step -- is what is left.
-        """
-        steps = self.core.steps
-        with steps.lock:
-            if steps.broken is not None or steps.closed or steps.recording:
-                return None  # (a refusal, or records to make: the general way, with a step)
-            now = steps.clock.now()  # read under the lock, as a step reads it
-            chosen = self._quiet(name, now)
-            if chosen is None:
-                return None
-            self.taken += 1
-            decisions, jobs = self._put_in_force(name, chosen, now, None)
-            return decisions, jobs, due_at()
-
     def occur(self, name: str, step: Step) -> tuple[list[Decision], list[Job]] | None:
-        """(In ``step``.) Event ``name`` occurred: its decisions and the jobs that run them, when
-        the case is quiet; None, having changed nothing, when the general path must take it."""
+        """(In ``step``: records are read.) Event ``name`` occurred: its decisions and the jobs
+        that run them, when the case is quiet; None, having changed nothing, when the general
+        path must take it. (When nobody reads records, the event's plan takes the quiet case
+        without a step: :mod:`cosleec.runtime.plans`.)"""
         chosen = self._quiet(name, step.now)
         if chosen is None:
             return None

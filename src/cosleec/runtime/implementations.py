@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from cosleec.bulk import quick_init
-from cosleec.cop import Snapshot, activating, layered
+from cosleec.cop import Layer, Snapshot, activating, layered
 from cosleec.errors import clip
 from cosleec.runtime.decision import Decision
 from cosleec.runtime.errors import BindingError
@@ -228,7 +228,7 @@ class Implementations:
             raise _Failed(errors)
 
     def _capabilities(self, decision: Decision, handled: set[str]) -> list[Ran]:
-        out = []
+        out: list[Ran] = []
         for ob in decision.obligations:
             if ob.negated:
                 continue
@@ -236,15 +236,7 @@ class Implementations:
             if cap is None:
                 continue
             handled.add(ob.event)
-            try:
-                cap(ob, decision)
-                out.append(Ran("capability", ob.event))
-            except Exception as e:
-                self.failures += 1
-                log.exception(
-                    "capability %s failed on decision %s of %s", ob.event, decision.id, decision.rule
-                )
-                out.append(Ran("capability", ob.event, _describe(e)))
+            self._call(cap, ob, decision, out)
         runs = _RUNS.get()
         if runs is not None:
             runs.extend(out)
@@ -286,7 +278,53 @@ class Implementations:
         layers = composition.layers
         if rule.name in self.tasks:
             return self._guarded("task", rule, decision, activating, layers, self.handler(rule), decision)
+        return self.capabilities_under(layers, rule, decision)
+
+    def capabilities_under(
+        self, layers: tuple[Layer, ...], rule: CompiledRule, decision: Decision
+    ) -> list[Ran]:
+        """(A rule bound to no task.) Run the capability of each event ``decision`` requires,
+        with ``layers`` active: what :meth:`dispatch` runs for such a rule, for the hot path
+        that found the composition's layers itself (:mod:`cosleec.runtime.plans`)."""
         return self._guarded("task", rule, decision, activating, layers, self._capabilities, decision, set())
+
+    def capability_under(
+        self, layers: tuple[Layer, ...], rule: CompiledRule, decision: Decision, ob: Obligation
+    ) -> list[Ran]:
+        """(A rule bound to no task.) What :meth:`capabilities_under` does for a decision that
+        requires one event, ``ob``'s: its capability run with ``layers`` active (none
+        registered: the layers entered and left, a task outcome), a failure logged and
+        counted, never raised."""
+        runs: list[Ran] = []
+        token = _RUNS.set(runs)
+        try:
+            cap = self.capabilities.get(ob.event)
+            if cap is None:
+                activating(layers, _nothing)
+                runs.append(_TASK_DONE)
+            else:
+                activating(layers, self._call, cap, ob, decision, runs)
+        except Exception as e:  # (the layers' activation failed: a task failure, as _guarded says)
+            self.failures += 1
+            log.exception("task for %s failed on decision %s", rule.name, decision.id)
+            runs.append(Ran("task", None, _describe(e)))
+        finally:
+            _RUNS.reset(token)
+        return runs
+
+    def _call(self, cap: Capability, ob: Obligation, decision: Decision, runs: list[Ran]) -> None:
+        """Run one capability, its outcome collected in ``runs`` (what :meth:`_capabilities`
+        does for each event)."""
+        try:
+            cap(ob, decision)
+            ran = _DONE.get(ob.event)
+            if ran is None:  # (an outcome is an immutable value: one per event serves every run)
+                ran = _DONE[ob.event] = Ran("capability", ob.event)
+            runs.append(ran)
+        except Exception as e:
+            self.failures += 1
+            log.exception("capability %s failed on decision %s of %s", ob.event, decision.id, decision.rule)
+            runs.append(Ran("capability", ob.event, _describe(e)))
 
     def dispatch_fallback(self, rule: CompiledRule, decision: Decision) -> list[Ran]:
         """Run an ``otherwise`` decision: capabilities for its events, else the task's ``fallback``.
@@ -333,6 +371,17 @@ class _Failed(Exception):
     def __init__(self, errors: list[Ran]) -> None:
         super().__init__("; ".join(f"{r.event}: {r.error}" for r in errors))
         self.errors = errors
+
+
+# a capability's successful outcome per event (immutable: shared by every run); bounded by
+# the events declared in the rule sets a process loads
+_DONE: dict[str, Ran] = {}
+
+_TASK_DONE = Ran("task", None)
+
+
+def _nothing() -> None:
+    """What runs under a decision's layers when no capability is registered for its event."""
 
 
 # the outcomes of the capabilities composed inside one guarded run (a task may call compose)

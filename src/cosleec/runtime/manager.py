@@ -50,6 +50,7 @@ from cosleec.runtime.layers import LayerManager, LayerSwitch
 from cosleec.runtime.obligations import Tracked, Tracker
 from cosleec.runtime.options import Options, UnknownEvents, explanations_of
 from cosleec.runtime.permission import Answers, Permission, undeclared
+from cosleec.runtime.plans import Plans
 from cosleec.runtime.priorities import PossibleConflict, Priorities, warn_conflicts, warn_lead
 from cosleec.runtime.reload import Reloaded
 from cosleec.runtime.restore import open_journal
@@ -121,6 +122,8 @@ class Manager:
         self._runner = Runner(core, self._gate, o.max_depth)
         self._express = Express(core, self._gate) if express.enabled() else None
         self._timer = Timer(core, self._enforcer, self._gate, weakly(self.tick))
+        self._plans = Plans(core, self._gate, self._runner, self._timer) if express.enabled() else None
+        self._planned = None if self._plans is None else self._plans.trigger_function()
         self.possible_conflicts: list[PossibleConflict] = []  # item pairs that can conflict (start() warns)
         self._check = False  # start() checked the bindings: a reload checks the new rules' too
         self._started = False  # start() ran, or the first event/update/request started it
@@ -402,6 +405,11 @@ class Manager:
         """
         if not self._started:
             self._start_implicitly("event")
+        if values is None and self._planned is not None:  # the quiet case as planned (cosleec.runtime.plans)
+            quiet = self._planned(name)
+            if quiet is not None:
+                return quiet
+            return self._occur(name, planned=True)
         if values and isinstance(name, str) and name in self.core.ruleset.events:
             # (an unknown event, or a name that is no string, takes no value: all or nothing)
             with self.core.steps.lock:  # re-entrant: the two steps below take it too
@@ -409,20 +417,17 @@ class Manager:
                 return self._occur(name)
         return self._occur(name)
 
-    def _occur(self, name: str) -> list[Decision]:
+    def _occur(self, name: str, *, planned: bool = False) -> list[Decision]:
+        """Event ``name`` occurred (``planned``: its plan, if any, already declined it)."""
         core = self.core
         if not self._started:
             self._start_implicitly("event")
+        if not planned and self._planned is not None:
+            quiet = self._planned(name)
+            if quiet is not None:
+                return quiet
         timer = self._timer
         lane = self._express
-        if lane is not None:  # the common case straight through (cosleec.runtime.express)
-            quiet = lane.trigger(name, timer.due_at)
-            if quiet is not None:
-                decisions, followups, due = quiet
-                if due is not None:
-                    timer.notify(due)
-                self._runner.dispatch(followups)
-                return decisions
         self._catch_up()
         with core.steps.step() as step:
             # the lane again when records are read (it took no step above), else the general path

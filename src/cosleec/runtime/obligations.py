@@ -35,6 +35,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from cosleec.bulk import positional_init
 from cosleec.lang import Untimed
 from cosleec.runtime.model import Obligation
 
@@ -250,6 +251,45 @@ class Tracker:
         self._next += 1
         self._index(t)
         return t
+
+    def start_plain(
+        self,
+        decision_id: int,
+        clause: int | None,
+        rule: str,
+        ob: Obligation,
+        now: float,
+        hi: float | None,
+        seq: int,
+    ) -> Tracked:
+        """What :meth:`start` does for a plain obligation -- one required event (no ``not``,
+        no ``else``), a window from ``now`` to ``hi`` (absolute, None: none; the caller has
+        applied ``untimed``), from a decision (depth 0, its own activation) -- for the hot
+        path that made ``hi`` once per rule set (:mod:`cosleec.runtime.plans`)."""
+        t = _new(Tracked)
+        tid = self._next
+        _init_plain(t, tid, decision_id, clause, rule, ob, now, now, hi, seq, decision_id, hi)
+        self._next = tid + 1
+        if self.keep_started or self.by_instance:
+            self._index(t)
+            return t
+        self._active[tid] = t
+        bucket = self._by_event.get(ob.event)
+        if bucket is None:
+            bucket = self._by_event[ob.event] = {}
+        bucket[tid] = t
+        if hi is not None:
+            heapq.heappush(self._heap, (hi, tid))
+        return t
+
+    def quiet_for(self, event: str, now: float) -> bool:
+        """Would an occurrence of ``event`` at ``now`` find nothing here to act on: nothing
+        forbidden, no window due (:meth:`backlog`), nothing waiting for it (:meth:`waits_for`)?
+        The three checks of the hot path, in one call."""
+        heap = self._heap
+        return not (
+            self.bans or (heap and heap[0][0] < now) or self._by_event.get(event) or self._missed.get(event)
+        )
 
     def waits_for(self, event: str) -> bool:
         """Would an occurrence of ``event`` change anything here: something in force names it
@@ -490,6 +530,14 @@ class Tracker:
     def outstanding(self) -> list[Tracked]:
         """Pending obligations that require an event (prohibitions left out): what the robot still owes."""
         return [t for t in self._active.values() if not t.prohibition]
+
+
+_new = object.__new__
+# Tracked's __init__ with a plain obligation's fields, positional (Tracker.start_plain)
+_init_plain = positional_init(
+    Tracked,
+    ("id", "decision_id", "clause", "rule", "obligation", "start", "lo", "hi", "seq", "instance", "own_hi"),
+)
 
 
 def _events(t: Tracked) -> tuple[str, ...]:

@@ -48,7 +48,7 @@ class Runner:
         self.core = core
         self.gate = gate
         self.max_depth = max_depth
-        self._depth = threading.local()
+        self.depth = threading.local()  # per thread: how many implementations deep it runs
 
     def dispatch(self, jobs: list[Job]) -> None:
         """Run each job's implementation (outside the lock), when the runtime dispatches.
@@ -89,7 +89,7 @@ class Runner:
         outcome records carry it, so a reader can tell what was in force when it started.
         ``actions``: the ids of the actions it was handed (they are no longer in flight).
         """
-        local = self._depth  # one level deeper, or refused past max_depth
+        local = self.depth  # one level deeper, or refused past max_depth
         depth = getattr(local, "n", 0)
         if depth >= self.max_depth:
             ran = self._too_deep(rule, depth)
@@ -99,6 +99,13 @@ class Runner:
                 ran = run(*args)
             finally:
                 local.n = depth
+        self.finished(rule, d, ran, checked, actions)
+
+    def finished(
+        self, rule: CompiledRule, d: Decision, ran: list[Ran], checked: int = 0, actions: Iterable[int] = ()
+    ) -> None:
+        """Count and record what a run of decision ``d``'s implementation did (``ran``): each
+        outcome in a step of its own, when records are read (see :meth:`run`)."""
         core = self.core
         for r in ran:
             if not r.ok:

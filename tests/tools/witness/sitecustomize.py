@@ -17,43 +17,80 @@ from types import ModuleType
 from typing import Any
 
 _WITNESS = os.environ.get("COSLEEC_PATHS_WITNESS")
-_LANE = "cosleec.runtime.express"
+# the lane's modules: the class, the method that puts a trigger's decisions in force (None:
+# none), the one that takes an update (None: none), the one that makes a trigger (None: none)
+_LANES = {
+    "cosleec.runtime.express": ("Express", "_put_in_force", "update", None),
+    "cosleec.runtime.plans": ("Plans", None, None, "trigger_function"),
+}
+
+
+def _seen() -> None:
+    if _WITNESS and not os.path.exists(_WITNESS):
+        open(_WITNESS, "a").close()
+
+
+def _took(method: Any) -> Any:
+    def taken(self: Any, *args: Any) -> Any:
+        _seen()
+        return method(self, *args)
+
+    return taken
+
+
+def _unless_none(method: Any) -> Any:
+    def updated(self: Any, *args: Any) -> Any:
+        out = method(self, *args)
+        if out is not None:  # the lane took it
+            _seen()
+        return out
+
+    return updated
+
+
+def _made(method: Any) -> Any:
+    def make(self: Any) -> Any:
+        trigger = method(self)
+
+        def noted(*args: Any) -> Any:
+            out = trigger(*args)
+            if out is not None:  # the lane took the trigger
+                _seen()
+            return out
+
+        return noted
+
+    return make
+
+
+def _wrap(lane: Any, took: str | None, update: str | None, maker: str | None) -> None:
+    for name, wrap in ((took, _took), (update, _unless_none), (maker, _made)):
+        if name is not None:
+            setattr(lane, name, wrap(getattr(lane, name)))
 
 
 class _Witness:
-    """A meta path finder that wraps the express lane as it is imported."""
+    """A meta path finder that wraps the express lane's modules as they are imported."""
+
+    def __init__(self) -> None:
+        self.waiting = dict(_LANES)
 
     def find_spec(self, name: str, path: Any = None, target: Any = None) -> ModuleSpec | None:
-        if name != _LANE:
+        wanted = self.waiting.pop(name, None)
+        if wanted is None:
             return None
-        sys.meta_path.remove(self)
+        if not self.waiting:
+            sys.meta_path.remove(self)
         spec = PathFinder.find_spec(name, path, target)
         if spec is None or spec.loader is None:
             return spec
         loader = spec.loader
         load = loader.exec_module
+        cls, took, update, maker = wanted
 
         def exec_module(module: ModuleType) -> None:
             load(module)
-            lane = module.Express
-            took, updating = lane._put_in_force, lane.update
-
-            def seen() -> None:
-                if _WITNESS and not os.path.exists(_WITNESS):
-                    open(_WITNESS, "a").close()
-
-            def taken(self: Any, *args: Any) -> Any:
-                seen()
-                return took(self, *args)
-
-            def updated(self: Any, *args: Any) -> Any:
-                out = updating(self, *args)
-                if out is not None:  # the lane took the update
-                    seen()
-                return out
-
-            lane._put_in_force = taken
-            lane.update = updated
+            _wrap(getattr(module, cls), took, update, maker)
 
         loader.exec_module = exec_module  # type: ignore[method-assign]
         return spec

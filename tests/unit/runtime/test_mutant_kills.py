@@ -483,3 +483,28 @@ def test_an_event_named_by_a_lookalike_of_a_string_is_refused() -> None:
         m.event(Lookalike("C"))  # type: ignore[arg-type]
     assert m.outstanding() == [] and m.stats["rejected"] == 1
     m.close()
+
+
+def test_an_action_fulfilled_between_its_decision_and_its_start_is_not_run() -> None:
+    """plans-admit-without-check: an action whose obligation ended after the decision put it
+    in force and before its implementation started (here the robot reports the event in
+    that gap, where the timer is told of the new deadline) would still be run; the check
+    where it starts leaves it out, on the plan's path as on the general one."""
+    text = "def_start event C event A def_end rule_start R1 when C then A within 50 seconds rule_end"
+    calls: list[str] = []
+    m = Manager.from_text(text, clock=MonotonicClock())
+    m.capability("A")(lambda ob, d: calls.append("A"))
+    m.start(timer=True)  # (the timer is told of each new deadline)
+    timer = m._timer
+    notify = timer.notify
+
+    def meanwhile(due: float | None = None) -> None:
+        timer.notify = notify  # type: ignore[method-assign]  # (once)
+        m.event("A")  # the robot did A already: nothing is owed when the dispatch starts
+        notify(due)
+
+    timer.notify = meanwhile  # type: ignore[method-assign]
+    m.event("C")
+    assert timer.notify is notify  # the gap was reached (a deadline to tell the timer of)
+    assert calls == [] and m.outstanding() == []
+    m.close()
