@@ -267,7 +267,7 @@ class Floor:
         semantics, obligations when fixed, ...; in its key order), the obligations with their
         deadlines' offsets, the layers and the capability's event.
         """
-        from cosleec.runtime.compile import _true  # the condition of a rule without one
+        from cosleec.runtime.compile import always  # the condition of a rule without one
 
         v, status, ids, stats = self.values, self.status, self.ids, self.stats
         active, by_event, heap = self.active, self.by_event, self.heap
@@ -316,7 +316,7 @@ class Floor:
                         )
                     )
                 out.append(
-                    (rule, rule.name, index, None if condition is _true else condition, reader, value_names,
+                    (rule, rule.name, index, None if condition is always else condition, reader, value_names,
                      tuple(clauses))
                 )  # fmt: skip
             table[name] = tuple(out)
@@ -346,9 +346,6 @@ class Floor:
                 dd["obligations"] = obligations = issuer_items(spec, rname)
                 timed = tuple((ob, ob.within_s, ob.event) for ob in obligations)
                 one = timed[0] if len(timed) == 1 else None
-            dd["_explanation"] = []
-            dd["_for_people"] = []
-            dd["_recorded"] = []
             dd["_parts"] = (rule, read, True, values)
             d = _new(Decision)
             _setattr(d, "__dict__", dd)
@@ -455,9 +452,6 @@ class Floor:
                         dd["time"] = now
                         dd["event"] = name
                         dd["context_version"] = me.version
-                        dd["_explanation"] = []
-                        dd["_for_people"] = []
-                        dd["_recorded"] = []
                         dd["_parts"] = (rule, read, True, values)
                         d = _new(Decision)
                         _setattr(d, "__dict__", dd)

@@ -80,7 +80,12 @@ class _Scope:
 def _transition(frame: Frame, mode: str, layer: Layer, g: GlobalState) -> Frame:
     key = (mode, layer)
     nxt = frame.transitions.get(key)
-    if nxt is not None and nxt.basis is g.layers and not g.activation_hooks and not _conflicts(nxt, layer, g):
+    if (
+        nxt is not None
+        and nxt.basis is g.layers
+        and not g.activation_hooks
+        and (layer.group is None or not g.layers or not _conflicts(nxt, layer, g))
+    ):
         # a cached transition is used only when no hook must see the activation (E37), and
         # under the global layers it was made under: a layer activated globally since then
         # is more recent than the stamp it holds (SD7 orders by recency)
@@ -154,6 +159,26 @@ def activating(layers: tuple[Layer, ...], fn: Callable[..., R], /, *args: Any) -
         return fn(*args)
     finally:
         dynamic.reset(token)
+
+
+def prepare(layers: tuple[Layer, ...]) -> None:
+    """Make the first :func:`activating` of ``layers`` (from no dynamic activation) as cheap
+    as the next: the frames it leads to are computed now and kept, as activating keeps them.
+
+    For a dispatcher that knows ahead which layers it will enter (the runtime plans each
+    rule's clauses once per rule set). Nothing is active meanwhile: a frame is only made
+    and cached. With activation hooks registered it does nothing (a hook must see each
+    activation when it happens); a global activation since makes activating compute the
+    frames again, as it would have.
+    """
+    g = RT.state
+    if g.activation_hooks:
+        return
+    frame = EMPTY
+    for layer in layers:
+        if not isinstance(layer, Layer):
+            raise TypeError(f"expected Layer objects, got {layer!r}")
+        frame = _transition(frame, "activate", layer, g)
 
 
 def deactivate(*layers: Layer) -> _Scope:

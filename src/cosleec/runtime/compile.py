@@ -129,7 +129,7 @@ class Compiler:
     def function(self, e: A.Expr | None) -> tuple[Callable[[Values], Any], frozenset[str], str]:
         """``(fn, measures read, source)``; ``None`` (no condition) compiles to True."""
         if e is None:
-            return _true, frozenset(), "True"
+            return always, frozenset(), "True"
         reads: set[str] = set()
         src = self.source(e, reads)
         return self.lambda_(src, "<sleec condition>"), frozenset(reads), src
@@ -151,7 +151,7 @@ class Compiler:
         when the fast form raised KeyError.
         """
         if e is None:
-            return _true
+            return always
         return self._kleene(e, None)
 
     def _kleene(self, e: A.Expr, scale: str | None) -> Callable[[Values], Any]:
@@ -392,7 +392,8 @@ def _strict(
     return apply
 
 
-def _true(v: Values) -> bool:
+def always(v: Values) -> bool:
+    """The condition of a rule without one (a hot path need not call it: ``is always``)."""
     return True
 
 

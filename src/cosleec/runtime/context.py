@@ -84,12 +84,13 @@ class Context:
             self.version += 1
         return changed
 
-    def apply_booleans(self, updates: Mapping[str, object], now: float) -> list[str] | None:
+    def apply_booleans(self, updates: Mapping[str, object], now: float) -> bool | None:
         """:meth:`validate` and :meth:`apply` at once, for the hot path's common update: only
-        boolean values of boolean measures (stored as they are, so a value changed exactly
-        when it is not the one stored); the measures whose value changed, in the update's
-        order. None, having changed nothing, for any other update (:meth:`validate` says
-        what is wrong with it, or stores it)."""
+        boolean values of boolean measures (stored as they are, so the update changes
+        something exactly when it is not all stored already). Did any value change (or become
+        known)? Then the rules that read the update's measures are to be judged again -- those
+        whose values did not change come to the same choice. None, having changed nothing,
+        for any other update (:meth:`validate` says what is wrong with it, or stores it)."""
         size = len(updates)
         if (
             [*map(type, updates)].count(str) != size  # (a key that only compares equal to a name is no name)
@@ -98,10 +99,8 @@ class Context:
         ):
             return None
         values, stamps = self.values, self.stamps
-        if updates.items() <= values.items():  # nothing changes (bools: equal is identical)
-            changed = []
-        else:
-            changed = [n for n, v in updates.items() if values.get(n) is not v]
+        changed = not updates.items() <= values.items()  # (bools: equal is identical)
+        if changed:
             values.update(updates)
             self.version += 1
         for name in updates:

@@ -31,6 +31,10 @@ from cosleec.runtime.values import Value
 OTHERWISE = "otherwise"
 
 
+# the memos a decision made on the hot path gets when first used (Decision.__getattr__)
+_MEMOS = frozenset({"_explanation", "_for_people", "_recorded"})
+
+
 class DecisionOrigin(StrEnum):
     """What made a decision: a trigger (its rule's event), or a missed obligation (an ``otherwise``)."""
 
@@ -219,10 +223,7 @@ class Decision:
         dd["obligations"] = obligations
         dd["missing"] = missing
         dd["context_version"] = context_version
-        dd["_explanation"] = []
-        dd["_for_people"] = []
-        dd["_recorded"] = []
-        dd["_parts"] = parts
+        dd["_parts"] = parts  # (its memos of sentences are made when first used: __getattr__)
         d = object.__new__(cls)
         object.__setattr__(d, "__dict__", dd)  # (frozen: its fields are set once, here)
         return d
@@ -239,7 +240,11 @@ class Decision:
 
         def __getattr__(self, name: str) -> Any:
             """``values`` and ``conditions`` of a decision :meth:`at_trigger` made, made when first
-            read (and kept: later reads are plain attribute reads)."""
+            read (and kept: later reads are plain attribute reads); so are its memos of sentences
+            (most decisions are never explained: no list is made for them)."""
+            if name in _MEMOS:
+                memo: list[str] = self.__dict__.setdefault(name, [])  # (atomic: one list, whoever races)
+                return memo
             if name == "values" or name == "conditions":
                 parts = self.__dict__.get("_parts")
                 if parts is not None:

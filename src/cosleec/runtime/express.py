@@ -27,7 +27,7 @@ to run against the general path alone.
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 
 from cosleec.records import Kind
 from cosleec.runtime.core import Core
@@ -77,13 +77,16 @@ class Express:
             now = steps.clock.now()  # read under the lock, as a step reads it
             if core.tracker.backlog(now):
                 return None
-            changed = context.apply_booleans(updates, now)
-            if changed is None:  # not only booleans: checked and stored as the general path does
+            changed: Collection[str]
+            known = context.apply_booleans(updates, now)
+            if known is None:  # not only booleans: checked and stored as the general path does
                 try:
                     stored = context.validate(updates)
                 except ContextError as e:
                     return e
-                changed = list(context.apply(stored, now))
+                changed = context.apply(stored, now)
+            else:  # (booleans: the rules that read them judged again, if anything changed)
+                changed = updates.keys() if known else ()
             core.stats.updates += 1
             self.updated += 1
             return core.layers.update(changed, context.values) if changed else []

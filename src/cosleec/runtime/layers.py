@@ -15,7 +15,7 @@ that clause's variant (see :mod:`cosleec.runtime.implementations`).
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -121,6 +121,12 @@ class LayerManager:
         for r in ruleset.rules:
             for m in r.hedge_reads:
                 self.index.setdefault(m, []).append(r)
+        # per rule, the measures it alone reads: an update of some of them touches that rule only
+        alone: dict[int, set[str]] = {}
+        for m, readers in self.index.items():
+            if len(readers) == 1:
+                alone.setdefault(readers[0].index, set()).add(m)
+        self._alone = {i: frozenset(names) for i, names in alone.items()}
         self.status: list[RuleStatus] = []
         self._active: dict[int, str] = {}  # rule index -> active layer (rules at their default absent)
         # before any value is known (an `unknown` policy that reads unknown as true or false
@@ -151,27 +157,40 @@ class LayerManager:
         values, missing = evaluate(r.clauses, v)
         return RuleStatus(values, choose(values, self.semantics, self.unknown), missing)
 
-    def update(self, changed: Iterable[str], v: Values) -> list[LayerSwitch]:
+    def update(self, changed: Collection[str], v: Values) -> list[LayerSwitch]:
         """Re-evaluate the rules that read a ``changed`` measure; return the layer switches."""
-        touched: dict[int, CompiledRule] = {}
         index = self.index
-        for m in changed:
-            for r in index.get(m, ()):
-                touched[r.index] = r
-        switches = []
+        rules: Iterable[CompiledRule] = ()
+        for first in changed:  # measures one rule alone reads (the usual update): that rule
+            readers = index.get(first)
+            if readers is not None and len(readers) == 1:
+                only = self._alone.get(readers[0].index)
+                if only is not None and only.issuperset(changed):
+                    rules = readers
+            break
+        if not rules:
+            touched: dict[int, CompiledRule] = {}
+            for m in changed:
+                for r in index.get(m, ()):
+                    touched[r.index] = r
+            rules = [touched[i] for i in sorted(touched)]  # rule order: the same switches every run
+        switches: list[LayerSwitch] = []
         status = self.status
-        for i in sorted(touched):  # rule order: the same switches in the same order on every run
-            r = touched[i]
+        for r in rules:
+            i = r.index
             new = self._compute(r, v)
             old = status[i]
             status[i] = new
             if new.clause != old.clause:
                 names = r.layer_names
                 switches.append(
-                    LayerSwitch(
-                        r.name,
-                        "?" if old.clause is None else names[old.clause],
-                        "?" if new.clause is None else names[new.clause],
+                    _tuple_new(
+                        LayerSwitch,
+                        (
+                            r.name,
+                            "?" if old.clause is None else names[old.clause],
+                            "?" if new.clause is None else names[new.clause],
+                        ),
                     )
                 )
                 if new.clause:

@@ -29,8 +29,9 @@ from collections.abc import Callable
 from operator import itemgetter
 from typing import Any
 
-from cosleec.cop import Layer, Snapshot
+from cosleec.cop import Layer, Snapshot, prepare
 from cosleec.lang import Untimed
+from cosleec.runtime.compile import always
 from cosleec.runtime.core import Core
 from cosleec.runtime.decider import Decider
 from cosleec.runtime.decision import Decision
@@ -112,10 +113,8 @@ class Plans:
         return plan
 
     def _rule(self, rule: CompiledRule) -> _Rule:
-        from cosleec.runtime.compile import _true  # the condition of a rule without one
-
         clauses = tuple(self._clause(rule, k) for k in range(len(rule.layer_names)))
-        condition = None if rule.condition is _true else rule.condition
+        condition = None if rule.condition is always else rule.condition
         return rule, condition, rule.index, _reader(rule.value_names), clauses
 
     @staticmethod
@@ -158,6 +157,7 @@ class Plans:
             explanations=core.decider.explanations,
         )
         composition = rule.compositions[clause]
+        prepare(composition.layers)  # (the COP frames its implementation runs under, made now)
         return obligations, spec, offsets, fields, composition, composition.layers
 
     def windows(self, obligations: tuple[Obligation, ...]) -> tuple[float | None, ...] | None:
@@ -282,7 +282,7 @@ class Plans:
                         return None
                     me.taken += 1
                     jobs = put_in_force(name, chosen, now)
-                due = timer.due_at()
+                due = None if timer.thread is None else timer.due_at()
             finally:
                 release()
             if due is not None:
@@ -311,7 +311,8 @@ class Plans:
                 ran = impl.capability_under(layers, rule, d, ob)
             finally:
                 local.n = depth
-            runner.finished(rule, d, ran, checked)
+            if len(ran) != 1 or ran[0].error is not None or steps.observers or steps.audit or steps.journal:
+                runner.finished(rule, d, ran, checked)  # (a failure to count, or records to make)
             return [d]
 
         return trigger
