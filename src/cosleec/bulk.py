@@ -94,7 +94,8 @@ def positional_init(cls: type, given: tuple[str, ...]) -> Any:
     whose fields outside ``given`` all have a default (TypeError otherwise)."""
     fields = dataclasses.fields(cls)
     names = {f.name for f in fields}
-    if hasattr(cls, "__post_init__") or not set(given) <= names:
+    frozen = getattr(getattr(cls, "__dataclass_params__", None), "frozen", True)
+    if frozen or hasattr(cls, "__post_init__") or not set(given) <= names:
         raise TypeError(f"positional_init cannot make {cls.__name__} from {given}")
     env: dict[str, Any] = {}
     body = []

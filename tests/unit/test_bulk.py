@@ -10,7 +10,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from cosleec.bulk import paused_gc, quick_init
+from cosleec.bulk import paused_gc, positional_init, quick_init
 from cosleec.runtime import model as M
 
 
@@ -186,3 +186,32 @@ def test_the_runtime_records_built_quickly_keep_the_dataclass_signature(cls: typ
     got = inspect.signature(cls.__init__).parameters.values()
     assert [(p.name, p.kind, p.default) for p in got][1:] == _signature(cls)
     assert cls.__init__.__qualname__ == f"{cls.__qualname__}.__init__"
+
+
+# ---------------------------------------------------------------------------- positional_init
+@dataclasses.dataclass(slots=True, kw_only=True)
+class _Record:
+    a: int
+    b: str
+    c: list[int] = dataclasses.field(default_factory=list)
+    d: float = 1.5
+    e: int | None = None
+
+
+def test_positional_init_stores_what_the_dataclass_init_stores() -> None:
+    init = positional_init(_Record, ("b", "e", "a"))  # any order: the given ones, positional
+    r = object.__new__(_Record)
+    init(r, "x", 7, 3)
+    assert r == _Record(a=3, b="x", e=7) and r.c == [] and r.d == 1.5
+    other = object.__new__(_Record)
+    init(other, "y", None, 4)
+    assert other.c is not r.c  # a default factory makes a new value for each record
+
+
+def test_positional_init_refuses_what_it_cannot_make() -> None:
+    with pytest.raises(TypeError, match="no default"):
+        positional_init(_Record, ("a",))  # b has no default and is not given
+    with pytest.raises(TypeError, match="cannot make"):
+        positional_init(_Record, ("a", "b", "z"))  # no field z
+    with pytest.raises(TypeError, match="cannot make"):
+        positional_init(M.Obligation, ("event",))  # frozen: its fields are not stored so

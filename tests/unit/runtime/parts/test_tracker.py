@@ -1,0 +1,84 @@
+"""Tracker: the hot path's plain start and quiet check against the general ones.
+
+``Tracker.start_plain`` is ``Tracker.start`` for a plain obligation (one required event, a
+window from now) whose deadline its caller made once (``untimed`` applied); ``quiet_for``
+is the three checks the hot path asks (nothing forbidden, nothing due, nothing waiting for
+the event). On generated obligations, times and indexes (priorities' or not), each must
+leave the tracker as the general one does and answer as the three do.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from cosleec.runtime.model import Obligation
+from cosleec.runtime.obligations import Tracked, Tracker
+
+EVENTS = ("A", "B", "C")
+
+
+def plain(event: str, within: float | None, eventually: bool) -> Obligation:
+    return Obligation(event=event, within_s=within, eventually=eventually and within is None, rule="R1")
+
+
+def window(tracker: Tracker, ob: Obligation) -> float | None:
+    """What the plans make once: the deadline's length, ``untimed`` applied."""
+    if ob.within_s is not None or ob.eventually:
+        return ob.within_s
+    if tracker.untimed == "immediate":
+        return tracker.tolerance
+    if isinstance(tracker.untimed, float):
+        return tracker.untimed
+    return None
+
+
+def state(t: Tracker) -> tuple[object, ...]:
+    items = {i: dataclasses.astuple(x) for i, x in t._active.items()}
+    by_event = {e: sorted(b) for e, b in t._by_event.items()}
+    return items, by_event, sorted(t._heap), t.next_id, [x.id for x in t.started], t._instances.keys()
+
+
+STARTS = st.lists(
+    st.tuples(
+        st.sampled_from(EVENTS),
+        st.one_of(st.none(), st.floats(0, 10)),
+        st.booleans(),
+        st.floats(0, 100),
+        st.integers(1, 5),
+    ),
+    max_size=8,
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(STARTS, st.sampled_from(["none", "immediate", 2.5]), st.booleans())
+def test_a_plain_start_leaves_what_start_leaves(
+    starts: list[tuple[str, float | None, bool, float, int]], untimed: str | float, priorities: bool
+) -> None:
+    general, hot = Tracker(untimed), Tracker(untimed)
+    for t in (general, hot):
+        t.reindex(priorities, priorities)
+    for i, (event, within, eventually, now, clause) in enumerate(starts):
+        ob = plain(event, within, eventually)
+        a = general.start(i + 1, clause, ob, now, seq=i)
+        off = window(hot, ob)
+        b = hot.start_plain(i + 1, clause, "R1", ob, now, None if off is None else now + off, i)
+        assert dataclasses.astuple(a) == dataclasses.astuple(b) and type(b) is Tracked
+        assert state(general) == state(hot)
+
+
+@settings(max_examples=200, deadline=None)
+@given(STARTS, st.sampled_from(EVENTS), st.floats(0, 120), st.booleans())
+def test_quiet_for_is_the_three_checks(
+    starts: list[tuple[str, float | None, bool, float, int]], event: str, now: float, ban: bool
+) -> None:
+    t = Tracker()
+    for i, (ev, within, eventually, at, clause) in enumerate(starts):
+        t.start(i + 1, clause, plain(ev, within, eventually), at, seq=i)
+    if ban:
+        t.start(99, 0, Obligation(event="C", negated=True, within_s=5.0, rule="R2"), 0.0, seq=99)
+    t.due(now / 2)  # some windows closed (and missed: a late event is awaited)
+    assert t.quiet_for(event, now) == (not t.bans and not t.backlog(now) and not t.waits_for(event))
