@@ -6,7 +6,9 @@ priority is declared. Then the general path's stages -- time passing, the occurr
 meeting what is in force, the decider, the enforcer's settling, the gate -- each find
 nothing to do, and what is left is what the guarantees require: the occurrence, each
 triggered rule's decision and its obligations put in force, each with its record. This
-lane does exactly that in one pass, without the stages' calls.
+lane does exactly that in one pass, without the stages' calls (:meth:`Express.occur`, in
+the step, when records are read; when nobody reads them, the event's plan does it without
+a step: :mod:`cosleec.runtime.plans`).
 
 A context update meets the same quiet runtime when, besides, nobody reads records: then
 the step's scope, time passing, the gate and the runner each find nothing to do, and what

@@ -195,7 +195,7 @@ class Plans:
         """
         core, gate, timer, runner = self.core, self.gate, self.timer, self.runner
         steps, tracker, stats = core.steps, core.tracker, core.stats
-        acquire, release = steps.lock.acquire, steps.lock.release
+        lock = steps.lock
         counters = steps.counters
         now_of = steps.clock.now
         made, plan_of = self._made, self._plan
@@ -209,8 +209,7 @@ class Plans:
         def trigger(name: str) -> list[Decision] | None:
             if type(name) is not str:  # (a lookalike or unhashable name: the general path refuses it)
                 return None
-            acquire()
-            try:
+            with lock:
                 if (
                     steps.broken is not None
                     or steps.closed
@@ -283,8 +282,6 @@ class Plans:
                     me.taken += 1
                     jobs = put_in_force(name, chosen, now)
                 due = None if timer.thread is None else timer.due_at()
-            finally:
-                release()
             if due is not None:
                 timer.notify(due)
             if one is None:
@@ -294,14 +291,11 @@ class Plans:
                 return [job[1] for job in jobs]
             if not core.dispatch:
                 return [d]
-            acquire()  # admitted: what the gate's common case checks, under the lock
-            try:
+            with lock:  # admitted: what the gate's common case checks, under the lock
                 if steps.broken is not None or steps.closed:
                     return [d]
                 plain = not tracker.bans and t.status == PENDING
                 checked = counters["record"] - 1  # (Steps.last_record)
-            finally:
-                release()
             depth = getattr(local, "n", 0)
             if not plain or depth >= runner.max_depth or rname in impl.tasks:
                 run(rule, d, [t], composition, layers, impl, admitted=plain, checked=checked)
