@@ -34,7 +34,7 @@ from cosleec.cop.errors import (
     HedgeEvaluationError,
 )
 from cosleec.cop.events import Transitions
-from cosleec.cop.extent import Snapshot, activate, activating, bind, deactivate, prepare, run_with, snapshot
+from cosleec.cop.extent import Snapshot, activate, activating, bind, deactivate, run_with, snapshot
 from cosleec.cop.generators import layered_generator
 from cosleec.cop.introspect import Explanation, current_layers, explain
 from cosleec.cop.layer import POLICIES, HedgeGroup, Layer, LayerGroup, policy_first, policy_last
@@ -91,7 +91,6 @@ __all__ = [
     "partial",
     "policy_first",
     "policy_last",
-    "prepare",
     "restore_globally",
     "run_with",
     "snapshot",

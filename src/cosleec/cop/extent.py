@@ -161,26 +161,6 @@ def activating(layers: tuple[Layer, ...], fn: Callable[..., R], /, *args: Any) -
         dynamic.reset(token)
 
 
-def prepare(layers: tuple[Layer, ...]) -> None:
-    """Make the first :func:`activating` of ``layers`` (from no dynamic activation) as cheap
-    as the next: the frames it leads to are computed now and kept, as activating keeps them.
-
-    For a dispatcher that knows ahead which layers it will enter (the runtime plans each
-    rule's clauses once per rule set). Nothing is active meanwhile: a frame is only made
-    and cached. With activation hooks registered it does nothing (a hook must see each
-    activation when it happens); a global activation since makes activating compute the
-    frames again, as it would have.
-    """
-    g = RT.state
-    if g.activation_hooks:
-        return
-    frame = EMPTY
-    for layer in layers:
-        if not isinstance(layer, Layer):
-            raise TypeError(f"expected Layer objects, got {layer!r}")
-        frame = _transition(frame, "activate", layer, g)
-
-
 def deactivate(*layers: Layer) -> _Scope:
     """Context manager: the layers are inactive inside the block, global ones included (SD13)."""
     return _Scope("deactivate", layers)

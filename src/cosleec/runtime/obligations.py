@@ -268,7 +268,7 @@ class Tracker:
         path that made ``hi`` once per rule set (:mod:`cosleec.runtime.plans`)."""
         t = _new(Tracked)
         tid = self._next
-        _init_plain(t, tid, decision_id, clause, rule, ob, now, now, hi, seq, decision_id, hi)
+        _init_plain(t, tid, decision_id, clause, rule, ob, now, now + ob.from_s, hi, seq, decision_id, hi)
         self._next = tid + 1
         if self.keep_started or self.by_instance:
             self._index(t)

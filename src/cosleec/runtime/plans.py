@@ -8,17 +8,17 @@ triggers reads its condition and the clause the Layer Manager keeps, and its dec
 that clause's obligations in force, with their records, before its implementation runs
 under the clause's COP layer. A *plan* is that, made for an event the first time it occurs:
 per rule, its condition, where its status is kept, a reader of the values its decision
-keeps; per clause, the obligations with their windows' lengths (``untimed`` applied) when
-they do not depend on measures, the fields every decision of the clause shares, the
-layers its implementation runs under. A trigger then runs the plan: the checks, the
-choice, the records, the implementation -- one pass over what the plan holds, no part
-asked again what it already said.
+keeps; per clause, at its first decision, the obligations with their windows' lengths
+(``untimed`` applied) when they do not depend on measures, the fields every decision of
+the clause shares, the layers its implementation runs under. A trigger then runs the
+plan: the checks, the choice, the records, the implementation -- one pass over what the
+plan holds, no part asked again what it already said.
 
 A plan is made from the rules in force, the semantics and the sentences for people: a
 reload (a new decider), ``set_semantics`` or ``explain`` makes a new one at the next
 trigger. It is a second implementation of the express lane's trigger, checked before it
-changes anything the same way (:meth:`Plans.trigger` returns None and the general path
-takes the occurrence), held equal to the general path record for record by the express
+changes anything the same way (the trigger returns None and the general path takes the
+occurrence), held equal to the general path record for record by the express
 lane's property test (``tests/unit/runtime/test_express.py``), and off with the lane
 (``COSLEEC_EXPRESS=0``).
 """
@@ -29,7 +29,7 @@ from collections.abc import Callable
 from operator import itemgetter
 from typing import Any
 
-from cosleec.cop import Layer, Snapshot, prepare
+from cosleec.cop import Layer, Snapshot
 from cosleec.lang import Untimed
 from cosleec.runtime.compile import always
 from cosleec.runtime.core import Core
@@ -55,21 +55,22 @@ _Clause = tuple[
     tuple[Layer, ...],
 ]
 # per rule: (rule, its condition or None when always true, its status slot, its reader, per clause)
-_Rule = tuple[CompiledRule, Callable[[Any], Any] | None, int, Reader, tuple[_Clause | None, ...]]
+_Rule = tuple[CompiledRule, Callable[[Any], Any] | None, int, Reader, list[Any]]
 # the inline case, per clause of the one rule an event triggers: (the decision's common
 # fields, the obligations, the one among them, its window's length, the layers, the
 # composition); None where it does not apply
 _Inline = tuple[dict[str, Any], tuple[Obligation, ...], Obligation, float | None, tuple[Layer, ...], Snapshot]
 # the one rule: (rule, condition, status slot, reader, value names, name, per clause)
-_One = tuple[
-    CompiledRule, Callable[[Any], Any] | None, int, Reader, tuple[str, ...], str, tuple[_Inline | None, ...]
-]
+_One = tuple[CompiledRule, Callable[[Any], Any] | None, int, Reader, tuple[str, ...], str, list[Any]]
 # (the decider it was made with, the semantics, the sentences for people; per rule, None when
 # no decision of the rules in force is quiet; the inline case or None)
 _Plan = tuple[Decider, Any, Any, tuple[_Rule, ...] | None, _One | None]
 # a decision on its way: (rule, decision, what it put in force, composition, layers, implementations)
 _Job = tuple[CompiledRule, Decision, list[Tracked], Snapshot, tuple[Layer, ...], Implementations]
 _Chosen = tuple[CompiledRule, int, _Clause, tuple[Obligation, ...], tuple[float | None, ...], Reader]
+
+
+UNMADE: Any = object()  # a clause's part of a plan not made yet (the parts are made when first needed)
 
 
 def _reader(names: tuple[str, ...]) -> Reader:
@@ -113,24 +114,41 @@ class Plans:
         return plan
 
     def _rule(self, rule: CompiledRule) -> _Rule:
-        clauses = tuple(self._clause(rule, k) for k in range(len(rule.layer_names)))
+        """A rule's part of a plan; its clauses' parts are made when a decision first needs them
+        (:meth:`clause_of`): an event's first trigger pays for one clause, not for all."""
         condition = None if rule.condition is always else rule.condition
-        return rule, condition, rule.index, _reader(rule.value_names), clauses
+        return rule, condition, rule.index, _reader(rule.value_names), [UNMADE] * len(rule.layer_names)
 
     @staticmethod
     def _one(planned: _Rule) -> _One:
-        """The inline case of an event that triggers one rule: per clause, what a decision that
-        requires one plain event made once needs."""
+        """The inline case of an event that triggers one rule (its clauses' parts made when
+        first needed: :meth:`inline_of`)."""
         rule, condition, index, reader, clauses = planned
-        inline: list[_Inline | None] = []
-        for entry in clauses:
-            obligations = None if entry is None else entry[0]
-            if entry is None or obligations is None or len(obligations) != 1:
-                inline.append(None)
+        return rule, condition, index, reader, rule.value_names, rule.name, [UNMADE] * len(clauses)
+
+    def clause_of(self, rule: CompiledRule, clause: int, clauses: list[Any]) -> _Clause | None:
+        """(Under the lock.) The part of ``rule``'s plan for ``clause``, made now if not yet
+        (kept in ``clauses``); None when no decision at it is quiet."""
+        entry = clauses[clause]
+        if entry is UNMADE:
+            entry = clauses[clause] = self._clause(rule, clause)
+        return entry  # type: ignore[no-any-return]
+
+    def inline_of(self, rule: CompiledRule, clause: int, inline: list[Any]) -> _Inline | None:
+        """(Under the lock.) The inline part of the one rule's plan for ``clause``, made now if
+        not yet (kept in ``inline``): what a decision that requires one plain event made once
+        needs; None when a decision at it is not that."""
+        entry = inline[clause]
+        if entry is UNMADE:
+            made = self._clause(rule, clause)
+            obligations = None if made is None else made[0]
+            if made is None or obligations is None or len(obligations) != 1:
+                entry = None
             else:
-                _, _, offsets, fields, composition, layers = entry
-                inline.append((fields, obligations, obligations[0], offsets[0], layers, composition))
-        return rule, condition, index, reader, rule.value_names, rule.name, tuple(inline)
+                _, _, offsets, fields, composition, layers = made
+                entry = (fields, obligations, obligations[0], offsets[0], layers, composition)
+            inline[clause] = entry
+        return entry  # type: ignore[no-any-return]
 
     def _clause(self, rule: CompiledRule, clause: int) -> _Clause | None:
         """What every decision of ``rule`` at ``clause`` shares; None when none is quiet (an
@@ -157,7 +175,6 @@ class Plans:
             explanations=core.decider.explanations,
         )
         composition = rule.compositions[clause]
-        prepare(composition.layers)  # (the COP frames its implementation runs under, made now)
         return obligations, spec, offsets, fields, composition, composition.layers
 
     def windows(self, obligations: tuple[Obligation, ...]) -> tuple[float | None, ...] | None:
@@ -203,6 +220,7 @@ class Plans:
         history = core.decisions.append
         from_fields = Decision.from_trigger_fields
         choose, put_in_force, run = self._choose, self._put_in_force, self._run
+        inline_of = self.inline_of
         local = runner.depth
         me = self
 
@@ -245,7 +263,12 @@ class Plans:
                         return None
                     status = core.layers.status[index]
                     clause = status[1]  # (RuleStatus.clause)
-                    entry = None if clause is None else clauses[clause]
+                    if clause is None:
+                        entry = None
+                    else:
+                        entry = clauses[clause]
+                        if entry is UNMADE:  # (the clause's first decision: its part made now)
+                            entry = inline_of(rule, clause, clauses)
                     if not fired or entry is None:
                         one = None  # (the general way below: nothing, or what is not inline)
                     else:
@@ -330,6 +353,8 @@ class Plans:
             if clause is None:
                 return None
             entry = clauses[clause]
+            if entry is UNMADE:  # (the clause's first decision: its part made now)
+                entry = self.clause_of(rule, clause, clauses)
             if entry is None:
                 return None
             obligations, offsets = entry[0], entry[2]

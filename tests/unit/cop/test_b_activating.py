@@ -17,10 +17,8 @@ from cosleec.cop import (
     activate_globally,
     activating,
     active_layers,
-    add_activation_hook,
     deactivate,
     deactivate_globally,
-    prepare,
 )
 
 LAYERS = [Layer(f"A{i}", priority=i % 2) for i in range(4)]
@@ -76,49 +74,3 @@ def test_hooks_fire_as_for_the_scope() -> None:
 def test_something_that_is_no_layer_is_refused() -> None:
     with pytest.raises(TypeError, match="expected Layer objects"):
         activating(("A0",), names)  # type: ignore[arg-type]
-
-
-# ---------------------------------------------------------------------------- prepare
-def _fresh(n: int) -> tuple[Layer, ...]:
-    """Layers never activated before (their frames are in no cache)."""
-    return tuple(Layer(f"P{i}", priority=i % 2) for i in range(n))
-
-
-@given(inner=st.lists(st.integers(0, 3), min_size=1, max_size=3), between=indices, outer=indices)
-def test_prepared_frames_give_what_frames_made_on_the_spot_give(
-    inner: list[int], between: list[int], outer: list[int]
-) -> None:
-    """``prepare`` makes the frames ``activating`` would make; used later -- after global
-    activations in between, inside another scope -- they give the composition of frames
-    made on the spot (here: with an activation hook registered, which no cache serves)."""
-    fresh = _fresh(4)
-    layers = tuple(fresh[i] for i in inner)
-    prepare(layers)
-    for i in between:
-        activate_globally(LAYERS[i])
-    try:
-        with activate(*(LAYERS[i] for i in outer)):
-            got = activating(layers, names)
-            seen: list[object] = []
-            remove = add_activation_hook(lambda layer, how: seen.append(layer))
-            try:
-                want = activating(layers, names)
-            finally:
-                remove()
-            assert seen  # (the hook saw the activation: nothing cached served it)
-            assert got == want
-    finally:
-        for i in between:
-            deactivate_globally(LAYERS[i])
-
-
-def test_prepare_runs_no_hook_and_refuses_what_is_no_layer() -> None:
-    seen: list[object] = []
-    remove = add_activation_hook(lambda layer, how: seen.append(layer))
-    try:
-        prepare(_fresh(2))  # a hook must see each activation when it happens: nothing is made
-    finally:
-        remove()
-    assert seen == [] and not active_layers()
-    with pytest.raises(TypeError, match="expected Layer"):
-        prepare(("R1.1",))  # type: ignore[arg-type]

@@ -21,6 +21,7 @@ from unittest import mock
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from cosleec import cop
 from cosleec.runtime import ContextError, Manager, VirtualClock
 from tests.unit.runtime.lookalike import Lookalike
 from tests.unit.semantics.differential import Case, HandClock, cases, reference, runtime
@@ -347,6 +348,39 @@ def test_values_given_with_an_event_not_named_by_a_string_are_not_applied() -> N
                 raise AssertionError("an event not named by a string was taken")
             assert m.values()["b"] is False, express
         m.close()
+
+
+def test_a_clause_layer_active_globally_is_met_as_the_general_path_meets_it() -> None:
+    """The robot's code has one of a rule's clause layers on globally when the event's plan is
+    made: the plan must not try the rule's other clauses' layers then (their exclusive group
+    would refuse them, and the trigger with them: fail open); it decides and runs as the
+    general path does (a hostile review's case)."""
+    text = rules(
+        "R1 when T then A within 5 seconds unless {b} then B within 2 seconds unless {c} then C within 2 seconds"
+    )
+    text = text.replace("measure b: boolean", "measure b: boolean\n  measure c: boolean")
+    seen = []
+    for express in (True, False):
+        m = build(text, express, clock=VirtualClock())
+        calls: list[tuple[str, list[str]]] = []
+        for e in "ABC":
+            m.capability(e)(
+                lambda ob, d, e=e, calls=calls: calls.append((e, [la.name for la in cop.active_layers()]))
+            )
+        m.start()
+        m.update({"b": True, "c": True, "n": 1})  # R1.2 chosen
+        r12 = m.ruleset.by_name["R1"].layers[1]
+        cop.activate_globally(r12)
+        try:
+            got = [(d.id, d.layer) for d in m.event("T")]
+            m.set_semantics("nested")  # (a new plan, made with the layer still on)
+            got += [(d.id, d.layer) for d in m.event("T")]
+        finally:
+            cop.deactivate_globally(r12)
+        seen.append((got, calls, m.stats["events"], m.stats["task_failures"], len(m.outstanding())))
+        m.close()
+    assert seen[0] == seen[1]
+    assert seen[0][0][0] == (1, "R1.2") and seen[0][1][0] == ("C", ["R1.2"])
 
 
 # the property last: the hand-made cases above fail first, and fast, when a guard goes
