@@ -153,7 +153,16 @@ def activating(layers: tuple[Layer, ...], fn: Callable[..., R], /, *args: Any) -
     for layer in layers:
         if not isinstance(layer, Layer):
             raise TypeError(f"expected Layer objects, got {layer!r}")
-        frame = _transition(frame, "activate", layer, g)
+        nxt = frame.transitions.get(("activate", layer))
+        if (  # the cached transition, as _transition takes it (without its call)
+            nxt is not None
+            and nxt.basis is g.layers
+            and not g.activation_hooks
+            and (layer.group is None or not g.layers)
+        ):
+            frame = nxt
+        else:
+            frame = _transition(frame, "activate", layer, g)
     token = dynamic.set(frame)
     try:
         return fn(*args)

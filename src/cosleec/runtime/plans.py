@@ -146,6 +146,7 @@ class Plans:
                 entry = None
             else:
                 _, _, offsets, fields, composition, layers = made
+                fields = {**fields, "obligations": obligations}  # (every decision at it has them)
                 entry = (fields, obligations, obligations[0], offsets[0], layers, composition)
             inline[clause] = entry
         return entry  # type: ignore[no-any-return]
@@ -218,7 +219,7 @@ class Plans:
         made, plan_of = self._made, self._plan
         quiet_for, start_plain, forgotten = tracker.quiet_for, tracker.start_plain, tracker.forgotten
         history = core.decisions.append
-        from_fields = Decision.from_trigger_fields
+        new_decision, set_dict = object.__new__, object.__setattr__
         choose, put_in_force, run = self._choose, self._put_in_force, self._run
         inline_of = self.inline_of
         local = runner.depth
@@ -272,7 +273,7 @@ class Plans:
                     if not fired or entry is None:
                         one = None  # (the general way below: nothing, or what is not inline)
                     else:
-                        fields, obligations, ob, off, layers, composition = entry
+                        fields, _, ob, off, layers, composition = entry
                         me.taken += 1
                         stats.events += 1
                         seq = counters["seq"]
@@ -283,16 +284,14 @@ class Plans:
                             read = reader(v)
                         except KeyError:  # an unknown value the condition did not need: None
                             read = tuple(map(v.get, value_names))
-                        d = from_fields(
-                            fields,
-                            did,
-                            now,
-                            name,
-                            obligations,
-                            (),
-                            context.version,
-                            (rule, read, True, status[0]),
-                        )
+                        dd = fields.copy()  # (Decision.from_trigger_fields, its obligations in `fields`)
+                        dd["id"] = did
+                        dd["time"] = now
+                        dd["event"] = name
+                        dd["context_version"] = context.version
+                        dd["_parts"] = (rule, read, True, status[0])
+                        d = new_decision(Decision)
+                        set_dict(d, "__dict__", dd)
                         t = start_plain(did, clause, rname, ob, now, None if off is None else now + off, seq)
                         history(d)
                         stats.decisions += 1

@@ -383,6 +383,32 @@ def test_a_clause_layer_active_globally_is_met_as_the_general_path_meets_it() ->
     assert seen[0][0][0] == (1, "R1.2") and seen[0][1][0] == ("C", ["R1.2"])
 
 
+def test_a_planned_decision_is_the_general_path_s_field_for_field() -> None:
+    """The plan makes the inline case's decision itself (Decision.from_trigger_fields, with the
+    clause's obligations in its common fields): every field, the memos and what is made when
+    first read included, must be the general path's -- one rule inline, two rules, a clause
+    and the default, values unknown to the decision but not to the condition."""
+    text = rules(
+        "R1 when T and {b} then A within 5 seconds unless {b} then B within 2 seconds",
+        "R2 when C then A within 3 seconds",
+        "R3 when C then B within 4 seconds unless (n > K) then A within 1 seconds",
+    )
+    made = []
+    for express in (True, False):
+        m = build(text, express, clock=VirtualClock(3))  # (a clock that counts in whole seconds)
+        m.start(check=False)
+        m.update({"b": True, "n": 5})
+        got = m.event("T") + m.event("C")
+        m.update({"n": 1})
+        got += m.event("C")
+        fields = [{k: v for k, v in vars(d).items() if k != "_parts"} for d in got]
+        parts = [(p[0].name, *p[1:]) for p in (vars(d)["_parts"] for d in got)]  # (each Manager's own rule)
+        made.append((fields, parts, [(d.values, d.conditions, d.explanation) for d in got]))
+        assert taken(m) == (3 if express else 0)
+        m.close()
+    assert made[0] == made[1]
+
+
 # the property last: the hand-made cases above fail first, and fast, when a guard goes
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(cases(), st.booleans())
