@@ -20,7 +20,8 @@ It is a second implementation of that case, so it decides nothing the general pa
 would not: it first checks, before changing anything, that every stage would find
 nothing to do (:meth:`Express.occur` returns None otherwise, and the general path takes
 the trigger), and a property test holds the two equal, record for record, on generated
-rule sets and traces (``tests/unit/runtime/test_express.py``). It never runs with a
+rule sets and traces (``tests/unit/runtime/test_express_generated.py``; hand-made cases in
+``test_express.py``). It never runs with a
 journal (a decision's outbox entry and its commit are the general path's), so the kill
 campaigns exercise the general path. ``COSLEEC_EXPRESS=0`` turns it off, for the suite
 to run against the general path alone.

@@ -19,7 +19,7 @@ reload (a new decider), ``set_semantics`` or ``explain`` makes a new one at the 
 trigger. It is a second implementation of the express lane's trigger, checked before it
 changes anything the same way (the trigger returns None and the general path takes the
 occurrence), held equal to the general path record for record by the express
-lane's property test (``tests/unit/runtime/test_express.py``), and off with the lane
+lane's tests (``tests/unit/runtime/test_express.py``, ``test_express_generated.py``), and off with the lane
 (``COSLEEC_EXPRESS=0``).
 """
 

@@ -18,13 +18,10 @@ import re
 from typing import Any, NamedTuple
 from unittest import mock
 
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-
 from cosleec import cop
 from cosleec.runtime import ContextError, Manager, VirtualClock
 from tests.unit.runtime.lookalike import Lookalike
-from tests.unit.semantics.differential import Case, HandClock, cases, reference, runtime
+from tests.unit.semantics.differential import Case, HandClock
 
 HEADER = """def_start
   event T
@@ -407,20 +404,3 @@ def test_a_planned_decision_is_the_general_path_s_field_for_field() -> None:
         assert taken(m) == (3 if express else 0)
         m.close()
     assert made[0] == made[1]
-
-
-# the property last: the hand-made cases above fail first, and fast, when a guard goes
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(cases(), st.booleans())
-def test_the_lane_changes_nothing_on_generated_rules(case: Case, action_triggers: bool) -> None:
-    with mock.patch.dict(os.environ, {"COSLEEC_EXPRESS": "0"}):  # the differential test, general path
-        assert runtime(case) == reference(case), case
-    text = case.text.replace("when T1", "when A") if action_triggers else case.text
-    same(
-        text,
-        trace_of(case),
-        semantics=case.semantics,
-        priorities=list(case.priorities),
-        priority_semantics=case.priority_semantics,
-        priority_lead=case.lead,
-    )
