@@ -42,19 +42,19 @@ has found: the figure the runtime's parts are measured against (``dispatch_path`
 
 from __future__ import annotations
 
-import dataclasses
 import heapq
 import threading
 from collections import deque
-from operator import itemgetter
 from typing import Any
 
+from cosleec.bulk import positional_init
 from cosleec.cop import activating
 from cosleec.runtime import Manager
 from cosleec.runtime.decision import Decision, DecisionOrigin
 from cosleec.runtime.implementations import _RUNS, Ran
 from cosleec.runtime.layers import RuleStatus
 from cosleec.runtime.obligations import FULFILLED, PENDING, VIOLATED, Tracked
+from cosleec.runtime.plans import reader as value_reader
 
 _tnew = tuple.__new__  # what RuleStatus.__new__ does, without its Python frame
 _heappush = heapq.heappush
@@ -79,39 +79,7 @@ _GIVEN = (
 )
 
 
-def _tracked_init():  # type: ignore[no-untyped-def]
-    """``Tracked.__init__`` with the arguments a trigger gives, positional: the same stores, in
-    the dataclass's field order, its defaults and default factories, made from its fields (as
-    ``dataclass`` makes its own ``__init__``), without the keyword matching."""
-    fields = dataclasses.fields(Tracked)
-    assert not hasattr(Tracked, "__post_init__") and {f.name for f in fields} >= set(_GIVEN)
-    ns: dict[str, Any] = {}
-    body = []
-    for f in fields:
-        if f.name in _GIVEN:
-            body.append(f"    t.{f.name} = {f.name}")
-        elif f.default_factory is not dataclasses.MISSING:
-            ns[f"_f_{f.name}"] = f.default_factory
-            body.append(f"    t.{f.name} = _f_{f.name}()")
-        else:
-            assert f.default is not dataclasses.MISSING
-            ns[f"_d_{f.name}"] = f.default
-            body.append(f"    t.{f.name} = _d_{f.name}")
-    exec(f"def init(t, {', '.join(_GIVEN)}):\n" + "\n".join(body) + "\n", ns)
-    return ns["init"]
-
-
-_init_tracked = _tracked_init()
-
-
-def _reader(names: tuple[str, ...]):  # type: ignore[no-untyped-def]
-    """tuple(map(v.get, names)) in one C call while every value is known."""
-    if not names:
-        return lambda v: ()
-    if len(names) == 1:
-        (n,) = names
-        return lambda v: (v[n],)
-    return itemgetter(*names)
+_init_tracked = positional_init(Tracked, _GIVEN)  # (what the tracker's start_plain sets, positional)
 
 
 class Floor:
@@ -169,7 +137,7 @@ class Floor:
                         rule,
                         rule.index,
                         rule.condition,
-                        _reader(rule.value_names),
+                        value_reader(rule.value_names),
                         rule.value_names,
                         tuple(per_clause),
                     )

@@ -73,7 +73,7 @@ _Chosen = tuple[CompiledRule, int, _Clause, tuple[Obligation, ...], tuple[float 
 UNMADE: Any = object()  # a clause's part of a plan not made yet (the parts are made when first needed)
 
 
-def _reader(names: tuple[str, ...]) -> Reader:
+def reader(names: tuple[str, ...]) -> Reader:
     """``tuple(map(values.__getitem__, names))`` in one C call (KeyError when one is unknown)."""
     if not names:
         return lambda v: ()
@@ -117,7 +117,7 @@ class Plans:
         """A rule's part of a plan; its clauses' parts are made when a decision first needs them
         (:meth:`clause_of`): an event's first trigger pays for one clause, not for all."""
         condition = None if rule.condition is always else rule.condition
-        return rule, condition, rule.index, _reader(rule.value_names), [UNMADE] * len(rule.layer_names)
+        return rule, condition, rule.index, reader(rule.value_names), [UNMADE] * len(rule.layer_names)
 
     @staticmethod
     def _one(planned: _Rule) -> _One:
