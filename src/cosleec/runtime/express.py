@@ -169,20 +169,18 @@ class Express:
         name: str,
         chosen: list[tuple[CompiledRule, int, tuple[Obligation, ...]]],
         now: float,
-        step: Step | None,
+        step: Step,
     ) -> tuple[list[Decision], list[Job]]:
         """(Under the lock.) The occurrence at ``now``, then each rule's decision and its
-        obligations, with their records in ``step`` (None: nobody reads records), in the
-        order the general path makes them."""
+        obligations, with their records in ``step``, in the order the general path makes
+        them (when nobody reads records the plans take the trigger: cosleec.runtime.plans)."""
         core = self.core
         steps, tracker = core.steps, core.tracker
         core.stats.events += 1
         counters = steps.counters
         seq = counters["seq"]
         counters["seq"] = seq + 1
-        recording = step is not None and steps.recording
-        if recording:
-            assert step is not None
+        if steps.recording:
             step.emit(Kind.OCCURRENCE, {"event": name, "causal": seq}, now)
         decider, status = core.decider, core.layers.status
         decisions: list[Decision] = []
@@ -195,15 +193,8 @@ class Express:
             )
             decisions.append(d)
             started = [tracker.start(did, clause, ob, now, seq, 0, did) for ob in obligations]
-            if recording:
-                assert step is not None
-                rec = core.record(d, step, queue=True)
-                for t in started:
-                    core.track(t, step)
-            else:  # what those two do when nobody reads records
-                core.decisions.append(d)
-                core.stats.decisions += 1
-                tracker.forgotten.clear()
-                rec = None
+            rec = core.record(d, step, queue=True)
+            for t in started:
+                core.track(t, step)
             jobs.append(Job(rule, d, rule.compositions[clause], started, rec, core.implementations))
         return decisions, jobs
