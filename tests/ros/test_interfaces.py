@@ -273,8 +273,14 @@ def test_diagnostics_report_a_rejected_message(
     with System(backend, namespace, env=graph, nodes=[manager()]):
         driver = Driver(transport, namespace, tasks=())
         driver.ready(layers=False)
-        driver.event("NoSuchEvent")  # a typed Event naming what no rule declares: rejected
         mine = node_name(namespace, "manager")
+        # the node reports once a second while nothing changes: one report heard first means
+        # this subscriber is connected, so the WARN (sent once, at the change) cannot pass it by
+        diagnostics.wait(
+            lambda got: any(mine in st["name"] for arr in got for st in arr["status"]),
+            what="a first diagnostic of the Manager",
+        )
+        driver.event("NoSuchEvent")  # a typed Event naming what no rule declares: rejected
 
         def warned(got: list[dict[str, Any]]) -> bool:
             for arr in got:

@@ -72,6 +72,7 @@ class Ros1Transport:
         self._clients: dict[str, Any] = {}
         self._guard = CallbackGuard()
         self.diagnostics = Diagnostics(node_name, self._publish_diagnostics)
+        self._diagnostics_publisher()
 
     @property
     def wire(self) -> str:
@@ -302,13 +303,21 @@ class Ros1Transport:
         return bool(self._rospy.get_param("~use_sim_time", self._rospy.get_param("/use_sim_time", False)))
 
     # ------------------------------------------------------------------ diagnostics
-    def _publish_diagnostics(self, fields: dict[str, Any]) -> None:
+    def _diagnostics_publisher(self) -> Any:
+        """The ``/diagnostics`` publisher, made when the node starts.
+
+        Made then, not at the first report: a publisher made just before it publishes has
+        no subscriber connected yet, and the report (a WARN sent once, at the change of
+        level) would be lost to every monitor.
+        """
         from diagnostic_msgs.msg import DiagnosticArray
 
-        pub = self._pubs.make(
+        return self._pubs.make(
             "/diagnostics#", lambda: self._rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=10)
         )
-        pub.publish(self._wire.diagnostics(fields))
+
+    def _publish_diagnostics(self, fields: dict[str, Any]) -> None:
+        self._diagnostics_publisher().publish(self._wire.diagnostics(fields))
 
     # ------------------------------------------------------------------ end
     def ok(self) -> bool:

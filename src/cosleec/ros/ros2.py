@@ -96,6 +96,7 @@ class Ros2Transport:
         self._guard = CallbackGuard()
         self._events = QosEvents()
         self.diagnostics = Diagnostics(node_name, self._publish_diagnostics)
+        self._diagnostics_publisher()
         self._spin = _Spin(self.node, node_name)
         self.executor = self._spin.executor
 
@@ -342,13 +343,21 @@ class Ros2Transport:
         return bool(result == TransitionCallbackReturn.SUCCESS)
 
     # ------------------------------------------------------------------ diagnostics
-    def _publish_diagnostics(self, fields: dict[str, Any]) -> None:
+    def _diagnostics_publisher(self) -> Any:
+        """The ``/diagnostics`` publisher, made when the node starts.
+
+        Made then, not at the first report: a publisher made just before it publishes has
+        no subscriber connected yet, and the report (a WARN sent once, at the change of
+        level) would be lost to every monitor.
+        """
         from diagnostic_msgs.msg import DiagnosticArray
 
-        pub = self._pubs.make(
+        return self._pubs.make(
             "/diagnostics#", lambda: self.node.create_publisher(DiagnosticArray, "/diagnostics", 10)
         )
-        pub.publish(self._wire.diagnostics(fields))
+
+    def _publish_diagnostics(self, fields: dict[str, Any]) -> None:
+        self._diagnostics_publisher().publish(self._wire.diagnostics(fields))
 
     # ------------------------------------------------------------------ end
     def ok(self) -> bool:
