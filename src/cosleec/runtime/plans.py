@@ -31,6 +31,7 @@ from typing import Any
 
 from cosleec.cop import Layer, Snapshot
 from cosleec.lang import Untimed
+from cosleec.records import Kind
 from cosleec.runtime.compile import always
 from cosleec.runtime.core import Core
 from cosleec.runtime.decider import Decider
@@ -43,6 +44,7 @@ from cosleec.runtime.obligations import PENDING, Tracked
 from cosleec.runtime.runner import Runner
 from cosleec.runtime.timer import Timer
 
+OCCURRENCE = Kind.OCCURRENCE
 Reader = Callable[[Any], tuple[Any, ...]]
 # per clause: (obligations, None when made at the trigger; the spec; their windows' lengths;
 # the decision's common fields; the composition; its layers); None: never quiet
@@ -202,14 +204,17 @@ class Plans:
         reload replaces is read through the plan, made for the rules in force. Its owner
         keeps it (this object does not: it would be a reference cycle).
 
-        ``trigger(name)``: event ``name`` occurred, when the runtime is quiet and nobody
-        reads records: its decisions, once their implementations ran (as the general path
-        runs them); None, having changed nothing, otherwise (the general path takes it).
-        It takes the runtime's lock without a step: a step would have nothing to record,
-        commit or deliver, so what the lock alone guarantees -- this occurrence ordered with
-        every other step -- is what is left. The usual case -- one rule, which fires, its
-        clause requiring one plain event -- runs inline; any other, through :meth:`_choose`,
-        :meth:`_put_in_force` and :meth:`_run`.
+        ``trigger(name)``: event ``name`` occurred, when the runtime is quiet and no journal
+        keeps it: its decisions, once their implementations ran (as the general path runs
+        them); None, having changed nothing, otherwise (the general path takes it). When
+        nobody reads records it takes the runtime's lock without a step: a step would have
+        nothing to record, commit or deliver, so what the lock alone guarantees -- this
+        occurrence ordered with every other step -- is what is left. The usual case -- one
+        rule, which fires, its clause requiring one plain event -- runs inline; any other,
+        through :meth:`_choose`, :meth:`_put_in_force` and :meth:`_run`. When observers or
+        the audit log read records, the usual case runs inline in a step, with the records
+        the express lane makes (occurrence, decision, obligation; the outcome in a step of
+        its own, as :meth:`Runner.finished` records it); any other goes the general way.
         """
         core, gate, timer, runner = self.core, self.gate, self.timer, self.runner
         steps, tracker, stats = core.steps, core.tracker, core.stats
@@ -228,15 +233,19 @@ class Plans:
         def trigger(name: str) -> list[Decision] | None:
             if type(name) is not str:  # (a lookalike or unhashable name: the general path refuses it)
                 return None
-            with lock:
+            # records read by observers or the audit log: in a step, made as the lane makes them
+            recording = bool(steps.observers) or steps.audit is not None
+            if recording and (steps.broken is not None or steps.closed or steps.before_commit is not None):
+                return None  # (a refusal, or a step another part adds to: the general way)
+            scope: Any = steps.step() if recording else lock  # (as `step`: the Step, or the lock's True)
+            with scope as step:
                 if (
                     steps.broken is not None
                     or steps.closed
-                    or steps.observers
-                    or steps.audit is not None
                     or steps.journal is not None
+                    or (not recording and (steps.observers or steps.audit is not None))
                 ):
-                    return None  # (a refusal, or records to make: the general way, with a step)
+                    return None  # (a refusal, a journal, or a reader since: the general way, with a step)
                 decider = core.decider
                 plan = made.get(name)
                 if (
@@ -251,7 +260,7 @@ class Plans:
                 rules, one = plan[3], plan[4]
                 if rules is None or gate.held:
                     return None
-                now = now_of()  # read under the lock, as a step reads it
+                now = step.now if recording else now_of()  # read under the lock, as a step reads it
                 if not quiet_for(name, now):
                     return None
                 if one is not None:  # one rule: it fires, its clause's one plain event, inline
@@ -293,11 +302,20 @@ class Plans:
                         d = new_decision(Decision)
                         set_dict(d, "__dict__", dd)
                         t = start_plain(did, clause, rname, ob, now, None if off is None else now + off, seq)
-                        history(d)
-                        stats.decisions += 1
-                        forgotten.clear()  # (what Core.track does when nobody reads records)
+                        if (
+                            recording
+                        ):  # the occurrence, the decision and its obligation, as the lane records them
+                            step.emit(OCCURRENCE, {"event": name, "causal": seq}, now)
+                            core.record(d, step, queue=True)
+                            core.track(t, step)
+                        else:
+                            history(d)
+                            stats.decisions += 1
+                            forgotten.clear()  # (what Core.track does when nobody reads records)
                         impl = core.implementations
                 if one is None:
+                    if recording:  # (not inline: the lane makes its records, in the general path's step)
+                        return None
                     chosen = choose(rules)
                     if chosen is None:
                         return None

@@ -13,6 +13,7 @@ the lane where it is quiet and refused where it is not.
 
 from __future__ import annotations
 
+import json
 import os
 import re
 from typing import Any, NamedTuple
@@ -137,6 +138,54 @@ QUIET = rules("R1 when T then A within 5 seconds unless {b} then B within 2 seco
 def test_a_quiet_trigger_takes_the_lane_and_decides_as_the_general_path() -> None:
     trace = [(0.0, {"b": False, "n": 1}), (1.0, "T"), (2.0, "A"), (3.0, {"b": True}), (4.0, "T"), (5.0, "B")]
     assert same(QUIET, trace) == (2, 2)
+
+
+def test_with_records_read_the_plan_takes_the_quiet_trigger_and_records_what_the_general_path_does(
+    tmp_path: Any,
+) -> None:
+    # an observer, then the audit log: the event's plan takes the quiet trigger in a step of
+    # its own (not the lane's step in the general path), record for record the same
+    trace = [(0.0, {"b": False, "n": 1}), (1.0, "T"), (2.0, "A"), (3.0, {"b": True}), (4.0, "T"), (5.0, "B")]
+    for reader in ("observer", "audit"):
+        seen = []
+        for express in (False, True):
+            clock = HandClock()
+            audit = tmp_path / f"{reader}-{express}.jsonl" if reader == "audit" else None
+            m = build(QUIET, express, clock=clock, audit=audit)
+            heard: list[tuple[Any, ...]] = []
+            if reader == "observer":
+                m.subscribe(lambda ev, heard=heard: heard.append((ev.seq, ev.kind, ev.time, ev.data)))
+            ran: list[tuple[str, int]] = []
+            for action in "AB":
+                m.capability(action)(lambda ob, d, a=action, ran=ran: ran.append((a, d.id)))
+            m.start()
+            for t, what in trace:
+                clock.set(t)
+                if isinstance(what, dict):
+                    m.update(what)
+                else:
+                    m.event(what)
+            m.close()
+            if audit is not None:
+                lines = [json.loads(line) for line in audit.read_text().splitlines()]
+                heard = [  # each line whole, but for when it was written and the run's id
+                    (
+                        r["seq"],
+                        r["kind"],
+                        r["time"],
+                        {k: v for k, v in r.items() if k not in ("wall", "mono", "run")},
+                    )
+                    for r in lines
+                ]
+            plans = 0 if m._plans is None else m._plans.taken
+            seen.append((heard, ran, m.stats["decisions"], plans, taken(m)))
+        general, planned = seen
+        assert planned[:3] == general[:3], reader
+        assert any(k == "task-done" for _, k, _, _ in planned[0]), reader  # the outcome is recorded
+        assert (general[3], general[4]) == (0, 0)
+        assert (planned[3], planned[4]) == (2, 2), (
+            f"{reader}: the plan took {planned[3]} of the 2 quiet triggers"
+        )
 
 
 # each: rules, a trace whose last trigger is not quiet, and why the lane must leave it
