@@ -157,6 +157,14 @@ class Floor:
         self._ran_ok: dict[str, Ran] = {}  # a successful run's outcome is an immutable value: shared
         self.trigger = self._make_trigger()
 
+    def take_context(self, m: Manager) -> None:
+        """(With ``own_context``.) The Manager's values and rule statuses now, copied into the
+        floor's own, in place (its trigger holds them): a floor built before a benchmark's
+        warm-up starts its timed pass from the context the runtime's started from."""
+        self.values.clear()
+        self.values.update(m.core.context.values)
+        self.status[:] = m.core.layers.status
+
     # ------------------------------------------------------------------ steps' common parts
     def _time_passes(self, now: float) -> None:
         heap, active, by_event = self.heap, self.active, self.by_event
