@@ -10,11 +10,12 @@ lane does exactly that in one pass, without the stages' calls (:meth:`Express.oc
 the step, when records are read; when nobody reads them, the event's plan does it without
 a step: :mod:`cosleec.runtime.plans`).
 
-A context update meets the same quiet runtime when, besides, nobody reads records: then
-the step's scope, time passing, the gate and the runner each find nothing to do, and what
-is left is the values validated, stored and stamped, and the rules that read them
-re-evaluated (:meth:`Express.update`). An update that is rejected is recorded by the
-general path, with the reason the lane found.
+A context update meets the same quiet runtime when no journal keeps the state: then time
+passing, the gate and the runner each find nothing to do, and what is left is the values
+validated, stored and stamped, and the rules that read them re-evaluated
+(:meth:`Express.update`) -- when nobody reads records, without a step (nothing to record,
+commit or deliver); else in one, with the records the general path makes. An update that
+is rejected is recorded by the general path, with the reason the lane found.
 
 It is a second implementation of that case, so it decides nothing the general path
 would not: it first checks, before changing anything, that every stage would find
@@ -58,13 +59,16 @@ class Express:
         self.updated = 0  # updates it took
 
     def update(self, updates: Mapping[str, object]) -> list[LayerSwitch] | ContextError | None:
-        """Apply ``updates`` and return the layer switches, when the runtime is quiet and
-        nobody reads records; None, having changed nothing, when the general path must; the
+        """Apply ``updates`` and return the layer switches, when the runtime is quiet and no
+        journal keeps it (records read: :meth:`_recorded`); None, having changed nothing,
+        when the general path must; the
         ContextError, having changed nothing, when the update is rejected (the general path
         records the rejection with it: the values are not checked twice, and a value's
         ``repr`` runs as often as on the general path)."""
         core = self.core
         steps, context = core.steps, core.context
+        if steps.observers or steps.audit is not None:
+            return self._recorded(updates)
         with steps.lock:  # what the general path's step would check, under the same lock
             if (
                 steps.broken is not None
@@ -93,6 +97,35 @@ class Express:
             core.stats.updates += 1
             self.updated += 1
             return core.layers.update(changed, context.values) if changed else []
+
+    def _recorded(self, updates: Mapping[str, object]) -> list[LayerSwitch] | ContextError | None:
+        """:meth:`update` when observers or the audit log read records (and no journal keeps
+        the state): in a step, the values checked and applied with their records
+        (:meth:`Core.apply`: the ``context`` record, the ``layers`` record of any switch), as
+        the general path applies them; the general path's other stages -- time passing, the
+        gate, the runner -- each find nothing to do in a quiet runtime, so none is asked."""
+        core = self.core
+        steps, context = core.steps, core.context
+        if steps.broken is not None or steps.closed or steps.before_commit is not None:
+            return None  # (a refusal, or a step another part adds to: the general way)
+        with steps.step() as step:
+            if (
+                steps.journal is not None
+                or not (steps.observers or steps.audit is not None)
+                or context.aging
+                or core.aware
+                or self.gate.held
+                or core.tracker.bans
+                or core.tracker.backlog(step.now)
+            ):
+                return None
+            try:
+                stored = context.validate(updates)
+            except ContextError as e:
+                return e
+            core.stats.updates += 1
+            self.updated += 1
+            return core.apply(stored, step)
 
     def occur(self, name: str, step: Step) -> tuple[list[Decision], list[Job]] | None:
         """(In ``step``: records are read.) Event ``name`` occurred: its decisions and the jobs

@@ -75,7 +75,7 @@ import threading
 import time
 import urllib.parse
 import weakref
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -515,7 +515,7 @@ class Journal:
                     (
                         "context",
                         "name",
-                        [(n, json.dumps(cv[0]), cv[1]) for n, cv in change.context.items() if cv],
+                        [(n, _value(cv[0]), cv[1]) for n, cv in change.context.items() if cv],
                     ),
                     ("obligations", "id", [(k, _dumps(r)) for k, r in change.obligations.items() if r]),
                     ("outbox", "id", [(k, _dumps(r)) for k, r in change.outbox.items() if r]),
@@ -791,5 +791,12 @@ def _hint(e: BaseException, path: Path, otherwise: str) -> str:
     return otherwise
 
 
-def _dumps(record: Mapping[str, Any]) -> str:
-    return json.dumps(record, default=str, separators=(",", ":"))
+#: ``json.dumps(record, default=str, separators=(",", ":"))`` without an encoder made per call
+#: (a step commits several records); stateless, so shared by threads
+_dumps: Callable[[Mapping[str, Any]], str] = json.JSONEncoder(default=str, separators=(",", ":")).encode
+_plain = json.JSONEncoder().encode  # what ``json.dumps(x)`` gives, without its call's checks
+
+
+def _value(x: object) -> str:
+    """A measure's value as the journal keeps it (``json.dumps(x)``); a boolean without a call."""
+    return "true" if x is True else "false" if x is False else _plain(x)

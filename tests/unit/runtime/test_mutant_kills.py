@@ -435,16 +435,20 @@ def test_an_update_after_a_deadline_passed_judges_the_deadline_first() -> None:
     m.close()
 
 
-def test_an_update_after_a_held_action_s_interval_opened_dispatches_it() -> None:
-    """express-update-ignores-held: an update taken by the express lane while an action is
-    held would leave it held past the opening of its interval, which the update's step
-    notices (no timer runs on a virtual clock)."""
+@pytest.mark.parametrize("watched", [False, True])
+def test_an_update_after_a_held_action_s_interval_opened_dispatches_it(watched: bool) -> None:
+    """express-update-ignores-held (and, with an observer, express-recorded-update-ignores-held):
+    an update taken by the express lane while an action is held would leave it held past the
+    opening of its interval, which the update's step notices (no timer runs on a virtual
+    clock)."""
     text = (
         "def_start event C event A event B measure b : boolean def_end rule_start "
         "R1 when C then B within [2 seconds, 5 seconds] rule_end"
     )
     clock, calls = SetClock(0.0), []
     m = _quiet_manager(text, clock, calls, "B")
+    if watched:  # records read: the lane's update in a step of its own
+        m.subscribe(lambda ev: None)
     m.update({"b": False})
     m.event("C")
     assert calls == []  # held until its interval opens
