@@ -6,7 +6,8 @@ state is unchanged. A measure never set, or older than its ``max_age``, is *unkn
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import functools
+from collections.abc import Callable, Collection, Mapping
 from typing import Any
 
 from cosleec.errors import closest, show
@@ -133,6 +134,14 @@ class Context:
         times = [self.stamps[n] + age for n, age in self._aged if n in self.values]
         return min(times) if times else None
 
+    def record_of(self, stored: Mapping[str, Any], changed: Collection[str]) -> Callable[[], dict[str, Any]]:
+        """The ``context`` record of values :meth:`apply` just stored (``stored``, of which
+        ``changed`` changed), as a function that makes it: ``{"values": ..., "version": ...}``,
+        the changed values as users see them, by name. It keeps ``stored`` and ``changed``,
+        which nobody changes once applied, and the version now, so it makes the same record
+        whenever it is called (``Step.emit_later``)."""
+        return functools.partial(_context_record, stored, changed, self.version, self._scales)
+
     def external(self, names: Any = None) -> dict[str, Value | None]:
         """Values as users see them; ``None`` for unknown."""
         keys = self.measures if names is None else names
@@ -145,3 +154,15 @@ class Context:
                 if v is not None and n in scales:
                     out[n] = scales[n][int(v)]
         return out
+
+
+def _context_record(
+    stored: Mapping[str, Any], changed: Collection[str], version: int, scales: Mapping[str, tuple[str, ...]]
+) -> dict[str, Any]:
+    """What :meth:`Context.record_of` makes: as :meth:`Context.external` shows the changed
+    values just after they were stored."""
+    values = {n: stored[n] for n in sorted(changed)}
+    for n, v in values.items():
+        if v is not None and n in scales:
+            values[n] = scales[n][int(v)]
+    return {"values": values, "version": version}

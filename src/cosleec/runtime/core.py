@@ -198,7 +198,8 @@ class Core:
     def switched(self, switches: list[LayerSwitch], step: Step) -> list[LayerSwitch]:
         """Announce layer switches to observers; returns them."""
         if switches and self.steps.recording:
-            step.emit(Kind.LAYERS, self.layers.state(switches).to_json())
+            # (the state is a value: its record is made when someone reads it)
+            step.emit_later(Kind.LAYERS, self.layers.state(switches).to_json)
         return switches
 
     def apply(self, stored: dict[str, Any], step: Step) -> list[LayerSwitch]:
@@ -208,10 +209,8 @@ class Core:
         if self.journal:
             step.change.context.update((n, (x, now)) for n, x in context.external(stored).items())
         switches = self.layers.update(changed, context.values) if changed else []
-        if changed and self.steps.recording:
-            step.emit(
-                Kind.CONTEXT, {"values": context.external(sorted(changed)), "version": context.version}, now
-            )
+        if changed and self.steps.recording:  # (made when someone reads it, from what it keeps)
+            step.emit_later(Kind.CONTEXT, context.record_of(stored, changed))
         return self.switched(switches, step)
 
     def options_record(self) -> dict[str, Any]:

@@ -89,3 +89,24 @@ def test_a_key_that_only_compares_equal_to_a_name_names_no_measure() -> None:
     with pytest.raises(ContextError, match="named by a string"):
         ctx.validate({Lookalike("b"): True})  # type: ignore[dict-item]
     assert ctx.values == {} and ctx.version == 0
+
+
+@given(st.lists(UPDATES, max_size=6))
+def test_a_context_record_made_when_read_is_the_one_made_at_once(updates: list[dict[str, object]]) -> None:
+    """``record_of`` keeps what a ``context`` record shows (the values just applied, scale
+    literals by name, the version then) and makes, whenever it is called -- after later
+    updates too -- what ``external`` showed at once."""
+    ctx = Context(MEASURES)
+    kept = []
+    for i, update in enumerate(updates):
+        try:
+            stored = ctx.validate(update)
+        except ContextError:
+            continue
+        changed = ctx.apply(stored, float(i))
+        if changed:
+            at_once = {"values": ctx.external(sorted(changed)), "version": ctx.version}
+            kept.append((at_once, ctx.record_of(stored, changed)))
+    for at_once, make in kept:
+        assert make() == at_once
+        assert make() == at_once  # (each call makes the same record)
