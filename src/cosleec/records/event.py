@@ -36,7 +36,11 @@ class RuntimeEvent:
         (a frozen dataclass sets each field through ``object.__setattr__``; a decision with
         observers makes several records). ``kind`` is taken as given: no conversion."""
         ev = object.__new__(cls)
-        ev.__dict__.update(kind=kind, time=time, data=data, seq=seq)
+        d = ev.__dict__  # (four stores: cheaper than an update from keywords)
+        d["kind"] = kind
+        d["time"] = time
+        d["data"] = data
+        d["seq"] = seq
         return ev
 
     @classmethod
@@ -45,7 +49,11 @@ class RuntimeEvent:
         any thread; ``make`` must give the same record whenever it is called, so it may only
         read what no longer changes). Equal to :meth:`made` with that data."""
         ev = object.__new__(cls)
-        ev.__dict__.update(kind=kind, time=time, seq=seq, _make=make)
+        d = ev.__dict__
+        d["kind"] = kind
+        d["time"] = time
+        d["seq"] = seq
+        d["_make"] = make
         return ev
 
     def __getattr__(self, name: str) -> Any:

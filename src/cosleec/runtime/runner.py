@@ -13,6 +13,7 @@ stops that (a ``task-failed`` record) before Python's stack runs out.
 
 from __future__ import annotations
 
+import functools
 import logging
 import sys
 import threading
@@ -113,16 +114,10 @@ class Runner:
         if not core.steps.recording:
             return
         with core.steps.step() as step:
-            for r in ran:
-                step.emit(
+            for r in ran:  # (what the record shows no longer changes: it is made when read)
+                step.emit_later(
                     Kind.TASK_DONE if r.ok else Kind.TASK_FAILED,
-                    {
-                        "rule": rule.name,
-                        "decision": d.id,
-                        "clause": d.clause,
-                        **r.to_json(),
-                        "checked": checked,
-                    },
+                    functools.partial(_outcome, rule.name, d.id, d.clause, r, checked),
                 )
             if core.journal and core.dispatch:
                 self.gate.landed(d.id, actions, step)  # (a decision with actions still held keeps its entry)
@@ -140,3 +135,8 @@ class Runner:
         ]
         log.error("%s: %s", rule.name, ran[0].error)
         return ran
+
+
+def _outcome(rule: str, decision: int, clause: int | None, r: Ran, checked: int) -> dict[str, Any]:
+    """The data of a ``task-done`` or ``task-failed`` record (see :meth:`Runner.finished`)."""
+    return {"rule": rule, "decision": decision, "clause": clause, **r.to_json(), "checked": checked}
