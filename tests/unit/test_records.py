@@ -163,6 +163,58 @@ def test_values_json_cannot_hold_are_written_as_text_and_one_header_serves_a_ste
     )
 
 
+class _Shown:
+    """A value JSON cannot hold: written as its ``str``."""
+
+    def __str__(self) -> str:
+        return "shown ü"
+
+
+_ATOMS = (
+    st.none()
+    | st.booleans()
+    | st.integers(min_value=-(2**70), max_value=2**70)  # beyond 64 bits too
+    | st.floats(allow_nan=False, allow_infinity=False)
+    | st.text(max_size=8)  # not only ASCII
+    | st.sampled_from([_Shown(), Path("/x"), Kind.DECISION])
+)
+_DATA = st.recursive(
+    _ATOMS,
+    lambda inner: (
+        st.lists(inner, max_size=4)
+        | st.tuples(inner, inner)
+        | st.dictionaries(st.text(max_size=6) | st.integers(-5, 5) | st.booleans(), inner, max_size=4)
+    ),
+    max_leaves=12,
+)
+
+
+def _exponents(x: object) -> bool:
+    """Does ``x`` hold a float whose repr has an exponent (spelt differently by orjson)?"""
+    if isinstance(x, float):
+        return "e" in repr(x)
+    if isinstance(x, dict):
+        return any(_exponents(k) or _exponents(v) for k, v in x.items())
+    if isinstance(x, list | tuple):
+        return any(map(_exponents, x))
+    return False
+
+
+@given(st.dictionaries(st.text(max_size=6), _DATA, max_size=5))
+def test_the_fast_encoder_writes_what_json_writes(data: dict[str, Any]) -> None:
+    """``encode`` (orjson where it writes alike) against ``json.dumps(data, default=str,
+    separators=(",", ":"))``: the same text, ASCII only, but for a float's exponent, spelt
+    ``1e16`` for ``1e+16``: the same numbers read back."""
+    from cosleec.records.encode import encode
+
+    want = json.dumps(data, default=str, separators=(",", ":"))
+    got = encode(data)
+    assert got.isascii()
+    assert json.loads(got) == json.loads(want)
+    if not _exponents(data):
+        assert got == want
+
+
 def test_a_record_as_one_object_is_kind_time_then_data() -> None:
     assert as_object(Kind.DECISION, 9.0, {"id": 1, "time": 4.5}) == {"kind": "decision", "time": 4.5, "id": 1}
     assert list(as_object("x", 1.0, {"a": 1})) == ["kind", "time", "a"]

@@ -81,6 +81,7 @@ from pathlib import Path
 from typing import Any
 
 from cosleec.errors import UserError
+from cosleec.records.encode import encode
 from cosleec.runtime.audit import AuditLog
 
 _SCHEMA = """
@@ -791,9 +792,9 @@ def _hint(e: BaseException, path: Path, otherwise: str) -> str:
     return otherwise
 
 
-#: ``json.dumps(record, default=str, separators=(",", ":"))`` without an encoder made per call
-#: (a step commits several records); stateless, so shared by threads
-_dumps: Callable[[Mapping[str, Any]], str] = json.JSONEncoder(default=str, separators=(",", ":")).encode
+#: ``json.dumps(record, default=str, separators=(",", ":"))``, as the audit log writes it
+#: (orjson where it writes alike: :func:`cosleec.records.encode.encode`)
+_dumps: Callable[[Mapping[str, Any]], str] = encode
 _plain = json.JSONEncoder().encode  # what ``json.dumps(x)`` gives, without its call's checks
 
 
