@@ -58,8 +58,8 @@ def audit_lines(
     for ev in events:
         data, t = ev.data, ev.time
         if "time" in data:  # a decision's own time (a fallback's is its deadline) is the record's:
-            t = data["time"]  # one "time" key, as a dict of the record has it, never two
-            data = {k: v for k, v in data.items() if k != "time"}
+            data = data.copy()  # one "time" key, as a dict of the record has it, never two
+            t = data.pop("time")  # (a copy then a pop: the other keys keep their order)
         body = _encode(data)
         lines.append(
             f'{{"seq":{ev.seq},"kind":"{ev.kind}","time":{_number(t)}{head}'
