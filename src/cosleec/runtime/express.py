@@ -7,8 +7,9 @@ meeting what is in force, the decider, the enforcer's settling, the gate -- each
 nothing to do, and what is left is what the guarantees require: the occurrence, each
 triggered rule's decision and its obligations put in force, each with its record. This
 lane does exactly that in one pass, without the stages' calls (:meth:`Express.occur`, in
-the step, when records are read; when nobody reads them, the event's plan does it without
-a step: :mod:`cosleec.runtime.plans`).
+the general path's step, for what the event's plan leaves: :mod:`cosleec.runtime.plans`
+takes the usual case itself, in a step of its own when records are read, without one when
+nobody reads them).
 
 A context update meets the same quiet runtime when no journal keeps the state: then time
 passing, the gate and the runner each find nothing to do, and what is left is the values
@@ -130,8 +131,8 @@ class Express:
     def occur(self, name: str, step: Step) -> tuple[list[Decision], list[Job]] | None:
         """(In ``step``: records are read.) Event ``name`` occurred: its decisions and the jobs
         that run them, when the case is quiet; None, having changed nothing, when the general
-        path must take it. (When nobody reads records, the event's plan takes the quiet case
-        without a step: :mod:`cosleec.runtime.plans`.)"""
+        path must take it. (The event's plan takes the usual quiet case before any step is
+        begun: :mod:`cosleec.runtime.plans`; this is the rest.)"""
         chosen = self._quiet(name, step.now)
         if chosen is None:
             return None
@@ -206,7 +207,8 @@ class Express:
     ) -> tuple[list[Decision], list[Job]]:
         """(Under the lock.) The occurrence at ``now``, then each rule's decision and its
         obligations, with their records in ``step``, in the order the general path makes
-        them (when nobody reads records the plans take the trigger: cosleec.runtime.plans)."""
+        them (the plans take the usual case, and every case when nobody reads records:
+        cosleec.runtime.plans)."""
         core = self.core
         steps, tracker = core.steps, core.tracker
         core.stats.events += 1

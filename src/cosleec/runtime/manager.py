@@ -430,7 +430,7 @@ class Manager:
         lane = self._express
         self._catch_up()
         with core.steps.step() as step:
-            # the lane again when records are read (it took no step above), else the general path
+            # the lane when records are read (for what the plan left), else the general path
             taken = lane.occur(name, step) if lane is not None and core.steps.recording else None
             if taken is None:
                 taken = self._general(name, step)

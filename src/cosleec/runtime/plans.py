@@ -2,7 +2,7 @@
 
 Most triggers meet a quiet runtime (:mod:`cosleec.runtime.express` says when: nothing in
 force names the event, nothing is forbidden, held or due, every condition the rules read
-is known, no priority acts) and nobody reads records. What the guarantees leave to do then
+is known, no priority acts) and no journal keeps the state. What the guarantees leave to do then
 is the same for every occurrence of an event, except for the values read: each rule it
 triggers reads its condition and the clause the Layer Manager keeps, and its decision puts
 that clause's obligations in force, with their records, before its implementation runs
@@ -12,7 +12,10 @@ keeps; per clause, at its first decision, the obligations with their windows' le
 (``untimed`` applied) when they do not depend on measures, the fields every decision of
 the clause shares, the layers its implementation runs under. A trigger then runs the
 plan: the checks, the choice, the records, the implementation -- one pass over what the
-plan holds, no part asked again what it already said.
+plan holds, no part asked again what it already said. When nobody reads records it needs
+no step (only the lock: nothing to record, commit or deliver); when observers or the audit
+log read them, the usual case -- one rule, one plain event -- runs in a step of its own
+with the records the express lane makes, and any other goes the general way.
 
 A plan is made from the rules in force, the semantics and the sentences for people: a
 reload (a new decider), ``set_semantics`` or ``explain`` makes a new one at the next
