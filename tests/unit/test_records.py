@@ -3,6 +3,10 @@ writer of audit lines and the one reader, each built and checked on its own."""
 
 from __future__ import annotations
 
+import collections
+import dataclasses
+import datetime
+import enum
 import json
 import math
 from pathlib import Path
@@ -170,13 +174,43 @@ class _Shown:
         return "shown ü"
 
 
+class _Float(float):
+    pass
+
+
+class _Level(enum.IntEnum):
+    HIGH = 2
+
+
+@dataclasses.dataclass
+class _Pose:
+    x: int = 1
+
+
+_Pair = collections.namedtuple("_Pair", "a b")
+
+# (what the runtime's records hold, and each kind of value orjson writes otherwise than json:
+# the hostile review's list -- a subclass of float, int or tuple, a dataclass, a datetime, DEL)
 _ATOMS = (
     st.none()
     | st.booleans()
     | st.integers(min_value=-(2**70), max_value=2**70)  # beyond 64 bits too
     | st.floats(allow_nan=False, allow_infinity=False)
     | st.text(max_size=8)  # not only ASCII
-    | st.sampled_from([_Shown(), Path("/x"), Kind.DECISION])
+    | st.text("a\x7f\x1f\u00e9", max_size=4)
+    | st.sampled_from(
+        [
+            _Shown(),
+            Path("/x"),
+            Kind.DECISION,
+            _Float(1.5),
+            _Level.HIGH,
+            _Pose(),
+            _Pair(1, 2),
+            datetime.datetime(2020, 1, 1, 1, 2, 3),
+            datetime.date(2020, 1, 1),
+        ]
+    )
 )
 _DATA = st.recursive(
     _ATOMS,
@@ -213,6 +247,13 @@ def test_the_fast_encoder_writes_what_json_writes(data: dict[str, Any]) -> None:
     assert json.loads(got) == json.loads(want)
     if not _exponents(data):
         assert got == want
+
+
+def test_a_record_that_may_hold_what_a_caller_gave_is_written_by_json() -> None:
+    """A front end's ``note`` keeps what it was given: its record is written by json, a float
+    that is not finite as json writes it (orjson would write null)."""
+    a = RuntimeEvent.made(Kind.REJECTED, 2, {"reason": "r", "value": math.inf}, 1)
+    assert lines_of(a) == [f'{{"seq":1,"kind":"rejected","time":2,{HEAD},"reason":"r","value":Infinity}}']
 
 
 def test_a_record_as_one_object_is_kind_time_then_data() -> None:
@@ -488,6 +529,13 @@ _JSONISH = st.recursive(
 
 @given(st.dictionaries(st.text(max_size=8), _JSONISH | st.sets(st.integers(), max_size=3), max_size=6))
 def test_the_shared_audit_encoder_writes_what_json_dumps_writes(data: dict[str, object]) -> None:
-    from cosleec.records.encode import _encode
+    """The shared json encoder (records a caller may have given: NaN and infinities too), and
+    the fast one where neither is: the same text but for a float's exponent."""
+    from cosleec.records.encode import _json, encode
 
-    assert _encode(data) == json.dumps(data, default=str, separators=(",", ":"))
+    want = json.dumps(data, default=str, separators=(",", ":"))
+    assert _json(data) == want
+    if "NaN" not in want and "Infinity" not in want:
+        assert json.loads(encode(data)) == json.loads(want)
+        if not _exponents(data):
+            assert encode(data) == want

@@ -26,7 +26,14 @@ from typing import Any
 try:  # the fast encoder (a dependency; where no wheel installs, json alone)
     import orjson as _orjson
 
-    _OPTIONS = _orjson.OPT_NON_STR_KEYS
+    # every value orjson would write otherwise than json (a dataclass, a datetime, a subclass
+    # of str, int, dict or list: a named tuple, an IntEnum) goes to ``default``, which refuses
+    # it; a key that is not a str makes orjson refuse the whole
+    _OPTIONS = (
+        _orjson.OPT_PASSTHROUGH_DATACLASS
+        | _orjson.OPT_PASSTHROUGH_DATETIME
+        | _orjson.OPT_PASSTHROUGH_SUBCLASS
+    )
 except ImportError:  # pragma: no cover
     _orjson = None  # type: ignore[assignment]
     _OPTIONS = 0
@@ -60,7 +67,7 @@ def audit_lines(
         if "time" in data:  # a decision's own time (a fallback's is its deadline) is the record's:
             data = data.copy()  # one "time" key, as a dict of the record has it, never two
             t = data.pop("time")  # (a copy then a pop: the other keys keep their order)
-        body = _encode(data)
+        body = encode(data) if ev.kind in _MADE else _json(data)
         lines.append(
             f'{{"seq":{ev.seq},"kind":"{ev.kind}","time":{_number(t)}{head}'
             + (f",{body[1:]}" if len(body) > 2 else "}")
@@ -82,25 +89,50 @@ def as_object(kind: Kind | str, time: float, data: Mapping[str, Any]) -> dict[st
 _json = json.JSONEncoder(default=str, separators=(",", ":")).encode
 
 
+#: the kinds of record the runtime makes from values it checked (finite numbers, names,
+#: its own fields): written by :func:`encode`; any other (a front end's ``note``, which
+#: keeps what it was given) by ``json`` alone
+_MADE = frozenset(
+    {
+        Kind.DECISION,
+        Kind.OBLIGATION,
+        Kind.OCCURRENCE,
+        Kind.CONTEXT,
+        Kind.LAYERS,
+        Kind.TASK_DONE,
+        Kind.TASK_FAILED,
+    }
+)
+
+
+def _refuse(x: object) -> object:
+    raise TypeError(type(x).__name__)  # orjson would write it otherwise than json: json writes it
+
+
 def encode(data: Mapping[str, Any]) -> str:
-    """``data`` as compact JSON text: what ``json.dumps(data, default=str,
-    separators=(",", ":"))`` gives, ASCII only (``\\u`` escapes), made by orjson (several
-    times faster: a step writes several records, a decision's about 2 KB) where orjson
-    writes it alike, else by ``json``: text that is not ASCII, an integer beyond 64 bits,
-    a value orjson cannot write, or no orjson installed. A number reads back the same
-    either way; only a float's exponent may be spelt differently (``1e16``, ``1e+16``).
-    ``tests/unit/test_records.py`` holds the two equal on generated records."""
+    """``data`` -- a record the runtime made, or a journal row -- as compact JSON text: what
+    ``json.dumps(data, default=str, separators=(",", ":"))`` gives, ASCII only (``\\u``
+    escapes), made by orjson (several times faster: a step writes several records, a
+    decision's about 2 KB) where orjson writes it alike, else by ``json``: text that is
+    not printable ASCII, an integer beyond 64 bits, a key that is not a ``str``, any value that is not a ``str``,
+    ``int``, ``float``, ``bool``, ``None``, ``dict``, ``list`` or ``tuple`` itself (a
+    subclass, a dataclass, a datetime, a path: json writes it, as its ``str`` where
+    json's ``default`` does), or no orjson installed. A number reads back the same either
+    way; only a float's exponent may be spelt differently (``1e16``, ``1e+16``). What the
+    runtime makes from checked values never holds the two that orjson would still write
+    otherwise: a float that is not finite (``null``, where json writes ``NaN``) and an
+    ``Enum`` member that is not also a ``str`` or an ``int`` (its value, where json writes
+    its ``str``); a record that may hold what a caller gave is written by ``json``
+    (:func:`audit_lines`). ``tests/unit/test_records.py`` holds the two equal on
+    generated records."""
     if _orjson is not None:
         try:
-            out = _orjson.dumps(data, default=str, option=_OPTIONS)
-        except TypeError:  # (orjson.JSONEncodeError is one) beyond what orjson writes
+            out = _orjson.dumps(data, default=_refuse, option=_OPTIONS)
+        except TypeError:  # (orjson.JSONEncodeError is one) beyond what orjson writes alike
             return _json(data)
-        if out.isascii():
+        if out.isascii() and b"\x7f" not in out:  # (json escapes DEL too)
             return out.decode()
     return _json(data)
-
-
-_encode = encode
 
 
 def _number(x: object) -> str:

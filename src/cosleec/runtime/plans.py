@@ -246,9 +246,9 @@ class Plans:
                     steps.broken is not None
                     or steps.closed
                     or steps.journal is not None
-                    or (not recording and (steps.observers or steps.audit is not None))
+                    or (bool(steps.observers) or steps.audit is not None) is not recording
                 ):
-                    return None  # (a refusal, a journal, or a reader since: the general way, with a step)
+                    return None  # (a refusal, a journal, or a reader come or gone since: the general way)
                 decider = core.decider
                 plan = made.get(name)
                 if (

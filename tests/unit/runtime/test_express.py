@@ -16,6 +16,8 @@ from __future__ import annotations
 import json
 import os
 import re
+import threading
+import time
 from typing import Any, NamedTuple
 from unittest import mock
 
@@ -183,6 +185,39 @@ def test_with_records_read_the_lane_and_the_plan_take_the_quiet_case_and_record_
         assert general[3:] == (0, 0, 0)
         assert planned[3:5] == (2, 2), f"{reader}: the plan took {planned[3]} of the 2 quiet triggers"
         assert planned[5] == 2, f"{reader}: the lane took {planned[5]} of the 2 quiet updates"
+
+
+def test_a_trigger_waiting_for_the_lock_while_the_last_observer_leaves_records_nothing() -> None:
+    # (found by a hostile review) the plan's trigger reads whether records are read before it
+    # takes the lock: it must read it again under the lock, both ways -- else an occurrence
+    # record nobody hears uses up a record number, and a later observer's numbers differ
+    text = rules("R1 when T then A within 5 seconds")
+    seen = []
+    for express in (False, True):
+        m = build(text, express, clock=HandClock())
+        m.capability("A")(lambda ob, d: None)
+        m.start()
+        late: list[tuple[int, str]] = []
+        waiting: list[threading.Thread] = []
+        leave: list[Any] = []
+
+        def observer(
+            ev: Any, m: Manager = m, waiting: list[threading.Thread] = waiting, leave: list[Any] = leave
+        ) -> None:
+            if ev.kind == "context" and not waiting:  # (delivered under the event's outer lock)
+                waiting.append(threading.Thread(target=m.event, args=("T",)))
+                waiting[0].start()
+                time.sleep(0.2)  # the trigger waits for the lock meanwhile
+                leave[0]()  # the last observer leaves
+
+        leave.append(m.subscribe(observer))
+        m.event("T", {"b": False, "n": 1})
+        waiting[0].join()
+        m.subscribe(lambda ev, late=late: late.append((ev.seq, str(ev.kind))))
+        m.event("T")
+        m.close()
+        seen.append(late)
+    assert seen[0] == seen[1], seen
 
 
 # each: rules, a trace whose last trigger is not quiet, and why the lane must leave it
