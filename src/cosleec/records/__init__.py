@@ -14,7 +14,7 @@ same thing -- the format, never what a record means for the rules:
   (:mod:`cosleec.records.read`).
 """
 
-from cosleec.records.encode import as_object, audit_lines
+from cosleec.records.encode import as_object, audit_lines, encode
 from cosleec.records.event import RuntimeEvent
 from cosleec.records.fields import FIELDS, HEADER, Field, Json, problem
 from cosleec.records.kinds import Kind
@@ -41,6 +41,7 @@ __all__ = [
     "as_object",
     "audit_lines",
     "check_fields",
+    "encode",
     "load_json",
     "problem",
     "read_records",

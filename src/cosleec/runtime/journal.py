@@ -81,7 +81,7 @@ from pathlib import Path
 from typing import Any
 
 from cosleec.errors import UserError
-from cosleec.records.encode import encode
+from cosleec.records import encode
 from cosleec.runtime.audit import AuditLog
 
 _SCHEMA = """
