@@ -305,9 +305,8 @@ class Plans:
                         d = new_decision(Decision)
                         set_dict(d, "__dict__", dd)
                         t = start_plain(did, clause, rname, ob, now, None if off is None else now + off, seq)
-                        if (
-                            recording
-                        ):  # the occurrence, the decision and its obligation, as the lane records them
+                        if recording:
+                            # the occurrence, the decision and its obligation, as the lane records them
                             step.emit(OCCURRENCE, {"event": name, "causal": seq}, now)
                             core.record(d, step, queue=True)
                             core.track(t, step)
