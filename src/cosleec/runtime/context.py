@@ -147,13 +147,18 @@ class Context:
         keys = self.measures if names is None else names
         if not isinstance(keys, dict | list | tuple):  # read twice below: a one-shot iterable once
             keys = list(keys)
-        values, scales = self.values, self._scales
-        out: dict[str, Value | None] = dict(zip(keys, map(values.get, keys)))
-        if scales:
-            for n, v in out.items():
-                if v is not None and n in scales:
-                    out[n] = scales[n][int(v)]
-        return out
+        values = self.values
+        return _shown(dict(zip(keys, map(values.get, keys))), self._scales)
+
+
+def _shown(values: dict[str, Any], scales: Mapping[str, tuple[str, ...]]) -> dict[str, Value | None]:
+    """``values`` (stored form, by name) as users see them: a scale's position as its literal.
+    Changed in place, and returned."""
+    if scales:
+        for n, v in values.items():
+            if v is not None and n in scales:
+                values[n] = scales[n][int(v)]
+    return values
 
 
 def _context_record(
@@ -161,8 +166,4 @@ def _context_record(
 ) -> dict[str, Any]:
     """What :meth:`Context.record_of` makes: as :meth:`Context.external` shows the changed
     values just after they were stored."""
-    values = {n: stored[n] for n in sorted(changed)}
-    for n, v in values.items():
-        if v is not None and n in scales:
-            values[n] = scales[n][int(v)]
-    return {"values": values, "version": version}
+    return {"values": _shown({n: stored[n] for n in sorted(changed)}, scales), "version": version}
