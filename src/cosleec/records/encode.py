@@ -114,10 +114,10 @@ def encode(data: Mapping[str, Any]) -> str:
     ``json.dumps(data, default=str, separators=(",", ":"))`` gives, ASCII only (``\\u``
     escapes), made by orjson (several times faster: a step writes several records, a
     decision's about 2 KB) where orjson writes it alike, else by ``json``: text that is
-    not printable ASCII, an integer beyond 64 bits, a key that is not a ``str``, any value that is not a ``str``,
-    ``int``, ``float``, ``bool``, ``None``, ``dict``, ``list`` or ``tuple`` itself (a
-    subclass, a dataclass, a datetime, a path: json writes it, as its ``str`` where
-    json's ``default`` does), or no orjson installed. A number reads back the same either
+    not printable ASCII, an integer beyond 64 bits, a key that is not a ``str``, any
+    value that is not a ``str``, ``int``, ``float``, ``bool``, ``None``, ``dict``,
+    ``list`` or ``tuple`` itself (a subclass, a dataclass, a datetime, a path: json
+    writes it, as its ``str`` where json's ``default`` does), or no orjson installed. A number reads back the same either
     way; only a float's exponent may be spelt differently (``1e16``, ``1e+16``). What the
     runtime makes from checked values never holds the two that orjson would still write
     otherwise: a float that is not finite (``null``, where json writes ``NaN``) and an
