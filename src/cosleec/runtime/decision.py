@@ -18,7 +18,7 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from cosleec.lang import HedgeSemantics, Unknowns, decisive
 from cosleec.runtime import people
@@ -410,6 +410,8 @@ def _because(d: Decision, width: int | None = None) -> str:
             f"; meanwhile {held}, as some reading of the rule requires" if held else ""
         )
     what = " and ".join(o.describe() for o in d.obligations) if d.obligations else "nothing is required"
+    if width is None and (made := _made_once(d)) is not None:
+        return f"{rule}: {what} {made}"
     hedges = [(c, t, v) for c, t, v in d.conditions if c > 0]
     if not hedges:
         return f"{rule}: {what}"
@@ -437,6 +439,40 @@ def _because(d: Decision, width: int | None = None) -> str:
         + (f" (unless {cond(hedges[clause - 1][1])})" if clause <= len(hedges) else "")
     )
     return f"{rule}: {what} [{head}], because {because}"
+
+
+#: how many ends of explanations a rule keeps (``CompiledRule.reasons``): under last-wins a
+#: clause chosen on known values has one, so a rule keeps one per clause at most, and this
+#: only bounds what unknown values could add
+_REASONS_KEPT = 256
+
+
+def _made_once(d: Decision) -> str | None:
+    """The end of :func:`_because`'s sentence, ``[head], because ...``, for a trigger's decision
+    under last-wins whose deciding conditions are all measures (``userUndressed was true``):
+    a function of the clause and those conditions' values alone, so made once per rule and
+    clause (and values) and kept in the compiled rule; None for any other decision, which
+    :func:`_because` explains in full. The same text as the general path (a test holds it)."""
+    parts = cast(
+        "tuple[CompiledRule, tuple[Any, ...], bool | None, tuple[bool | None, ...]] | None",
+        d.__dict__.get("_parts"),
+    )
+    clause = d.clause
+    if parts is None or clause is None or d.semantics != HedgeSemantics.LAST_WINS:
+        return None
+    rule, _read, _fired, status = parts
+    if not status or clause > len(status):
+        return None
+    key = (clause, status[(clause or 1) - 1 :])  # the deciding ones: this clause and every later one
+    made = rule.reasons.get(key)
+    if made is None:
+        texts = rule.clause_texts[(clause or 1) - 1 :]
+        if not set(texts) <= set(rule.value_names) or len(rule.reasons) >= _REASONS_KEPT:
+            return None
+        because = "; ".join(f"{t} was {_fmt(v)}" for t, v in zip(texts, key[1], strict=True))
+        head = "default" if clause == 0 else f"clause {clause} (unless {rule.clause_texts[clause - 1]})"
+        made = rule.reasons.setdefault(key, f"[{head}], because {because}")
+    return made
 
 
 def said_in(record: Mapping[str, Any]) -> str:

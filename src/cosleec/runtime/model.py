@@ -226,6 +226,9 @@ class CompiledRule:
     value_names: tuple[str, ...]  # every measure it reads, sorted: the values a decision shows
     scale_values: tuple[tuple[str, tuple[str, ...]], ...]  # those of a scale, with its literals
     evaluate_all: Callable[[Values], tuple[bool, ...]] | None  # every clause condition at once
+    # the end of a decision's explanation ("[clause k (unless ...)], because ..."), made once
+    # per clause and clause values that decide it (``decision._because``): empty until then
+    reasons: dict[tuple[int, tuple[bool | None, ...]], str] = field(compare=False, repr=False)
 
     def response_of(self, clause: int) -> ResponseSpec | None:
         """The response of clause ``clause`` (0: the default)."""
@@ -399,4 +402,5 @@ def compile_rule(
             (n, lits) for n in sorted(trigger_reads | hedge_reads) if (lits := literals.get(n))
         ),
         evaluate_all=_all_clauses(c, clauses) if clauses else None,
+        reasons={},
     )

@@ -33,7 +33,7 @@ def test_decision_made_takes_exactly_the_fields_with_their_defaults() -> None:
 
 
 @given(
-    clause=st.none() | st.integers(0, 5),
+    clause=st.none() | st.integers(0, 4),
     values=st.dictionaries(st.sampled_from(["a", "b", "c"]), st.none() | st.booleans() | st.integers()),
     missing=st.lists(st.sampled_from(["a", "b"])).map(tuple),
     reason=st.text(max_size=5),
@@ -309,3 +309,74 @@ def test_a_decision_made_at_a_trigger_is_the_one_made_whole(
         assert again == whole and "_parts" not in vars(again)
     with pytest.raises(AttributeError, match="no attribute 'valuez'"):
         lazy.valuez  # noqa: B018 - any other missing attribute is still an AttributeError
+
+
+MEASURED = """def_start
+  event T
+  event A
+  measure b1: boolean
+  measure b2: boolean
+  measure b3: boolean
+  measure n: numeric
+def_end
+rule_start
+R1 when T then A within 2 seconds unless {b1} then A within 1 seconds unless ({n} > 2) then A
+  unless {b2} then A within 3 seconds unless {b3}
+rule_end
+"""
+
+
+@given(
+    status=st.tuples(*[st.none() | st.booleans()] * 4),
+    clause=st.none() | st.integers(0, 4),
+    semantics=st.sampled_from(list(HedgeSemantics)),
+    unknown=st.sampled_from(list(Unknowns)),
+    n=st.none() | st.integers(0, 5),
+    reason=st.sampled_from(["", "held back"]),
+)
+def test_an_explanation_made_once_per_clause_is_the_one_made_in_full(
+    status: tuple[bool | None, ...],
+    clause: int | None,
+    semantics: HedgeSemantics,
+    unknown: Unknowns,
+    n: int | None,
+    reason: str,
+) -> None:
+    """``_made_once`` (last-wins, the deciding conditions all measures: kept per rule, clause
+    and values) says what the general path says, read first or from the rule's memo, for
+    every clause, value, semantics and unknown policy; the memo
+    holds only what it may."""
+    from cosleec.runtime.ruleset import RuleSet
+
+    rule = RuleSet.from_text(MEASURED).rules[0]
+    stored = {"b1": status[0], "b2": status[2], "b3": status[3], "n": n}
+    read = tuple(stored[name] for name in rule.value_names)
+    common = dict(
+        id=4,
+        time=2.0,
+        event="T",
+        clause=clause,
+        semantics=semantics,
+        obligations=(Obligation(event="A", within_s=2.0, rule="R1"),) if clause != 3 else (),
+        missing=(),
+        context_version=7,
+        unknown=unknown,
+        explanations=None,
+    )
+    for _ in range(2):  # the second time from the rule's memo, when it kept it
+        lazy = Decision.at_trigger(rule=rule, fired=True, read=read, status=status, **common)  # type: ignore[arg-type]
+        if reason:
+            lazy = dataclasses.replace(lazy, reason=reason)
+        whole = dataclasses.replace(lazy)  # made from its fields: no parts, the general path
+        assert "_parts" not in vars(whole)
+        assert lazy.explanation == whole.explanation
+        assert lazy.explain(30) == whole.explain(30)
+    deciding = rule.clause_texts[(clause or 1) - 1 :] if clause is not None else ()
+    kept = (clause, status[(clause or 1) - 1 :]) in rule.reasons
+    assert kept == (
+        not reason
+        and clause is not None
+        and clause <= 4
+        and semantics == HedgeSemantics.LAST_WINS
+        and "n > 2" not in deciding
+    )
