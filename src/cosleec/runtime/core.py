@@ -186,20 +186,22 @@ class Core:
         """Record an obligation's new state (and keep it in the journal while it is pending)."""
         tracker = self.tracker
         if self.steps.recording:
-            rec = t.to_json()
-            step.emit(Kind.OBLIGATION, rec)
-            if self.journal:  # pending, or missed and waiting for its late event
+            if self.journal:  # pending, or missed and waiting for its late event: kept now
+                rec = t.to_json()
+                step.emit(Kind.OBLIGATION, rec)
                 keep = t.status == PENDING or tracker.waits_late(t)
                 step.change.obligations[t.id] = rec if keep else None
                 for gone in tracker.forgotten:
                     step.change.obligations[gone] = None
+            else:  # made when someone reads it, from what it keeps of the obligation now
+                step.emit_later(Kind.OBLIGATION, t.record_of())
         tracker.forgotten.clear()
 
     def switched(self, switches: list[LayerSwitch], step: Step) -> list[LayerSwitch]:
         """Announce layer switches to observers; returns them."""
         if switches and self.steps.recording:
             # (the state is a value: its record is made when someone reads it)
-            step.emit_later(Kind.LAYERS, self.layers.state(switches).to_json)
+            step.emit_later(Kind.LAYERS, self.layers.record_of(switches))
         return switches
 
     def apply(self, stored: dict[str, Any], step: Step) -> list[LayerSwitch]:

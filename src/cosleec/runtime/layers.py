@@ -15,7 +15,8 @@ that clause's variant (see :mod:`cosleec.runtime.implementations`).
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Mapping
+import functools
+from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -81,6 +82,18 @@ class LayerState:
             semantics=HedgeSemantics(d["semantics"]),
             version=int(d["version"]),
         )
+
+
+def _layers_record(
+    active: dict[int, str], switches: tuple[LayerSwitch, ...], semantics: HedgeSemantics, version: int
+) -> dict[str, Any]:
+    """What :meth:`LayerManager.record_of` makes: :meth:`LayerState.to_json` of the state it kept."""
+    return LayerState(
+        active=tuple([active[i] for i in sorted(active)]),
+        switches=switches,
+        semantics=semantics,
+        version=version,
+    ).to_json()
 
 
 def evaluate(conds: Iterable[Clause], v: Values) -> tuple[tuple[bool | None, ...], tuple[str, ...]]:
@@ -216,6 +229,15 @@ class LayerManager:
             switches=tuple(switches),
             semantics=self.semantics,
             version=self.version,
+        )
+
+    def record_of(self, switches: Iterable[LayerSwitch]) -> Callable[[], dict[str, Any]]:
+        """``state(switches).to_json`` -- the ``layers`` record now, a new version -- as a
+        function that makes it when called (``Step.emit_later``: the hot path's record, which
+        nobody may read): it keeps a copy of the active layers by rule, sorted when read."""
+        self.version += 1
+        return functools.partial(
+            _layers_record, self._active.copy(), tuple(switches), self.semantics, self.version
         )
 
     def active_layers(self) -> list[str]:

@@ -29,9 +29,10 @@ Causal order: an occurrence counts only for obligations created before it was ha
 
 from __future__ import annotations
 
+import functools
 import heapq
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -87,29 +88,30 @@ class Tracked:
         A snapshot: later changes to this obligation (a late event) do not alter it.
         :meth:`from_json` reads it back (the ``otherwise`` fallback stays in the process).
         """
-        return {
-            "type": "obligation",
-            "id": self.id,
-            "decision": self.decision_id,
-            "clause": self.clause,
-            "causal": self.seq,  # its place in the causal order of occurrences
-            "obligation": self.obligation.to_json(),
-            "rule": self.rule,
-            "event": self.event,
-            "negated": self.prohibition,
-            "start": self.start,
-            "window": [self.lo, self.own_hi],
-            "deadline": self.hi,
-            "instance": self.instance,
-            "status": self.status,
-            "at": self.outcome_at,
-            "by": self.by,
-            "late": list(self.late),  # a copy: a record must not change after it was emitted
-            "refused": self.refused,
-            "depth": self.depth,
-            "branches": [[list(w) for w in b] for b in self.branches],
-            "met": [list(m) for m in self.met],
-        }
+        return _record(self, self._now())
+
+    def record_of(self) -> Callable[[], dict[str, Any]]:
+        """:meth:`to_json` now, as a function that makes it when called (``Step.emit_later``:
+        the hot path's record, which nobody may read): it keeps, as they are now, the fields
+        that change while the obligation is in force (its outcome, late events, refusals,
+        the `else` items met; its window and ``otherwise`` on a restore or reload), and
+        the obligation for the others, which never change once it is tracked."""
+        return functools.partial(_record, self, self._now())
+
+    def _now(self) -> _Now:
+        """What of this obligation may still change, as it is now (copies of its lists)."""
+        return (
+            self.obligation,
+            self.start,
+            self.lo,
+            self.hi,
+            self.status,
+            self.outcome_at,
+            self.by,
+            tuple(self.late),
+            self.refused,
+            tuple(map(tuple, self.met)),
+        )
 
     @classmethod
     def from_json(cls, d: Mapping[str, Any]) -> Tracked:
@@ -538,6 +540,50 @@ _init_plain = positional_init(
     Tracked,
     ("id", "decision_id", "clause", "rule", "obligation", "start", "lo", "hi", "seq", "instance", "own_hi"),
 )
+
+
+#: what :meth:`Tracked._now` keeps: obligation, start, lo, hi, status, outcome_at, by,
+#: late, refused, met
+_Now = tuple[
+    Obligation,
+    float,
+    float,
+    float | None,
+    str,
+    float | None,
+    str | None,
+    tuple[float, ...],
+    int,
+    tuple[tuple[int, ...], ...],
+]
+
+
+def _record(t: Tracked, now: _Now) -> dict[str, Any]:
+    """The ``obligation`` record of ``t`` with what may change as ``now`` holds it (:meth:`Tracked.to_json`)."""
+    obligation, start, lo, hi, status, outcome_at, by, late, refused, met = now
+    return {
+        "type": "obligation",
+        "id": t.id,
+        "decision": t.decision_id,
+        "clause": t.clause,
+        "causal": t.seq,  # its place in the causal order of occurrences
+        "obligation": obligation.to_json(),
+        "rule": t.rule,
+        "event": obligation.event,
+        "negated": obligation.negated,
+        "start": start,
+        "window": [lo, t.own_hi],
+        "deadline": hi,
+        "instance": t.instance,
+        "status": status,
+        "at": outcome_at,
+        "by": by,
+        "late": list(late),  # a copy: a record must not change after it was emitted
+        "refused": refused,
+        "depth": t.depth,
+        "branches": [[list(w) for w in b] for b in t.branches],
+        "met": [list(m) for m in met],
+    }
 
 
 def _events(t: Tracked) -> tuple[str, ...]:

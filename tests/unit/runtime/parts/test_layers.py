@@ -14,7 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cosleec.lang import HedgeSemantics
-from cosleec.runtime.layers import LayerManager, LayerSwitch
+from cosleec.runtime.layers import LayerManager, LayerState, LayerSwitch
 from cosleec.runtime.ruleset import RuleSet
 
 MEASURES = ("a", "b", "c", "d", "e")  # each rule reads some; a measure may be shared, or read by none
@@ -91,3 +91,28 @@ def test_a_measure_read_by_two_rules_reaches_both_and_one_read_by_one_only_that_
         LayerSwitch("R1", "R1.2", None),
         LayerSwitch("R2", "R2.2", "R2.1"),
     ]
+
+
+@settings(max_examples=200, deadline=None)
+@given(rule_sets(), st.lists(UPDATES, min_size=1, max_size=6), st.sampled_from(list(HedgeSemantics)))
+def test_a_deferred_layers_record_is_the_state_then(
+    text: str, updates: list[dict[str, bool]], semantics: HedgeSemantics
+) -> None:
+    """``LayerManager.record_of`` (the hot path's ``layers`` record, made when read) reads,
+    after every later update, as ``state(switches).to_json()`` read at once: the same
+    active layers, switches and a version of its own."""
+    rules = RuleSet.from_text(text)
+    lm = LayerManager(rules, semantics)
+    values: dict[str, object] = {}
+    made = []
+    for update in updates:
+        values.update(update)
+        switches = lm.update(list(update), values)
+        later = lm.record_of(switches)
+        now = LayerState(
+            active=tuple(lm.active_layers()), switches=tuple(switches), semantics=semantics, version=lm.version
+        ).to_json()
+        switches.append(LayerSwitch("R9", "x", "y"))  # (the caller's list: the record kept its own)
+        made.append((later, now))
+    assert [later() for later, _ in made] == [now for _, now in made]
+    assert [now["version"] for _, now in made] == list(range(1, len(updates) + 1))

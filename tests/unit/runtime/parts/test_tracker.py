@@ -86,3 +86,48 @@ def test_quiet_for_is_the_three_checks(
         t.start(99, 0, Obligation(event="C", negated=True, within_s=5.0, rule="R2"), 0.0, seq=99)
     t.due(now / 2)  # some windows closed (and missed: a late event is awaited)
     assert t.quiet_for(event, now) == (not t.bans and not t.backlog(now) and not t.waits_for(event))
+
+
+@given(
+    within=st.none() | st.floats(0.0, 10.0),
+    negated=st.booleans(),
+    alternatives=st.booleans(),
+    changes=st.lists(
+        st.sampled_from(["status", "late", "refused", "met", "obligation", "shift", "by"]), max_size=6
+    ),
+)
+def test_a_deferred_obligation_record_is_the_one_made_then(
+    within: float | None, negated: bool, alternatives: bool, changes: list[str]
+) -> None:
+    """``Tracked.record_of`` (the hot path's record, made when read) reads later as
+    ``to_json`` read at once, whatever changes the obligation meets in between (every field
+    that changes while it is in force: outcome, late events, refusals, `else` items met, a
+    restore's shift, a reload's new ``otherwise``)."""
+    ob = Obligation(
+        event="A",
+        negated=negated,
+        within_s=within,
+        rule="R1",
+        alternatives=((("B", 0.0, 5.0), ("C", 1.0, None)),) if alternatives else (),
+    )
+    t = Tracker().start(3, 1, ob, 10.0, 7)
+    now, later = t.to_json(), t.record_of()
+    for change in changes:
+        if change == "status":
+            t.status, t.outcome_at = "fulfilled", 12.0
+        elif change == "by":
+            t.by = "A"
+        elif change == "late":
+            t.late.append(13.0)
+        elif change == "refused":
+            t.refused += 1
+        elif change == "met" and t.met:
+            t.met[0].append(1)
+        elif change == "obligation":
+            t.obligation = dataclasses.replace(t.obligation, item="R1.0.0", event="A")
+        elif change == "shift":
+            t.start += 5
+            t.lo += 5
+            t.hi = None if t.hi is None else t.hi + 5
+    assert later() == now
+    assert t.record_of()() == t.to_json()
