@@ -180,9 +180,14 @@ class Restore:
                 continue
             t.obligation = dataclasses.replace(t.obligation, otherwise=item.otherwise, item=item.key)
             d = self.hold if t.prohibition else self.shift
-            t.start += d
-            t.lo += d
-            t.hi = None if t.hi is None else t.hi + d
+            if d:  # the whole window into this boot's clock: its own event's and each `else`'s too
+                t.start += d
+                t.lo += d
+                t.hi = None if t.hi is None else t.hi + d
+                t.own_hi = None if t.own_hi is None else t.own_hi + d
+                t.branches = tuple(
+                    tuple((e, lo + d, None if hi is None else hi + d) for e, lo, hi in br) for br in t.branches
+                )
             restored.append(t)
             if t.status == PENDING:
                 tracker.resume(t, c.get("obligation", 1))
