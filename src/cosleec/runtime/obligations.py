@@ -105,6 +105,8 @@ class Tracked:
             self.start,
             self.lo,
             self.hi,
+            self.own_hi,
+            self.branches,
             self.status,
             self.outcome_at,
             self.by,
@@ -542,13 +544,15 @@ _init_plain = positional_init(
 )
 
 
-#: what :meth:`Tracked._now` keeps: obligation, start, lo, hi, status, outcome_at, by,
-#: late, refused, met
+#: what :meth:`Tracked._now` keeps: obligation, start, lo, hi, own_hi, branches, status,
+#: outcome_at, by, late, refused, met
 _Now = tuple[
     Obligation,
     float,
     float,
     float | None,
+    float | None,
+    tuple[tuple[tuple[str, float, float | None], ...], ...],
     str,
     float | None,
     str | None,
@@ -560,7 +564,7 @@ _Now = tuple[
 
 def _record(t: Tracked, now: _Now) -> dict[str, Any]:
     """The ``obligation`` record of ``t`` with what may change as ``now`` holds it (:meth:`Tracked.to_json`)."""
-    obligation, start, lo, hi, status, outcome_at, by, late, refused, met = now
+    obligation, start, lo, hi, own_hi, branches, status, outcome_at, by, late, refused, met = now
     return {
         "type": "obligation",
         "id": t.id,
@@ -572,7 +576,7 @@ def _record(t: Tracked, now: _Now) -> dict[str, Any]:
         "event": obligation.event,
         "negated": obligation.negated,
         "start": start,
-        "window": [lo, t.own_hi],
+        "window": [lo, own_hi],
         "deadline": hi,
         "instance": t.instance,
         "status": status,
@@ -581,7 +585,7 @@ def _record(t: Tracked, now: _Now) -> dict[str, Any]:
         "late": list(late),  # a copy: a record must not change after it was emitted
         "refused": refused,
         "depth": t.depth,
-        "branches": [[list(w) for w in b] for b in t.branches],
+        "branches": [[list(w) for w in b] for b in branches],
         "met": [list(m) for m in met],
     }
 

@@ -186,7 +186,8 @@ class Restore:
                 t.hi = None if t.hi is None else t.hi + d
                 t.own_hi = None if t.own_hi is None else t.own_hi + d
                 t.branches = tuple(
-                    tuple((e, lo + d, None if hi is None else hi + d) for e, lo, hi in br) for br in t.branches
+                    tuple((e, lo + d, None if hi is None else hi + d) for e, lo, hi in br)
+                    for br in t.branches
                 )
             restored.append(t)
             if t.status == PENDING:
