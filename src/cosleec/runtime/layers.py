@@ -66,12 +66,7 @@ class LayerState:
 
     def to_json(self) -> dict[str, Any]:
         """The wire form; :meth:`from_json` reads it back."""
-        return {
-            "active": list(self.active),
-            "switches": [sw.to_json() for sw in self.switches],
-            "semantics": str(self.semantics),
-            "version": self.version,
-        }
+        return _state_json(list(self.active), self.switches, self.semantics, self.version)
 
     @classmethod
     def from_json(cls, d: Mapping[str, Any]) -> LayerState:
@@ -88,12 +83,19 @@ def _layers_record(
     active: dict[int, str], switches: tuple[LayerSwitch, ...], semantics: HedgeSemantics, version: int
 ) -> dict[str, Any]:
     """What :meth:`LayerManager.record_of` makes: :meth:`LayerState.to_json` of the state it kept."""
-    return LayerState(
-        active=tuple([active[i] for i in sorted(active)]),
-        switches=switches,
-        semantics=semantics,
-        version=version,
-    ).to_json()
+    return _state_json([active[i] for i in sorted(active)], switches, semantics, version)
+
+
+def _state_json(
+    active: list[str], switches: Iterable[LayerSwitch], semantics: HedgeSemantics, version: int
+) -> dict[str, Any]:
+    """A ``layers`` record (:meth:`LayerState.to_json`), made from its parts."""
+    return {
+        "active": active,
+        "switches": [sw.to_json() for sw in switches],
+        "semantics": str(semantics),
+        "version": version,
+    }
 
 
 def evaluate(conds: Iterable[Clause], v: Values) -> tuple[tuple[bool | None, ...], tuple[str, ...]]:
