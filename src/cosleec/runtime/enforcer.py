@@ -106,6 +106,8 @@ class Enforcer:
         """Record what ``out`` changed and start the ``otherwise`` of each miss, in order."""
         core = self.core
         followups: list[Job] = []
+        for t in out.progressed:  # (an `else` item met: still pending, what it met recorded)
+            core.track(t, step)
         for t in out.changed:
             if t.status == "violated" and not t.late:
                 core.stats.violations += 1

@@ -153,6 +153,9 @@ class Outcome:
 
     changed: list[Tracked] = field(default_factory=list)
     fallbacks: list[tuple[Tracked, float]] = field(default_factory=list)  # (violated, start of fallback)
+    # pending obligations that met an `else` item and are not settled yet: a new state too
+    # (what the branch met), recorded and journaled so that a restart does not forget it
+    progressed: list[Tracked] = field(default_factory=list)
 
 
 class Tracker:
@@ -458,10 +461,14 @@ class Tracker:
                 t.status, t.outcome_at, t.by = FULFILLED, now, event
                 out.changed.append(t)
                 self._close(t)
-            elif t.branches and _branch_met(t, event, now):
-                t.status, t.outcome_at, t.by = FULFILLED, now, event
-                out.changed.append(t)
-                self._close(t)
+            elif t.branches:
+                met = sum(map(len, t.met))
+                if _branch_met(t, event, now):
+                    t.status, t.outcome_at, t.by = FULFILLED, now, event
+                    out.changed.append(t)
+                    self._close(t)
+                elif sum(map(len, t.met)) != met:
+                    out.progressed.append(t)
         missed = self._missed.get(event)
         if missed:  # the first E after a missed deadline is recorded as late, once
             for t in [t for t in missed if t.hi is not None and now > t.hi and t.seq < seq]:

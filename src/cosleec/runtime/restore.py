@@ -189,6 +189,9 @@ class Restore:
                     tuple((e, lo + d, None if hi is None else hi + d) for e, lo, hi in br)
                     for br in t.branches
                 )
+                # and kept so in the journal, with this step's new clock and boot: a restart in
+                # this boot (no shift then) must find the windows this boot's clock reads
+                self.step.change.obligations[t.id] = t.to_json()
             restored.append(t)
             if t.status == PENDING:
                 tracker.resume(t, c.get("obligation", 1))
