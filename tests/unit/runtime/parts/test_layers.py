@@ -110,7 +110,10 @@ def test_a_deferred_layers_record_is_the_state_then(
         switches = lm.update(list(update), values)
         later = lm.record_of(switches)
         now = LayerState(
-            active=tuple(lm.active_layers()), switches=tuple(switches), semantics=semantics, version=lm.version
+            active=tuple(lm.active_layers()),
+            switches=tuple(switches),
+            semantics=semantics,
+            version=lm.version,
         ).to_json()
         switches.append(LayerSwitch("R9", "x", "y"))  # (the caller's list: the record kept its own)
         made.append((later, now))
