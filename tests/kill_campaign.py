@@ -126,21 +126,23 @@ WARD_RULES = """def_start
  event Alarm event Ack event Escalate event Page
  event Visitor event Photo event Alert
  event Door event Lock event Tour
+ event Call event Answer event Note event Callback
  measure night : boolean
  measure consent : boolean
  measure staff : numeric
 def_end
 rule_start
  W1 when Shift then Patrol within 30 seconds and Check within 1 minutes
-   unless night then Patrol within 10 seconds
+   unless {night} then Patrol within 10 seconds
  W2 when Patrol then Log within 20 seconds
  W3 when Alarm then Ack within 1 minutes otherwise Escalate within 30 seconds otherwise Page within 10 seconds
  W4 when Visitor then not Photo within 5 minutes
-   unless consent
+   unless {consent}
  W5 when Alert then Photo within 10 seconds
- W6 when Door and staff < 2 then Lock within 10 seconds
-   unless night then Lock within 5 seconds and Alert within 5 seconds
+ W6 when Door and ({staff} < 2) then Lock within 10 seconds
+   unless {night} then Lock within 5 seconds and Alert within 5 seconds
  W7 when Tour then Photo within 10 minutes and Log within 20 seconds
+ W8 when Call then Answer within 10 seconds else {Note within 1 minutes and Callback within 1 minutes}
 rule_end
 """
 
@@ -148,7 +150,8 @@ rule_end
 #: robot's own actions, an ``otherwise`` whose fallback is missed too (a second
 #: ``otherwise``), a late event, a prohibition that refuses requests (the driver's and the
 #: robot's own) and one broken anyway, an undetermined decision, a failing action,
-#: a decision dispatched in parts (one action runs at once, the other is held until allowed)
+#: a decision dispatched in parts (one action runs at once, the other is held until allowed),
+#: an ``else`` met in two events (a kill between them must not forget the first)
 WARD_STEPS: list[Step] = [
     ("set", {"night": False, "consent": False}, "day shift, no consent to photos, staffing unknown"),
     ("event", "Shift", "W1: patrol (W2: log it) and check"),
@@ -179,13 +182,17 @@ WARD_STEPS: list[Step] = [
     ("event", "Visitor", "W4: no photos again"),
     ("event", "Tour", "W7: log at once; the photo is held until W4's ban ends (a decision in parts)"),
     ("request", "Photo", "refused: the prohibition counts its refusals"),
+    ("event", "Call", "W8: the user should answer within 10 seconds, else a note and a call back"),
+    ("event", "Note", "a note: one item of W8's else met, the obligation still pending"),
+    ("advance", 20, "no answer: W8's own window closes, its else still open"),
+    ("event", "Callback", "the call back completes W8's else: fulfilled"),
     ("advance", 400, "end of the day: every window closes, the prohibition was respected"),
 ]
 
 
 def ward_day() -> Day:
     """The purpose-built day (:data:`WARD_STEPS`)."""
-    return Day("ward", WARD_RULES, WARD_STEPS, frozenset({"Ack"}))
+    return Day("ward", WARD_RULES, WARD_STEPS, frozenset({"Ack", "Answer"}))
 
 
 def assistive_care_day() -> Day:
