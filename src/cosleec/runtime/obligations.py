@@ -98,6 +98,18 @@ class Tracked:
         the obligation for the others, which never change once it is tracked."""
         return functools.partial(_record, self, self._now())
 
+    def shift(self, by: float) -> None:
+        """Move every time this obligation keeps by ``by`` seconds (a restore after a reboot:
+        into the new boot's clock): its start, window and deadline, its own event's window
+        and each `else` branch's window."""
+        self.start += by
+        self.lo += by
+        self.hi = None if self.hi is None else self.hi + by
+        self.own_hi = None if self.own_hi is None else self.own_hi + by
+        self.branches = tuple(
+            tuple((e, lo + by, None if hi is None else hi + by) for e, lo, hi in br) for br in self.branches
+        )
+
     def _now(self) -> _Now:
         """What of this obligation may still change, as it is now (copies of its lists)."""
         return (
@@ -461,13 +473,12 @@ class Tracker:
                 t.status, t.outcome_at, t.by = FULFILLED, now, event
                 out.changed.append(t)
                 self._close(t)
-            elif t.branches:
-                met = sum(map(len, t.met))
-                if _branch_met(t, event, now):
+            elif t.branches and (complete := _branch_met(t, event, now)) is not None:
+                if complete:
                     t.status, t.outcome_at, t.by = FULFILLED, now, event
                     out.changed.append(t)
                     self._close(t)
-                elif sum(map(len, t.met)) != met:
+                else:  # an item met, its branch not complete: still pending
                     out.progressed.append(t)
         missed = self._missed.get(event)
         if missed:  # the first E after a missed deadline is recorded as late, once
@@ -604,12 +615,15 @@ def _events(t: Tracked) -> tuple[str, ...]:
     return (t.obligation.event, *(e for br in t.branches for e, _, _ in br))
 
 
-def _branch_met(t: Tracked, event: str, now: float) -> bool:
-    """Count an occurrence for ``t``'s `else` branches; True when one is now complete."""
+def _branch_met(t: Tracked, event: str, now: float) -> bool | None:
+    """Count an occurrence for ``t``'s `else` branches: True when one is now complete, False
+    when it met an item of one that is not, None when it met none."""
+    counted = None
     for br, met in zip(t.branches, t.met):
         for j, (e, lo, hi) in enumerate(br):
             if e == event and lo <= now and (hi is None or now <= hi) and j not in met:
                 met.append(j)
+                counted = False
         if len(met) == len(br):
             return True
-    return False
+    return counted

@@ -180,15 +180,8 @@ class Restore:
                 continue
             t.obligation = dataclasses.replace(t.obligation, otherwise=item.otherwise, item=item.key)
             d = self.hold if t.prohibition else self.shift
-            if d:  # the whole window into this boot's clock: its own event's and each `else`'s too
-                t.start += d
-                t.lo += d
-                t.hi = None if t.hi is None else t.hi + d
-                t.own_hi = None if t.own_hi is None else t.own_hi + d
-                t.branches = tuple(
-                    tuple((e, lo + d, None if hi is None else hi + d) for e, lo, hi in br)
-                    for br in t.branches
-                )
+            if d:  # the whole window into this boot's clock
+                t.shift(d)
                 # and kept so in the journal, with this step's new clock and boot: a restart in
                 # this boot (no shift then) must find the windows this boot's clock reads
                 self.step.change.obligations[t.id] = t.to_json()

@@ -245,6 +245,29 @@ rule_end
 """
 
 
+def trigger_keywords(
+    clause: int | None,
+    *,
+    obligations: tuple[Obligation, ...],
+    missing: tuple[str, ...] = (),
+    semantics: HedgeSemantics = HedgeSemantics.LAST_WINS,
+    unknown: Unknowns = Unknowns.UNDETERMINED,
+) -> dict[str, object]:
+    """``Decision.at_trigger``'s keywords besides the rule and what it read, for R1 at ``T``."""
+    return dict(
+        id=4,
+        time=2.0,
+        event="T",
+        clause=clause,
+        semantics=semantics,
+        obligations=obligations,
+        missing=missing,
+        context_version=7,
+        unknown=unknown,
+        explanations=None,
+    )
+
+
 @given(
     b=st.none() | st.booleans(),
     n=st.none() | st.integers(-3, 5),
@@ -268,17 +291,8 @@ def test_a_decision_made_at_a_trigger_is_the_one_made_whole(
     rule = RuleSet.from_text(SCALED).rules[0]
     stored = {"b": b, "n": n, "s": s}  # a scale is stored as its position
     read = tuple(stored[name] for name in rule.value_names)
-    common = dict(
-        id=4,
-        time=2.0,
-        event="T",
-        clause=clause,
-        semantics=HedgeSemantics.LAST_WINS,
-        obligations=(Obligation(event="A", within_s=2.0, rule="R1"),),
-        missing=("n",),
-        context_version=7,
-        unknown=Unknowns.UNDETERMINED,
-        explanations=None,
+    common = trigger_keywords(
+        clause, obligations=(Obligation(event="A", within_s=2.0, rule="R1"),), missing=("n",)
     )
     lazy = Decision.at_trigger(rule=rule, fired=fired, read=read, status=status, **common)  # type: ignore[arg-type]
     assert "values" not in vars(lazy) and "conditions" not in vars(lazy)  # nothing made yet
@@ -351,18 +365,8 @@ def test_an_explanation_made_once_per_clause_is_the_one_made_in_full(
     rule = RuleSet.from_text(MEASURED).rules[0]
     stored = {"b1": status[0], "b2": status[2], "b3": status[3], "n": n}
     read = tuple(stored[name] for name in rule.value_names)
-    common = dict(
-        id=4,
-        time=2.0,
-        event="T",
-        clause=clause,
-        semantics=semantics,
-        obligations=(Obligation(event="A", within_s=2.0, rule="R1"),) if clause != 3 else (),
-        missing=(),
-        context_version=7,
-        unknown=unknown,
-        explanations=None,
-    )
+    obligations = (Obligation(event="A", within_s=2.0, rule="R1"),) if clause != 3 else ()
+    common = trigger_keywords(clause, obligations=obligations, semantics=semantics, unknown=unknown)
     for _ in range(2):  # the second time from the rule's memo, when it kept it
         lazy = Decision.at_trigger(rule=rule, fired=True, read=read, status=status, **common)  # type: ignore[arg-type]
         if reason:

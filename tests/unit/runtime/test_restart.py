@@ -42,6 +42,13 @@ def rebooted(journal: Path) -> None:
     db.close()
 
 
+def on_uptime(journal_dir: Path, t: float) -> Manager:
+    """A Manager of ``rules.sleec`` in ``journal_dir`` on its journal, its clock reading ``t``."""
+    return Manager.from_file(
+        journal_dir / "rules.sleec", clock=Uptime(t), journal=journal_dir / "state.db", dispatch=False
+    )
+
+
 ELSE_RULES = """def_start
  event Trigger event Act event Alt event Help
 def_end
@@ -61,18 +68,13 @@ def test_after_a_reboot_an_obligation_is_met_in_its_shifted_window(tmp_path: Pat
     unshifted own window had ended long before), and ``Alt`` fulfils R2's ``else`` (it did
     not: the unshifted branch window had too)."""
     (tmp_path / "rules.sleec").write_text(ELSE_RULES)
-
-    def manager(t: float) -> Manager:
-        return Manager.from_file(
-            tmp_path / "rules.sleec", clock=Uptime(t), journal=tmp_path / "state.db", dispatch=False
-        )
-
-    m = manager(100)
+    m = on_uptime(tmp_path, 100)
     m.start()
     m.event("Trigger")  # R1: Act by 105; R2: Act by 105, else Alt by 120
     m.close()
     rebooted(tmp_path / "state.db")
-    m = manager(5000)  # the new boot's uptime, 4,899 s ahead of the old clock at the stop (1 s down)
+    # the new boot's uptime, 4,899 s ahead of the old clock at the stop (1 s down)
+    m = on_uptime(tmp_path, 5000)
     m.start()
     held = {t.rule: t for t in m.outstanding()}
     near = functools.partial(pytest.approx, abs=0.5)  # (the time down is read from the wall clock)
@@ -102,25 +104,20 @@ def test_a_restart_in_the_new_boot_finds_the_windows_shifted(tmp_path: Path) -> 
     reboot: no shift then) finds them as this boot's clock reads them, not the old boot's."""
     (tmp_path / "rules.sleec").write_text(ELSE_RULES)
 
-    def manager(t: float) -> Manager:
-        return Manager.from_file(
-            tmp_path / "rules.sleec", clock=Uptime(t), journal=tmp_path / "state.db", dispatch=False
-        )
-
     def windows(m: Manager) -> dict[str, tuple[object, ...]]:
         return {t.rule: (t.start, t.lo, t.own_hi, t.hi, t.branches) for t in m.outstanding()}
 
-    m = manager(100)
+    m = on_uptime(tmp_path, 100)
     m.start()
     m.event("Trigger")
     m.close()
     rebooted(tmp_path / "state.db")
-    m = manager(5000)
+    m = on_uptime(tmp_path, 5000)
     m.start()
     first = windows(m)
     assert first["R1"][1] == pytest.approx(4999, abs=0.5)
     m.close()
-    m = manager(5001)  # the same boot, a second later
+    m = on_uptime(tmp_path, 5001)  # the same boot, a second later
     m.start()
     assert windows(m) == first
     m.clock.t = 5002  # type: ignore[attr-defined]
@@ -128,6 +125,14 @@ def test_a_restart_in_the_new_boot_finds_the_windows_shifted(tmp_path: Path) -> 
     m.clock.t = 5100  # type: ignore[attr-defined]
     assert m.tick() == [] and m.stats["violations"] == 0
     m.close()
+
+
+def then_c(m: Manager, clock: VirtualClock) -> None:
+    """After B at 3 s: C at 6 s completes R4's `else`; by 30 s nothing was violated."""
+    clock.set(6)
+    m.event("C")
+    clock.set(30)
+    assert m.tick() == [] and m.stats["violations"] == 0
 
 
 PARTS = """def_start event T event A event B event C def_end
@@ -161,10 +166,7 @@ def test_an_else_branch_partly_met_stays_so_across_a_restart(tmp_path: Path, res
         m = manager()
         m.start()
         assert [t.met for t in m.outstanding()] == [([0],)]
-    clock.set(6)
-    m.event("C")
-    clock.set(30)
-    assert m.tick() == [] and m.stats["violations"] == 0
+    then_c(m, clock)
     assert (heard[-1]["status"], heard[-1]["by"], heard[-1]["met"]) == ("fulfilled", "C", [[0, 1]])
     m.close()
 
@@ -188,8 +190,5 @@ os.kill(os.getpid(), signal.SIGKILL)
     m = Manager.from_text(PARTS, clock=clock, journal=tmp_path / "state.db", dispatch=False)
     m.start()
     assert [t.met for t in m.outstanding()] == [([0],)]
-    clock.set(6)
-    m.event("C")
-    clock.set(30)
-    assert m.tick() == [] and m.stats["violations"] == 0
+    then_c(m, clock)
     m.close()

@@ -126,12 +126,6 @@ def test_a_deferred_obligation_record_is_the_one_made_then(
         elif change == "obligation":
             t.obligation = dataclasses.replace(t.obligation, item="R1.0.0", event="A")
         elif change == "shift":  # (what a restore after a reboot does)
-            t.start += 5
-            t.lo += 5
-            t.hi = None if t.hi is None else t.hi + 5
-            t.own_hi = None if t.own_hi is None else t.own_hi + 5
-            t.branches = tuple(
-                tuple((e, lo + 5, None if hi is None else hi + 5) for e, lo, hi in br) for br in t.branches
-            )
+            t.shift(5)
     assert later() == now
     assert t.record_of()() == t.to_json()
